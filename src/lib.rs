@@ -1,0 +1,9 @@
+//! planetwear: nonlinear dynamics of a spur planetary gear set whose tooth
+//! flanks wear.
+//!
+//! The physics core ([`physics`]) is pure; [`scene`] turns what a user writes
+//! into validated SI input; [`report`] writes files for the command-line tool.
+#![deny(clippy::print_stdout, clippy::print_stderr)]
+
+pub mod physics;
+pub mod scene;

@@ -1,0 +1,8 @@
+//! The physics core: pure functions of validated input. No I/O, no FMI, no
+//! printing, no `unsafe`.
+
+pub mod gear;
+pub mod involute;
+pub mod mesh;
+pub mod profile;
+pub mod separation;

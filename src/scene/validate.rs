@@ -1,0 +1,494 @@
+//! Validation of a scene: every rule checked, every problem reported with
+//! the parameter's name, its value and what is allowed.
+
+use std::f64::consts::PI;
+use std::fmt;
+
+use super::{ChamferSpec, ExternalGearSpec, RingGearSpec, Scene};
+use crate::physics::gear::{
+    Analysis, Chamfer, GearKind, GearSet, Material, MeshKind, RootForm, Supports, ToothForm,
+};
+use crate::physics::mesh::PathOfContact;
+
+/// One broken rule of a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Problem {
+    /// The parameter, as its key path in the scene file (`sun.tip_radius_mm`).
+    pub name: String,
+    /// The offending value, as written or derived.
+    pub value: String,
+    /// What is allowed, and why.
+    pub reason: String,
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} = {}: {}", self.name, self.value, self.reason)
+    }
+}
+
+/// Why a scene cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The text is not a well-formed scene file.
+    #[error("scene file is not valid TOML for a scene: {message}")]
+    Syntax {
+        /// The parser's message, with line and column.
+        message: String,
+    },
+    /// One or more parameters break a rule.
+    #[error("invalid scene:\n{}", .problems.iter().map(|p| format!("  - {p}")).collect::<Vec<_>>().join("\n"))]
+    Invalid {
+        /// Every problem found.
+        problems: Vec<Problem>,
+    },
+}
+
+impl SceneError {
+    /// The problems of an invalid scene (empty for a syntax error).
+    pub fn problems(&self) -> &[Problem] {
+        match self {
+            SceneError::Invalid { problems } => problems,
+            SceneError::Syntax { .. } => &[],
+        }
+    }
+}
+
+/// Default tip chamfer of sun and planet (docs/PARAMETERS.md): 0.1·m radial
+/// height at 45° to the tip circle, a common edge break for hobbed and
+/// shaved automotive gears.
+pub fn default_chamfer(module_mm: f64) -> ChamferSpec {
+    ChamferSpec { height_mm: 0.1 * module_mm, angle_deg: 45.0 }
+}
+
+struct Checker {
+    problems: Vec<Problem>,
+}
+
+impl Checker {
+    fn fail(&mut self, name: &str, value: impl fmt::Display, reason: impl Into<String>) {
+        self.problems.push(Problem { name: name.into(), value: value.to_string(), reason: reason.into() });
+    }
+
+    fn positive(&mut self, name: &str, v: f64) -> bool {
+        if !(v.is_finite() && v > 0.0) {
+            self.fail(name, v, "must be a finite number greater than zero");
+            false
+        } else {
+            true
+        }
+    }
+
+    fn in_range(&mut self, name: &str, v: f64, lo: f64, hi: f64, why: &str) -> bool {
+        if !(v.is_finite() && v > lo && v < hi) {
+            self.fail(name, v, format!("must lie strictly between {lo} and {hi} ({why})"));
+            false
+        } else {
+            true
+        }
+    }
+
+    fn chamfer(&mut self, key: &str, c: &ChamferSpec, addendum_mm: f64) -> Chamfer {
+        let name_h = format!("{key}.tip_chamfer.height_mm");
+        let name_a = format!("{key}.tip_chamfer.angle_deg");
+        if !(c.height_mm.is_finite() && c.height_mm >= 0.0 && c.height_mm < 0.5 * addendum_mm) {
+            self.fail(
+                &name_h,
+                c.height_mm,
+                format!("must be at least 0 and below half the addendum ({:.4} mm)", 0.5 * addendum_mm),
+            );
+        }
+        self.in_range(&name_a, c.angle_deg, 0.0, 90.0, "angle to the tip circle's tangent");
+        Chamfer { height: c.height_mm * 1e-3, angle: c.angle_deg.to_radians() }
+    }
+
+    fn external(&mut self, key: &str, g: &ExternalGearSpec) -> ToothForm {
+        let n = |f: &str| format!("{key}.{f}");
+        if g.teeth < 6 {
+            self.fail(&n("teeth"), g.teeth, "must be at least 6");
+        }
+        let mut sizes_ok = self.positive(&n("module_mm"), g.module_mm);
+        sizes_ok &= self.positive(&n("tooth_thickness_mm"), g.tooth_thickness_mm);
+        sizes_ok &= self.positive(&n("tip_radius_mm"), g.tip_radius_mm);
+        sizes_ok &= self.positive(&n("root_radius_mm"), g.root_radius_mm);
+        sizes_ok &= self.positive(&n("bore_radius_mm"), g.bore_radius_mm);
+        sizes_ok &= self.positive(&n("face_width_mm"), g.face_width_mm);
+        if !(g.hob_tip_radius_mm.is_finite() && g.hob_tip_radius_mm >= 0.0) {
+            self.fail(&n("hob_tip_radius_mm"), g.hob_tip_radius_mm, "must be a finite number, zero or greater");
+            sizes_ok = false;
+        }
+        let angle_ok =
+            self.in_range(&n("pressure_angle_deg"), g.pressure_angle_deg, 10.0, 35.0, "spur gear practice");
+        let reference = g.module_mm * f64::from(g.teeth) / 2.0;
+        let chamfer_spec = g.tip_chamfer.unwrap_or_else(|| default_chamfer(g.module_mm));
+        let chamfer = self.chamfer(key, &chamfer_spec, g.tip_radius_mm - reference);
+        let form = ToothForm {
+            kind: GearKind::External,
+            teeth: g.teeth,
+            module: g.module_mm * 1e-3,
+            pressure_angle: g.pressure_angle_deg.to_radians(),
+            tooth_thickness: g.tooth_thickness_mm * 1e-3,
+            tip_radius: g.tip_radius_mm * 1e-3,
+            root_radius: g.root_radius_mm * 1e-3,
+            body_radius: g.bore_radius_mm * 1e-3,
+            root_form: RootForm::Hob { tip_radius: g.hob_tip_radius_mm * 1e-3 },
+            chamfer: (chamfer.height > 0.0).then_some(chamfer),
+            face_width: g.face_width_mm * 1e-3,
+        };
+        if !(sizes_ok && angle_ok && g.teeth >= 6) {
+            return form;
+        }
+        let rb = form.base_radius() * 1e3;
+        if g.tip_radius_mm <= rb {
+            self.fail(
+                &n("tip_radius_mm"),
+                g.tip_radius_mm,
+                format!("must exceed the base radius {rb:.4} mm, or the teeth have no involute flank"),
+            );
+        }
+        if g.root_radius_mm >= g.tip_radius_mm {
+            self.fail(&n("root_radius_mm"), g.root_radius_mm, format!("must be below the tip radius {} mm", g.tip_radius_mm));
+        }
+        if g.bore_radius_mm >= g.root_radius_mm {
+            self.fail(&n("bore_radius_mm"), g.bore_radius_mm, format!("must be below the root radius {} mm", g.root_radius_mm));
+        }
+        if g.tooth_thickness_mm >= PI * g.module_mm {
+            self.fail(
+                &n("tooth_thickness_mm"),
+                g.tooth_thickness_mm,
+                format!("must be below the circular pitch π·m = {:.4} mm", PI * g.module_mm),
+            );
+        } else if g.tip_radius_mm > rb && form.thickness_at(form.tip_radius) <= 0.0 {
+            self.fail(
+                &n("tip_radius_mm"),
+                g.tip_radius_mm,
+                "the tooth is pointed below this tip radius: reduce the tip radius or thicken the tooth",
+            );
+        }
+        if let RootForm::Hob { tip_radius } = form.root_form {
+            let dedendum = form.reference_radius() - form.root_radius;
+            if tip_radius > 0.0 && tip_radius >= dedendum {
+                self.fail(
+                    &n("hob_tip_radius_mm"),
+                    g.hob_tip_radius_mm,
+                    format!("must be below the dedendum {:.4} mm", dedendum * 1e3),
+                );
+            }
+        }
+        form
+    }
+
+    fn ring(&mut self, g: &RingGearSpec) -> ToothForm {
+        let n = |f: &str| format!("ring.{f}");
+        if g.teeth < 12 {
+            self.fail(&n("teeth"), g.teeth, "must be at least 12");
+        }
+        let mut ok = self.positive(&n("module_mm"), g.module_mm);
+        ok &= self.positive(&n("tooth_thickness_mm"), g.tooth_thickness_mm);
+        ok &= self.positive(&n("minor_radius_mm"), g.minor_radius_mm);
+        ok &= self.positive(&n("root_radius_mm"), g.root_radius_mm);
+        ok &= self.positive(&n("rim_radius_mm"), g.rim_radius_mm);
+        ok &= self.positive(&n("fillet_radius_mm"), g.fillet_radius_mm);
+        ok &= self.positive(&n("face_width_mm"), g.face_width_mm);
+        ok &= self.in_range(&n("pressure_angle_deg"), g.pressure_angle_deg, 10.0, 35.0, "spur gear practice");
+        let reference = g.module_mm * f64::from(g.teeth) / 2.0;
+        let chamfer = g.tip_chamfer.map(|c| self.chamfer("ring", &c, reference - g.minor_radius_mm));
+        let form = ToothForm {
+            kind: GearKind::Internal,
+            teeth: g.teeth,
+            module: g.module_mm * 1e-3,
+            pressure_angle: g.pressure_angle_deg.to_radians(),
+            tooth_thickness: g.tooth_thickness_mm * 1e-3,
+            tip_radius: g.minor_radius_mm * 1e-3,
+            root_radius: g.root_radius_mm * 1e-3,
+            body_radius: g.rim_radius_mm * 1e-3,
+            root_form: RootForm::Fillet { radius: g.fillet_radius_mm * 1e-3 },
+            chamfer: chamfer.filter(|c| c.height > 0.0),
+            face_width: g.face_width_mm * 1e-3,
+        };
+        if !(ok && g.teeth >= 12) {
+            return form;
+        }
+        let rb = form.base_radius() * 1e3;
+        if g.minor_radius_mm <= rb {
+            self.fail(
+                &n("minor_radius_mm"),
+                g.minor_radius_mm,
+                format!("must exceed the ring's base radius {rb:.4} mm, or its teeth have no involute flank"),
+            );
+        }
+        if g.root_radius_mm <= g.minor_radius_mm {
+            self.fail(&n("root_radius_mm"), g.root_radius_mm, format!("must exceed the minor radius {} mm", g.minor_radius_mm));
+        }
+        if g.rim_radius_mm <= g.root_radius_mm {
+            self.fail(&n("rim_radius_mm"), g.rim_radius_mm, format!("must exceed the root radius {} mm", g.root_radius_mm));
+        }
+        if g.tooth_thickness_mm >= PI * g.module_mm {
+            self.fail(
+                &n("tooth_thickness_mm"),
+                g.tooth_thickness_mm,
+                format!("must be below the circular pitch π·m = {:.4} mm", PI * g.module_mm),
+            );
+        }
+        if g.fillet_radius_mm >= 0.5 * (g.root_radius_mm - g.minor_radius_mm) {
+            self.fail(
+                &n("fillet_radius_mm"),
+                g.fillet_radius_mm,
+                format!("must be below half the tooth depth, {:.4} mm", 0.5 * (g.root_radius_mm - g.minor_radius_mm)),
+            );
+        }
+        form
+    }
+}
+
+/// Checks every rule of a scene and converts it to SI.
+pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
+    let mut c = Checker { problems: Vec::new() };
+    let sun = c.external("sun", &scene.sun);
+    let planet = c.external("planet", &scene.planet);
+    let ring = c.ring(&scene.ring);
+    let gears_ok = c.problems.is_empty();
+
+    let m = &scene.material;
+    let mut material_ok = c.in_range("material.youngs_modulus_gpa", m.youngs_modulus_gpa, 0.0, 1.0e4, "an engineering metal or polymer");
+    material_ok &= c.in_range("material.poisson_ratio", m.poisson_ratio, 0.0, 0.5, "isotropic elastic material");
+    material_ok &= c.positive("material.density_kg_per_m3", m.density_kg_per_m3);
+    let material = Material {
+        youngs_modulus: m.youngs_modulus_gpa * 1e9,
+        poisson_ratio: m.poisson_ratio,
+        density: m.density_kg_per_m3,
+    };
+    let _ = material_ok;
+
+    let s = &scene.supports;
+    for (name, v) in [
+        ("supports.sun_radial_n_per_m", s.sun_radial_n_per_m),
+        ("supports.ring_radial_n_per_m", s.ring_radial_n_per_m),
+        ("supports.carrier_radial_n_per_m", s.carrier_radial_n_per_m),
+        ("supports.planet_bearing_n_per_m", s.planet_bearing_n_per_m),
+    ] {
+        c.positive(name, v);
+    }
+    let a = &scene.analysis;
+    if !(8..=100_000).contains(&a.positions_per_mesh_cycle) {
+        c.fail("analysis.positions_per_mesh_cycle", a.positions_per_mesh_cycle, "must be between 8 and 100000");
+    }
+    if !(5..=10_000).contains(&a.profile_points) {
+        c.fail("analysis.profile_points", a.profile_points, "must be between 5 and 10000");
+    }
+    if !(1..=1000).contains(&a.face_slices) {
+        c.fail("analysis.face_slices", a.face_slices, "must be between 1 and 1000");
+    }
+
+    let op = &scene.operation;
+    if op.held == op.input {
+        c.fail("operation.input", op.input.name(), format!("must differ from the held member ({})", op.held.name()));
+    }
+    if !op.input_torque_nm.is_finite() {
+        c.fail("operation.input_torque_nm", op.input_torque_nm, "must be a finite number");
+    }
+
+    // Planet layout and the assembly condition.
+    let count = scene.planets.count;
+    let mut angles = Vec::new();
+    if !(1..=32).contains(&count) {
+        c.fail("planets.count", count, "must be between 1 and 32");
+    } else {
+        angles = match &scene.planets.angles_deg {
+            None => (0..count).map(|i| 2.0 * PI * f64::from(i) / f64::from(count)).collect(),
+            Some(list) => {
+                if list.len() != count as usize {
+                    c.fail(
+                        "planets.angles_deg",
+                        format!("{list:?}"),
+                        format!("must list exactly planets.count = {count} angles"),
+                    );
+                }
+                list.iter().map(|d| d.to_radians()).collect()
+            }
+        };
+        if angles.iter().any(|a| !a.is_finite()) {
+            c.fail("planets.angles_deg", format!("{:?}", scene.planets.angles_deg), "must be finite numbers");
+            angles.clear();
+        }
+    }
+
+    let centre_ok = c.positive("centre_distance_mm", scene.centre_distance_mm);
+    if !(gears_ok && centre_ok) {
+        return Err(SceneError::Invalid { problems: c.problems });
+    }
+
+    let set = GearSet {
+        name: scene.name.clone(),
+        sun,
+        planet,
+        ring,
+        planet_angles: angles,
+        centre_distance: scene.centre_distance_mm * 1e-3,
+        material,
+        held: op.held,
+        input: op.input,
+        input_torque: op.input_torque_nm,
+        supports: Supports {
+            sun_radial: s.sun_radial_n_per_m,
+            ring_radial: s.ring_radial_n_per_m,
+            carrier_radial: s.carrier_radial_n_per_m,
+            planet_bearing: s.planet_bearing_n_per_m,
+        },
+        analysis: Analysis {
+            positions_per_mesh_cycle: a.positions_per_mesh_cycle as usize,
+            profile_points: a.profile_points as usize,
+            face_slices: a.face_slices as usize,
+            fidelity: a.fidelity,
+        },
+    };
+
+    // Same module and pressure angle on all gears (a mesh needs equal base pitches).
+    for (key, g) in [("planet", &set.planet), ("ring", &set.ring)] {
+        if (g.base_pitch() - set.sun.base_pitch()).abs() > 1e-9 {
+            c.fail(
+                &format!("{key}.module_mm"),
+                g.module * 1e3,
+                format!(
+                    "module and pressure angle must give the sun's base pitch {:.5} mm (this gives {:.5} mm)",
+                    set.sun.base_pitch() * 1e3,
+                    g.base_pitch() * 1e3
+                ),
+            );
+        }
+    }
+    if !c.problems.is_empty() {
+        return Err(SceneError::Invalid { problems: c.problems });
+    }
+
+    // Centre distance must be reachable by both meshes.
+    let a_mm = scene.centre_distance_mm;
+    let ext = (set.sun.base_radius() + set.planet.base_radius()) * 1e3;
+    let int = (set.ring.base_radius() - set.planet.base_radius()) * 1e3;
+    if a_mm <= ext {
+        c.fail("centre_distance_mm", a_mm, format!("must exceed the sum of sun and planet base radii, {ext:.4} mm"));
+    }
+    if a_mm <= int {
+        c.fail("centre_distance_mm", a_mm, format!("must exceed the ring base radius less the planet's, {int:.4} mm"));
+    }
+    if !c.problems.is_empty() {
+        return Err(SceneError::Invalid { problems: c.problems });
+    }
+
+    for mesh in MeshKind::ALL {
+        let j = set.circumferential_backlash(mesh);
+        if j < 0.0 {
+            let (key1, key2) = match mesh {
+                MeshKind::SunPlanet => ("sun", "planet"),
+                MeshKind::RingPlanet => ("planet", "ring"),
+            };
+            c.fail(
+                &format!("{key1}.tooth_thickness_mm"),
+                format!("{} (with {key2})", set.mesh_gears(mesh).0.tooth_thickness * 1e3),
+                format!(
+                    "the {} mesh has negative backlash ({:.4} mm at the operating pitch circle): thin the teeth of {key1} or {key2} or increase centre_distance_mm",
+                    mesh.name(),
+                    j * 1e3
+                ),
+            );
+        }
+        let path = PathOfContact::new(&set, mesh);
+        let eps = path.nominal_contact_ratio();
+        if eps < 1.0 {
+            c.fail(
+                &format!("{}.tip_radius_mm", if mesh == MeshKind::SunPlanet { "sun" } else { "ring" }),
+                format!("{} (contact ratio {eps:.4})", path.gear1_tip_radius_mm()),
+                format!("the {} mesh's contact ratio must be at least 1: lengthen the teeth", mesh.name()),
+            );
+        }
+        // Tip/root interference: each gear's start of active profile must lie
+        // on its involute, above the form circle where the fillet begins.
+        let (g1, g2) = set.mesh_gears(mesh);
+        let (k1, k2) = match mesh {
+            MeshKind::SunPlanet => ("sun", "planet"),
+            MeshKind::RingPlanet => ("planet", "ring"),
+        };
+        let (r1, r2) = path.active_profile_start_radii();
+        let f1 = g1.form_radius();
+        let f2 = g2.form_radius();
+        let interferes1 = r1 < f1;
+        let interferes2 = match g2.kind {
+            GearKind::External => r2 < f2,
+            GearKind::Internal => r2 > f2,
+        };
+        if interferes1 {
+            c.fail(
+                &format!("{k2}.tip_radius_mm"),
+                g2.tip_radius * 1e3,
+                format!(
+                    "tip/root interference in the {} mesh: the {k2} tip reaches {k1} radius {:.4} mm, below its form radius {:.4} mm where the fillet begins",
+                    mesh.name(), r1 * 1e3, f1 * 1e3
+                ),
+            );
+        }
+        if interferes2 {
+            c.fail(
+                &format!("{k1}.tip_radius_mm"),
+                g1.tip_radius * 1e3,
+                format!(
+                    "tip/root interference in the {} mesh: the {k1} tip reaches {k2} radius {:.4} mm, beyond its form radius {:.4} mm where the fillet begins",
+                    mesh.name(), r2 * 1e3, f2 * 1e3
+                ),
+            );
+        }
+        // Root clearance: the mating tip circle must not reach the root circle.
+        for (clearance, tip_key, root_key) in path.root_clearances() {
+            if clearance <= 0.0 {
+                c.fail(
+                    &format!("{tip_key}.tip_radius_mm"),
+                    format!("clearance {:.4} mm", clearance * 1e3),
+                    format!("the {tip_key} tip circle must clear the {root_key} root circle in the {} mesh", mesh.name()),
+                );
+            }
+        }
+    }
+
+    // Assembly: planet n at ψ_n fits when (Z_s + Z_r)·ψ_n / 2π is an integer.
+    let zsum = f64::from(set.sun.teeth + set.ring.teeth);
+    for (i, psi) in set.planet_angles.iter().enumerate() {
+        let k = zsum * psi / (2.0 * PI);
+        if (k - k.round()).abs() > 1e-6 {
+            c.fail(
+                &format!("planets.angles_deg[{i}]"),
+                format!("{:.6}", psi.to_degrees()),
+                format!(
+                    "planets can only be assembled at multiples of 360°/(Z_sun + Z_ring) = {:.6}°: (Z_sun + Z_ring)·ψ/360° = {k:.6} is not an integer",
+                    360.0 / zsum
+                ),
+            );
+        }
+    }
+    // Neighbouring planets must not touch.
+    let mut sorted = set.planet_angles.clone();
+    sorted.sort_by(f64::total_cmp);
+    if sorted.len() > 1 {
+        for i in 0..sorted.len() {
+            let next = if i + 1 < sorted.len() { sorted[i + 1] } else { sorted[0] + 2.0 * PI };
+            let gap = next - sorted[i];
+            let chord = 2.0 * set.centre_distance * (gap / 2.0).sin();
+            if chord <= 2.0 * set.planet.tip_radius {
+                c.fail(
+                    "planets.angles_deg",
+                    format!("{:.4}° and {:.4}°", sorted[i].to_degrees(), next.to_degrees().rem_euclid(360.0)),
+                    format!(
+                        "neighbouring planets overlap: centres {:.4} mm apart, tips need more than {:.4} mm",
+                        chord * 1e3,
+                        2.0 * set.planet.tip_radius * 1e3
+                    ),
+                );
+                break;
+            }
+        }
+    }
+
+    if c.problems.is_empty() {
+        Ok(set)
+    } else {
+        Err(SceneError::Invalid { problems: c.problems })
+    }
+}
