@@ -6,3 +6,7 @@ pub mod involute;
 pub mod mesh;
 pub mod profile;
 pub mod separation;
+pub mod hertz;
+pub mod iso6336;
+pub mod stiffness;
+pub mod ltca;

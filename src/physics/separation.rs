@@ -94,6 +94,9 @@ pub struct MeshSeparation {
     /// Positions [m] (drive-position coordinate of the gear-1 tooth) between
     /// which that tooth's back flank is on the back path of contact.
     pub back_range: (f64, f64),
+    /// The back flank of the tooth at drive position s touches the back line
+    /// of action at position `back_mirror − s` [m].
+    pub back_mirror: f64,
 }
 
 type P = [f64; 2];
@@ -267,6 +270,6 @@ impl MeshSeparation {
         let drive = table(1.0, &g1_drive, &g2_drive);
         let back = table(-1.0, &g1_back, &g2_back);
         let back_range = (mirror(path.end), mirror(path.start));
-        Self { path, drive, back, normal_backlash: jn, back_range }
+        Self { path, drive, back, normal_backlash: jn, back_range, back_mirror: 2.0 * offset + jn }
     }
 }

@@ -1,0 +1,451 @@
+//! Quasi-static loaded tooth contact analysis (LTCA).
+//!
+//! A mesh is a set of tooth pairs, each at its position on the line of
+//! action; a pair carries F = k(s)·max(0, δ − g(s)) on its drive flank and
+//! −k·max(0, −δ − g_back) on its back flank, δ being the mesh approach along
+//! the line of action (zero for perfect rigid involutes in drive contact).
+//! Force and tangent stiffness of a mesh are piecewise linear in δ; the
+//! equilibria are found by safeguarded Newton iteration on monotone
+//! functions, exact to rounding.
+//!
+//! Whole set (torsional statics, central members on their axes, carrier and
+//! output member held): planet n carries F_n through its sun and ring meshes
+//! in series, F_sp(δ_s) = F_rp(δ_r) with δ_s + δ_r = u_s (the sun's rotation
+//! as a displacement along the line of action), and Σ F_n = T_sun / r_b,sun.
+//! Every tooth sits at its real angular position: the sun mesh of the planet
+//! at ψ_n is at travel λ − r_b,sun ψ_n, and its ring mesh follows from the
+//! planet's own tooth positions (see [`SetModel::ring_position`]).
+
+use serde::{Deserialize, Serialize};
+
+use super::gear::{GearKind, GearSet, MeshKind};
+use super::hertz::{contact_modulus, line_contact};
+use super::mesh::PathOfContact;
+use super::separation::{MeshFlanks, MeshSeparation, NO_CONTACT};
+use super::stiffness::PairStiffness;
+
+/// Contact model of one mesh: separations and pair stiffness on one grid.
+#[derive(Clone, Debug)]
+pub struct MeshModel {
+    /// Separation tables.
+    pub separation: MeshSeparation,
+    /// Pair stiffness.
+    pub stiffness: PairStiffness,
+    drive_k: Vec<f64>,
+    back_k: Vec<f64>,
+}
+
+/// State of one tooth pair at one instant.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairContact {
+    /// Pair index relative to the reference tooth (0), the next tooth of gear 1 is 1.
+    pub index: i32,
+    /// Drive-flank position on the line of action [m].
+    pub position: f64,
+    /// Force along the line of action [N]; negative on the back flank.
+    pub force: f64,
+    /// Stiffness of the pair in contact [N/m] (0 when open).
+    pub stiffness: f64,
+}
+
+/// Samples per base pitch of the contact tables.
+pub const TABLE_SAMPLES_PER_PITCH: usize = 400;
+
+impl MeshModel {
+    /// The contact model of a mesh with the given flank deviations.
+    pub fn new(set: &GearSet, mesh: MeshKind, flanks: &MeshFlanks) -> Self {
+        let path = PathOfContact::new(set, mesh);
+        let step = path.base_pitch / TABLE_SAMPLES_PER_PITCH as f64;
+        let separation = MeshSeparation::new(set, mesh, flanks, step);
+        let stiffness = PairStiffness::new(set, mesh);
+        let drive_k = separation.drive.positions().map(|s| stiffness.at(s)).collect();
+        let back_k = separation.back.positions().map(|s| stiffness.at(separation.back_mirror - s)).collect();
+        Self { separation, stiffness, drive_k, back_k }
+    }
+
+    /// The path of contact.
+    pub fn path(&self) -> &PathOfContact {
+        &self.separation.path
+    }
+
+    fn lookup(&self, table: &[f64], s: f64) -> f64 {
+        let t = &self.separation.drive;
+        let x = ((s - t.start) / t.step).clamp(0.0, (table.len() - 1) as f64);
+        let i = (x.floor() as usize).min(table.len() - 2);
+        table[i] + (x - i as f64) * (table[i + 1] - table[i])
+    }
+
+    /// Range of pair indices k whose position s + k·p_b lies in the tables.
+    fn pair_range(&self, s: f64) -> std::ops::RangeInclusive<i32> {
+        let t = &self.separation.drive;
+        let pb = self.path().base_pitch;
+        let k_lo = ((t.start - s) / pb).ceil() as i32;
+        let k_hi = ((t.end() - s) / pb).floor() as i32;
+        k_lo..=k_hi
+    }
+
+    /// Mesh force [N] and tangent stiffness [N/m] at approach `delta` [m],
+    /// with the reference pair at position `s` [m]; pairs are filled into
+    /// `pairs` when given.
+    pub fn force(&self, s: f64, delta: f64, mut pairs: Option<&mut Vec<PairContact>>) -> (f64, f64) {
+        if let Some(p) = pairs.as_deref_mut() {
+            p.clear();
+        }
+        let pb = self.path().base_pitch;
+        let (mut f, mut k) = (0.0, 0.0);
+        for index in self.pair_range(s) {
+            let pos = s + f64::from(index) * pb;
+            let gd = self.separation.drive.at(pos);
+            let gb = self.separation.back.at(pos);
+            let (mut fp, mut kp) = (0.0, 0.0);
+            if gd < NO_CONTACT && delta > gd {
+                kp = self.lookup(&self.drive_k, pos);
+                fp = kp * (delta - gd);
+            } else if gb < NO_CONTACT && -delta > gb {
+                kp = self.lookup(&self.back_k, pos);
+                fp = -kp * (-delta - gb);
+            }
+            f += fp;
+            k += kp;
+            if let Some(p) = pairs.as_deref_mut() {
+                p.push(PairContact { index, position: pos, force: fp, stiffness: kp });
+            }
+        }
+        (f, k)
+    }
+
+    /// Sum of the pair stiffnesses of the pairs on the nominal (sharp-tip)
+    /// path at position `s` [N/m]: the geometric mesh stiffness.
+    pub fn nominal_mesh_stiffness(&self, s: f64) -> f64 {
+        let p = self.path();
+        self.pair_range(s)
+            .map(|i| s + f64::from(i) * p.base_pitch)
+            .filter(|pos| *pos >= p.start_sharp && *pos <= p.end_sharp)
+            .map(|pos| self.stiffness.at(pos))
+            .sum()
+    }
+
+    /// Approach [m] at which the mesh carries `load` [N] with the reference
+    /// pair at `s`.
+    pub fn approach_for(&self, s: f64, load: f64) -> f64 {
+        solve_increasing(|d| self.force(s, d, None), load, 0.0)
+    }
+}
+
+/// Solves f(x) = target for a non-decreasing piecewise-linear f given with
+/// its slope, by Newton steps safeguarded with bisection once bracketed.
+fn solve_increasing(f: impl Fn(f64) -> (f64, f64), target: f64, x0: f64) -> f64 {
+    let scale = 1e-5;
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    let mut x = x0;
+    for _ in 0..200 {
+        let (v, slope) = f(x);
+        let r = v - target;
+        if r == 0.0 {
+            return x;
+        }
+        if r < 0.0 {
+            lo = lo.max(x);
+        } else {
+            hi = hi.min(x);
+        }
+        let mut next = if slope > 0.0 { x - r / slope } else if r < 0.0 { x + scale } else { x - scale };
+        if lo.is_finite() && hi.is_finite() {
+            if !(next > lo && next < hi) {
+                next = 0.5 * (lo + hi);
+            }
+            if hi - lo <= 1e-16 + 1e-13 * x.abs() {
+                return 0.5 * (lo + hi);
+            }
+        } else if lo.is_finite() && next <= lo {
+            next = lo + scale;
+        } else if hi.is_finite() && next >= hi {
+            next = hi - scale;
+        }
+        if (next - x).abs() <= 1e-18 + 1e-14 * x.abs() {
+            return next;
+        }
+        x = next;
+    }
+    x
+}
+
+/// Summary of a periodic quantity over a mesh cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CycleStats {
+    /// Mean.
+    pub mean: f64,
+    /// Minimum.
+    pub min: f64,
+    /// Maximum.
+    pub max: f64,
+    /// Maximum − minimum.
+    pub peak_to_peak: f64,
+}
+
+impl CycleStats {
+    /// Statistics of samples evenly spread over one cycle.
+    pub fn of(v: &[f64]) -> Self {
+        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        let min = v.iter().cloned().fold(f64::INFINITY, f64::min);
+        let max = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        Self { mean, min, max, peak_to_peak: max - min }
+    }
+}
+
+/// LTCA of one mesh over one mesh cycle at a constant transmitted load.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeshLtca {
+    /// Mesh name.
+    pub name: String,
+    /// Load along the line of action [N].
+    pub load: f64,
+    /// Reference-pair positions over one cycle [m].
+    pub position: Vec<f64>,
+    /// Roll angle of gear 1 at the reference position [rad].
+    pub roll_angle_gear1: Vec<f64>,
+    /// Loaded static transmission error: the approach along the line of action [m].
+    pub transmission_error: Vec<f64>,
+    /// Tangent mesh stiffness of the loaded mesh [N/m].
+    pub mesh_stiffness_loaded: Vec<f64>,
+    /// Sum of pair stiffnesses on the nominal path [N/m].
+    pub mesh_stiffness_nominal: Vec<f64>,
+    /// Pairs carrying load at each position.
+    pub pairs_in_contact: Vec<u32>,
+    /// Largest Hertzian peak pressure of any pair [Pa].
+    pub peak_pressure: Vec<f64>,
+    /// Largest Hertzian half-width of any pair [m].
+    pub half_width: Vec<f64>,
+    /// One tooth pair's load through its whole engagement: positions [m].
+    pub pair_path_position: Vec<f64>,
+    /// ... its gear-1 roll angles [rad].
+    pub pair_path_roll_gear1: Vec<f64>,
+    /// ... its load [N].
+    pub pair_path_load: Vec<f64>,
+    /// ... its Hertzian peak pressure [Pa].
+    pub pair_path_peak_pressure: Vec<f64>,
+    /// ... its Hertzian half-width [m].
+    pub pair_path_half_width: Vec<f64>,
+}
+
+impl MeshLtca {
+    /// Loaded contact ratio: the mean number of loaded pairs.
+    pub fn loaded_contact_ratio(&self) -> f64 {
+        self.pairs_in_contact.iter().map(|n| f64::from(*n)).sum::<f64>() / self.pairs_in_contact.len() as f64
+    }
+
+    /// Fraction of the cycle with exactly `n` pairs in contact.
+    pub fn fraction_with_pairs(&self, n: u32) -> f64 {
+        self.pairs_in_contact.iter().filter(|k| **k == n).count() as f64 / self.pairs_in_contact.len() as f64
+    }
+}
+
+fn hertz_of(model: &MeshModel, set: &GearSet, pos: f64, force: f64) -> (f64, f64) {
+    let p = model.path();
+    let s = pos.clamp(p.start, p.end);
+    let e_star = contact_modulus(
+        set.material.youngs_modulus,
+        set.material.poisson_ratio,
+        set.material.youngs_modulus,
+        set.material.poisson_ratio,
+    );
+    let width = set.sun.face_width.min(set.planet.face_width).min(set.ring.face_width);
+    let c = line_contact(force.abs() / width, p.rho_1(s), p.rho_2(s), p.kind == GearKind::Internal, e_star);
+    (c.peak_pressure, c.half_width)
+}
+
+/// LTCA of one mesh carrying `load` [N] along its line of action, at
+/// `samples` positions over one mesh cycle.
+pub fn mesh_ltca(set: &GearSet, model: &MeshModel, load: f64, samples: usize) -> MeshLtca {
+    let p = model.path().clone();
+    let mut out = MeshLtca {
+        name: p.mesh.name().into(),
+        load,
+        position: Vec::new(),
+        roll_angle_gear1: Vec::new(),
+        transmission_error: Vec::new(),
+        mesh_stiffness_loaded: Vec::new(),
+        mesh_stiffness_nominal: Vec::new(),
+        pairs_in_contact: Vec::new(),
+        peak_pressure: Vec::new(),
+        half_width: Vec::new(),
+        pair_path_position: Vec::new(),
+        pair_path_roll_gear1: Vec::new(),
+        pair_path_load: Vec::new(),
+        pair_path_peak_pressure: Vec::new(),
+        pair_path_half_width: Vec::new(),
+    };
+    let mut pairs = Vec::new();
+    let mut along: Vec<(f64, f64, f64, f64)> = Vec::new();
+    let mut delta = 0.0;
+    for i in 0..samples {
+        let s = p.start + p.base_pitch * i as f64 / samples as f64;
+        delta = solve_increasing(|d| model.force(s, d, None), load, delta);
+        let (_, k) = model.force(s, delta, Some(&mut pairs));
+        let mut n = 0;
+        let (mut pmax, mut bmax): (f64, f64) = (0.0, 0.0);
+        for c in &pairs {
+            let (pp, b) = hertz_of(model, set, c.position, c.force);
+            if c.force != 0.0 {
+                n += 1;
+                pmax = pmax.max(pp);
+                bmax = bmax.max(b);
+            }
+            along.push((c.position, c.force, pp, b));
+        }
+        out.position.push(s);
+        out.roll_angle_gear1.push(p.roll_1(s));
+        out.transmission_error.push(delta);
+        out.mesh_stiffness_loaded.push(k);
+        out.mesh_stiffness_nominal.push(model.nominal_mesh_stiffness(s));
+        out.pairs_in_contact.push(n);
+        out.peak_pressure.push(pmax);
+        out.half_width.push(bmax);
+    }
+    along.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let first = along.iter().position(|a| a.1 != 0.0).unwrap_or(0).saturating_sub(1);
+    let last = (along.iter().rposition(|a| a.1 != 0.0).unwrap_or(0) + 2).min(along.len());
+    for (pos, f, pp, b) in &along[first..last] {
+        out.pair_path_position.push(*pos);
+        out.pair_path_roll_gear1.push(p.roll_1(*pos));
+        out.pair_path_load.push(*f);
+        out.pair_path_peak_pressure.push(*pp);
+        out.pair_path_half_width.push(*b);
+    }
+    out
+}
+
+/// Contact models of both meshes of a set with its planet phasing.
+#[derive(Clone, Debug)]
+pub struct SetModel {
+    /// Sun–planet mesh model.
+    pub sun_planet: MeshModel,
+    /// Ring–planet mesh model.
+    pub ring_planet: MeshModel,
+    /// Planet angles [rad].
+    pub planet_angles: Vec<f64>,
+    base_radius_sun: f64,
+    ring_shift: f64,
+}
+
+impl SetModel {
+    /// Models of both meshes, unworn.
+    pub fn new(set: &GearSet) -> Self {
+        Self::with_flanks(set, &MeshFlanks::default(), &MeshFlanks::default())
+    }
+
+    /// Models of both meshes with flank deviations.
+    pub fn with_flanks(set: &GearSet, sun_planet: &MeshFlanks, ring_planet: &MeshFlanks) -> Self {
+        let sp = MeshModel::new(set, MeshKind::SunPlanet, sun_planet);
+        let rp = MeshModel::new(set, MeshKind::RingPlanet, ring_planet);
+        // Planet tooth directions seen from the sun mesh (a space facing the
+        // sun) and from the mirrored ring mesh (a tooth facing the ring)
+        // differ by π + π/Z_p; both meshes' positions follow the planet's
+        // angle, so the ring position is the sun position shifted by
+        // (offset_r − offset_s) − j_n,s/2 − r_b,p (π + π/Z_p).
+        let off = |m: &MeshModel| m.separation.back_mirror / 2.0 - m.separation.normal_backlash / 2.0;
+        let zp = f64::from(set.planet.teeth);
+        let ring_shift = off(&rp) - off(&sp) - sp.separation.normal_backlash / 2.0
+            - set.planet.base_radius() * (std::f64::consts::PI + std::f64::consts::PI / zp);
+        Self {
+            sun_planet: sp,
+            ring_planet: rp,
+            planet_angles: set.planet_angles.clone(),
+            base_radius_sun: set.sun.base_radius(),
+            ring_shift,
+        }
+    }
+
+    /// Sun-mesh reference position of planet `n` at sun travel `lambda` [m].
+    pub fn sun_position(&self, n: usize, lambda: f64) -> f64 {
+        let p = self.sun_planet.path();
+        let s = lambda - self.base_radius_sun * self.planet_angles[n];
+        p.start + (s - p.start).rem_euclid(p.base_pitch)
+    }
+
+    /// Ring-mesh reference position of planet `n` at sun travel `lambda` [m].
+    pub fn ring_position(&self, n: usize, lambda: f64) -> f64 {
+        let p = self.ring_planet.path();
+        let s = self.sun_position(n, lambda) + self.ring_shift;
+        p.start + (s - p.start).rem_euclid(p.base_pitch)
+    }
+
+    /// Load [N] through planet `n` when the sun has advanced `u_s` [m]
+    /// elastically, with the approach of its sun mesh.
+    pub fn planet_load(&self, n: usize, lambda: f64, u_s: f64, guess: f64) -> (f64, f64) {
+        let ss = self.sun_position(n, lambda);
+        let sr = self.ring_position(n, lambda);
+        let g = |x: f64| {
+            let (fs, ks) = self.sun_planet.force(ss, x, None);
+            let (fr, kr) = self.ring_planet.force(sr, u_s - x, None);
+            (fs - fr, ks + kr)
+        };
+        let x = solve_increasing(g, 0.0, guess);
+        (self.sun_planet.force(ss, x, None).0, x)
+    }
+}
+
+/// Whole-set LTCA result over one mesh cycle.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SetLtca {
+    /// Sun travel along the line of action [m].
+    pub travel: Vec<f64>,
+    /// Sun rotation as displacement along the line of action [m] (the set's
+    /// static transmission error at the sun).
+    pub sun_approach: Vec<f64>,
+    /// Load of each planet at each position [N]: `planet_load[n][i]`.
+    pub planet_load: Vec<Vec<f64>>,
+    /// Mean load of each planet over the cycle [N].
+    pub planet_mean_load: Vec<f64>,
+    /// Largest instantaneous planet load over the mean planet load.
+    pub load_sharing_factor: f64,
+}
+
+/// Quasi-static LTCA of the whole set under the input torque.
+pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
+    let total = set.input_torque / set.sun.base_radius();
+    let n = model.planet_angles.len();
+    let pb = model.sun_planet.path().base_pitch;
+    let mut guesses = vec![0.0; n];
+    let mut us = 0.0;
+    let mut out = SetLtca {
+        travel: Vec::new(),
+        sun_approach: Vec::new(),
+        planet_load: vec![Vec::new(); n],
+        planet_mean_load: vec![0.0; n],
+        load_sharing_factor: 0.0,
+    };
+    for i in 0..samples {
+        let lambda = pb * i as f64 / samples as f64;
+        let g = |u: f64| {
+            let mut f = 0.0;
+            let mut k = 0.0;
+            for p in 0..n {
+                let (fp, x) = model.planet_load(p, lambda, u, guesses[p]);
+                f += fp;
+                // Series stiffness of the planet's two meshes at this state.
+                let ks = model.sun_planet.force(model.sun_position(p, lambda), x, None).1;
+                let kr = model.ring_planet.force(model.ring_position(p, lambda), u - x, None).1;
+                if ks + kr > 0.0 {
+                    k += ks * kr / (ks + kr);
+                }
+            }
+            (f, k)
+        };
+        us = solve_increasing(g, total, us);
+        out.travel.push(lambda);
+        out.sun_approach.push(us);
+        for (p, guess) in guesses.iter_mut().enumerate() {
+            let (f, x) = model.planet_load(p, lambda, us, *guess);
+            *guess = x;
+            out.planet_load[p].push(f);
+        }
+    }
+    let mean_all = total / n as f64;
+    for p in 0..n {
+        out.planet_mean_load[p] = out.planet_load[p].iter().sum::<f64>() / samples as f64;
+    }
+    out.load_sharing_factor =
+        out.planet_load.iter().flatten().cloned().fold(0.0, f64::max) / mean_all;
+    out
+}
