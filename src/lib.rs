@@ -6,4 +6,5 @@
 #![deny(clippy::print_stdout, clippy::print_stderr)]
 
 pub mod physics;
+pub mod report;
 pub mod scene;

@@ -27,13 +27,24 @@ fn pair_loads_add_up_to_the_mesh_load_and_stiffness_is_periodic() {
         for (i, s) in r.position.iter().enumerate() {
             let (f, k) = model.force(*s, r.transmission_error[i], Some(&mut pairs));
             let sum: f64 = pairs.iter().map(|p| p.force).sum();
-            assert!((sum / w - 1.0).abs() < 1e-9, "{mesh:?} sum of pair loads {sum} vs {w}");
+            assert!(
+                (sum / w - 1.0).abs() < 1e-9,
+                "{mesh:?} sum of pair loads {sum} vs {w}"
+            );
             assert!((f / w - 1.0).abs() < 1e-9);
             let (f2, k2) = model.force(s + pb, r.transmission_error[i], None);
-            assert!((f2 - f).abs() < 1e-9 * w && (k2 - k).abs() < 1e-9 * k, "not periodic at {s}");
+            assert!(
+                (f2 - f).abs() < 1e-9 * w && (k2 - k).abs() < 1e-9 * k,
+                "not periodic at {s}"
+            );
         }
-        let nominal: Vec<f64> = r.position.iter().map(|s| model.nominal_mesh_stiffness(*s)).collect();
-        let mean = nominal.iter().sum::<f64>() / nominal.len() as f64 / (set.sun.face_width * 1e3) * 1e-6;
+        let nominal: Vec<f64> = r
+            .position
+            .iter()
+            .map(|s| model.nominal_mesh_stiffness(*s))
+            .collect();
+        let mean =
+            nominal.iter().sum::<f64>() / nominal.len() as f64 / (set.sun.face_width * 1e3) * 1e-6;
         eprintln!(
             "{mesh:?}: loaded contact ratio {:.4}, mean nominal mesh stiffness {mean:.3} N/(mm·µm), TE p-p {:.3} µm",
             r.loaded_contact_ratio(),
@@ -66,7 +77,10 @@ fn mean_mesh_stiffness_of_the_example_is_inside_the_iso_band() {
         contact_ratio: model.path().nominal_contact_ratio(),
     });
     let ratio = mean / iso.mesh;
-    eprintln!("mean mesh stiffness {mean:.3} N/(mm·µm), ISO c_γα {:.3}, ratio {ratio:.3}", iso.mesh);
+    eprintln!(
+        "mean mesh stiffness {mean:.3} N/(mm·µm), ISO c_γα {:.3}, ratio {ratio:.3}",
+        iso.mesh
+    );
     assert!(ratio > 0.7 && ratio < 1.3, "ratio to ISO {ratio}");
 }
 
@@ -78,10 +92,23 @@ fn hertz_pressure_of_a_pair_matches_the_closed_form() {
     let r = mesh_ltca(&set, &model, w, 200);
     let p = model.path();
     // The pair through the pitch point carries the whole load (single-pair zone).
-    let i = r.pair_path_position.iter().enumerate().min_by(|a, b| (a.1 - p.pitch_point()).abs().total_cmp(&(b.1 - p.pitch_point()).abs())).unwrap().0;
+    let i = r
+        .pair_path_position
+        .iter()
+        .enumerate()
+        .min_by(|a, b| {
+            (a.1 - p.pitch_point())
+                .abs()
+                .total_cmp(&(b.1 - p.pitch_point()).abs())
+        })
+        .unwrap()
+        .0;
     let s = r.pair_path_position[i];
     let load = r.pair_path_load[i];
-    assert!((load / w - 1.0).abs() < 1e-9, "single pair at pitch point carries {load} of {w}");
+    assert!(
+        (load / w - 1.0).abs() < 1e-9,
+        "single pair at pitch point carries {load} of {w}"
+    );
     let e = 207e9 / (2.0 * (1.0 - 0.09));
     let rho1 = s;
     let rho2 = p.tangency_distance - s;
@@ -91,9 +118,19 @@ fn hertz_pressure_of_a_pair_matches_the_closed_form() {
     let p0 = 2.0 * wl / (std::f64::consts::PI * b);
     assert!((r.pair_path_half_width[i] / b - 1.0).abs() < 1e-9);
     assert!((r.pair_path_peak_pressure[i] / p0 - 1.0).abs() < 1e-9);
-    let c = line_contact(wl, rho1, rho2, false, contact_modulus(207e9, 0.3, 207e9, 0.3));
+    let c = line_contact(
+        wl,
+        rho1,
+        rho2,
+        false,
+        contact_modulus(207e9, 0.3, 207e9, 0.3),
+    );
     assert!((c.peak_pressure / p0 - 1.0).abs() < 1e-12);
-    eprintln!("pitch point: b = {:.2} µm, p0 = {:.0} MPa", b * 1e6, p0 * 1e-6);
+    eprintln!(
+        "pitch point: b = {:.2} µm, p0 = {:.0} MPa",
+        b * 1e6,
+        p0 * 1e-6
+    );
 }
 
 #[test]
@@ -104,13 +141,19 @@ fn planets_share_the_load_equally_on_average_and_loads_add_up() {
     let total = set.input_torque / set.sun.base_radius();
     for i in 0..r.travel.len() {
         let sum: f64 = r.planet_load.iter().map(|p| p[i]).sum();
-        assert!((sum / total - 1.0).abs() < 1e-9, "planet loads add to {sum} of {total}");
+        assert!(
+            (sum / total - 1.0).abs() < 1e-9,
+            "planet loads add to {sum} of {total}"
+        );
         // Planets 0 and 2 (and 1 and 3) mesh in phase: Z_sun·90°/360° = 8.5.
         assert!((r.planet_load[0][i] - r.planet_load[2][i]).abs() < 1e-6 * total);
         assert!((r.planet_load[1][i] - r.planet_load[3][i]).abs() < 1e-6 * total);
     }
     for m in &r.planet_mean_load {
-        assert!((m / (total / 4.0) - 1.0).abs() < 2e-3, "mean planet load {m}");
+        assert!(
+            (m / (total / 4.0) - 1.0).abs() < 2e-3,
+            "mean planet load {m}"
+        );
     }
     eprintln!("load sharing factor {:.4}", r.load_sharing_factor);
 }

@@ -21,7 +21,11 @@ fn iso_tr_6336_30_example_1_to_0_1_percent() {
         contact_ratio: (17.46485 / 12.37047 - 0.25) / 0.75,
     };
     let s = iso_stiffness(&p);
-    assert!((s.single_theoretical / 17.85584 - 1.0).abs() < 1e-3, "c'_th {}", s.single_theoretical);
+    assert!(
+        (s.single_theoretical / 17.85584 - 1.0).abs() < 1e-3,
+        "c'_th {}",
+        s.single_theoretical
+    );
     assert!((s.single / 12.37047 - 1.0).abs() < 1e-3, "c' {}", s.single);
     assert!((s.mesh / 17.46485 - 1.0).abs() < 1e-3, "c_γα {}", s.mesh);
 }
@@ -39,11 +43,20 @@ fn pair_stiffness_of_the_example_lies_in_the_iso_band() {
             max = max.max(k.at(s));
         }
         let per_mm = max / width_mm * 1e-6;
-        eprintln!("{mesh:?}: max single-pair stiffness {per_mm:.3} N/(mm·µm), at pitch {:.3}", k.at(p.pitch_point()) / width_mm * 1e-6);
+        eprintln!(
+            "{mesh:?}: max single-pair stiffness {per_mm:.3} N/(mm·µm), at pitch {:.3}",
+            k.at(p.pitch_point()) / width_mm * 1e-6
+        );
         for s in [p.start, p.pitch_point(), p.end] {
             let c1 = k.gear1.at(p.roll_1(s));
             let c2 = k.gear2.at(p.roll_2(s));
-            eprintln!("  s={:.3}mm gear1 {:?}\n    gear2 {:?}\n    hertz {:e}", s * 1e3, c1, c2, k.hertz);
+            eprintln!(
+                "  s={:.3}mm gear1 {:?}\n    gear2 {:?}\n    hertz {:e}",
+                s * 1e3,
+                c1,
+                c2,
+                k.hertz
+            );
         }
         // ISO 6336-1: c' ≈ 14 N/(mm·µm) for solid steel spur gears; the
         // energy method is known to sit within about ±40 % of it.

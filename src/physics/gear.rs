@@ -357,11 +357,15 @@ impl GearSet {
         let (rb1, rb2) = (g1.base_radius(), g2.base_radius());
         match g2.kind {
             GearKind::External => {
-                g1.base_pitch() - 2.0 * rb1 * g1.base_half_angle() - 2.0 * rb2 * g2.base_half_angle()
+                g1.base_pitch()
+                    - 2.0 * rb1 * g1.base_half_angle()
+                    - 2.0 * rb2 * g2.base_half_angle()
                     + 2.0 * (rb1 + rb2) * aw
             }
             GearKind::Internal => {
-                2.0 * rb2 * g2.base_half_angle() - 2.0 * rb1 * g1.base_half_angle() - 2.0 * (rb2 - rb1) * aw
+                2.0 * rb2 * g2.base_half_angle()
+                    - 2.0 * rb1 * g1.base_half_angle()
+                    - 2.0 * (rb2 - rb1) * aw
             }
         }
     }

@@ -58,9 +58,22 @@ impl MeshModel {
         let step = path.base_pitch / TABLE_SAMPLES_PER_PITCH as f64;
         let separation = MeshSeparation::new(set, mesh, flanks, step);
         let stiffness = PairStiffness::new(set, mesh);
-        let drive_k = separation.drive.positions().map(|s| stiffness.at(s)).collect();
-        let back_k = separation.back.positions().map(|s| stiffness.at(separation.back_mirror - s)).collect();
-        Self { separation, stiffness, drive_k, back_k }
+        let drive_k = separation
+            .drive
+            .positions()
+            .map(|s| stiffness.at(s))
+            .collect();
+        let back_k = separation
+            .back
+            .positions()
+            .map(|s| stiffness.at(separation.back_mirror - s))
+            .collect();
+        Self {
+            separation,
+            stiffness,
+            drive_k,
+            back_k,
+        }
     }
 
     /// The path of contact.
@@ -87,7 +100,12 @@ impl MeshModel {
     /// Mesh force [N] and tangent stiffness [N/m] at approach `delta` [m],
     /// with the reference pair at position `s` [m]; pairs are filled into
     /// `pairs` when given.
-    pub fn force(&self, s: f64, delta: f64, mut pairs: Option<&mut Vec<PairContact>>) -> (f64, f64) {
+    pub fn force(
+        &self,
+        s: f64,
+        delta: f64,
+        mut pairs: Option<&mut Vec<PairContact>>,
+    ) -> (f64, f64) {
         if let Some(p) = pairs.as_deref_mut() {
             p.clear();
         }
@@ -108,7 +126,12 @@ impl MeshModel {
             f += fp;
             k += kp;
             if let Some(p) = pairs.as_deref_mut() {
-                p.push(PairContact { index, position: pos, force: fp, stiffness: kp });
+                p.push(PairContact {
+                    index,
+                    position: pos,
+                    force: fp,
+                    stiffness: kp,
+                });
             }
         }
         (f, k)
@@ -149,7 +172,13 @@ fn solve_increasing(f: impl Fn(f64) -> (f64, f64), target: f64, x0: f64) -> f64 
         } else {
             hi = hi.min(x);
         }
-        let mut next = if slope > 0.0 { x - r / slope } else if r < 0.0 { x + scale } else { x - scale };
+        let mut next = if slope > 0.0 {
+            x - r / slope
+        } else if r < 0.0 {
+            x + scale
+        } else {
+            x - scale
+        };
         if lo.is_finite() && hi.is_finite() {
             if !(next > lo && next < hi) {
                 next = 0.5 * (lo + hi);
@@ -189,7 +218,12 @@ impl CycleStats {
         let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
         let min = v.iter().cloned().fold(f64::INFINITY, f64::min);
         let max = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-        Self { mean, min, max, peak_to_peak: max - min }
+        Self {
+            mean,
+            min,
+            max,
+            peak_to_peak: max - min,
+        }
     }
 }
 
@@ -231,12 +265,17 @@ pub struct MeshLtca {
 impl MeshLtca {
     /// Loaded contact ratio: the mean number of loaded pairs.
     pub fn loaded_contact_ratio(&self) -> f64 {
-        self.pairs_in_contact.iter().map(|n| f64::from(*n)).sum::<f64>() / self.pairs_in_contact.len() as f64
+        self.pairs_in_contact
+            .iter()
+            .map(|n| f64::from(*n))
+            .sum::<f64>()
+            / self.pairs_in_contact.len() as f64
     }
 
     /// Fraction of the cycle with exactly `n` pairs in contact.
     pub fn fraction_with_pairs(&self, n: u32) -> f64 {
-        self.pairs_in_contact.iter().filter(|k| **k == n).count() as f64 / self.pairs_in_contact.len() as f64
+        self.pairs_in_contact.iter().filter(|k| **k == n).count() as f64
+            / self.pairs_in_contact.len() as f64
     }
 }
 
@@ -249,8 +288,18 @@ fn hertz_of(model: &MeshModel, set: &GearSet, pos: f64, force: f64) -> (f64, f64
         set.material.youngs_modulus,
         set.material.poisson_ratio,
     );
-    let width = set.sun.face_width.min(set.planet.face_width).min(set.ring.face_width);
-    let c = line_contact(force.abs() / width, p.rho_1(s), p.rho_2(s), p.kind == GearKind::Internal, e_star);
+    let width = set
+        .sun
+        .face_width
+        .min(set.planet.face_width)
+        .min(set.ring.face_width);
+    let c = line_contact(
+        force.abs() / width,
+        p.rho_1(s),
+        p.rho_2(s),
+        p.kind == GearKind::Internal,
+        e_star,
+    );
     (c.peak_pressure, c.half_width)
 }
 
@@ -297,13 +346,18 @@ pub fn mesh_ltca(set: &GearSet, model: &MeshModel, load: f64, samples: usize) ->
         out.roll_angle_gear1.push(p.roll_1(s));
         out.transmission_error.push(delta);
         out.mesh_stiffness_loaded.push(k);
-        out.mesh_stiffness_nominal.push(model.nominal_mesh_stiffness(s));
+        out.mesh_stiffness_nominal
+            .push(model.nominal_mesh_stiffness(s));
         out.pairs_in_contact.push(n);
         out.peak_pressure.push(pmax);
         out.half_width.push(bmax);
     }
     along.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let first = along.iter().position(|a| a.1 != 0.0).unwrap_or(0).saturating_sub(1);
+    let first = along
+        .iter()
+        .position(|a| a.1 != 0.0)
+        .unwrap_or(0)
+        .saturating_sub(1);
     let last = (along.iter().rposition(|a| a.1 != 0.0).unwrap_or(0) + 2).min(along.len());
     for (pos, f, pp, b) in &along[first..last] {
         out.pair_path_position.push(*pos);
@@ -343,9 +397,12 @@ impl SetModel {
         // differ by π + π/Z_p; both meshes' positions follow the planet's
         // angle, so the ring position is the sun position shifted by
         // (offset_r − offset_s) − j_n,s/2 − r_b,p (π + π/Z_p).
-        let off = |m: &MeshModel| m.separation.back_mirror / 2.0 - m.separation.normal_backlash / 2.0;
+        let off =
+            |m: &MeshModel| m.separation.back_mirror / 2.0 - m.separation.normal_backlash / 2.0;
         let zp = f64::from(set.planet.teeth);
-        let ring_shift = off(&rp) - off(&sp) - sp.separation.normal_backlash / 2.0
+        let ring_shift = off(&rp)
+            - off(&sp)
+            - sp.separation.normal_backlash / 2.0
             - set.planet.base_radius() * (std::f64::consts::PI + std::f64::consts::PI / zp);
         Self {
             sun_planet: sp,
@@ -424,8 +481,14 @@ pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
                 let (fp, x) = model.planet_load(p, lambda, u, guesses[p]);
                 f += fp;
                 // Series stiffness of the planet's two meshes at this state.
-                let ks = model.sun_planet.force(model.sun_position(p, lambda), x, None).1;
-                let kr = model.ring_planet.force(model.ring_position(p, lambda), u - x, None).1;
+                let ks = model
+                    .sun_planet
+                    .force(model.sun_position(p, lambda), x, None)
+                    .1;
+                let kr = model
+                    .ring_planet
+                    .force(model.ring_position(p, lambda), u - x, None)
+                    .1;
                 if ks + kr > 0.0 {
                     k += ks * kr / (ks + kr);
                 }
@@ -445,7 +508,12 @@ pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
     for p in 0..n {
         out.planet_mean_load[p] = out.planet_load[p].iter().sum::<f64>() / samples as f64;
     }
-    out.load_sharing_factor =
-        out.planet_load.iter().flatten().cloned().fold(0.0, f64::max) / mean_all;
+    out.load_sharing_factor = out
+        .planet_load
+        .iter()
+        .flatten()
+        .cloned()
+        .fold(0.0, f64::max)
+        / mean_all;
     out
 }

@@ -2,11 +2,11 @@
 //! printing, no `unsafe`.
 
 pub mod gear;
+pub mod hertz;
 pub mod involute;
+pub mod iso6336;
+pub mod ltca;
 pub mod mesh;
 pub mod profile;
 pub mod separation;
-pub mod hertz;
-pub mod iso6336;
 pub mod stiffness;
-pub mod ltca;

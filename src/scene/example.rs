@@ -52,7 +52,10 @@ impl Scene {
                 face_width_mm: 30.0,
                 tip_chamfer: None,
             },
-            planets: PlanetLayoutSpec { count: 4, angles_deg: None },
+            planets: PlanetLayoutSpec {
+                count: 4,
+                angles_deg: None,
+            },
             centre_distance_mm: 39.0,
             material: MaterialSpec::default(),
             operation: OperationSpec {

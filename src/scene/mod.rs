@@ -141,7 +141,11 @@ pub struct MaterialSpec {
 impl Default for MaterialSpec {
     /// Steel (MODEL.md §1).
     fn default() -> Self {
-        Self { youngs_modulus_gpa: 207.0, poisson_ratio: 0.3, density_kg_per_m3: 7850.0 }
+        Self {
+            youngs_modulus_gpa: 207.0,
+            poisson_ratio: 0.3,
+            density_kg_per_m3: 7850.0,
+        }
     }
 }
 
@@ -210,7 +214,9 @@ impl Default for AnalysisSpec {
 impl Scene {
     /// Parses a scene from TOML text.
     pub fn from_toml(text: &str) -> Result<Self, SceneError> {
-        toml::from_str(text).map_err(|e| SceneError::Syntax { message: e.to_string() })
+        toml::from_str(text).map_err(|e| SceneError::Syntax {
+            message: e.to_string(),
+        })
     }
 
     /// The scene as TOML text a user can edit.

@@ -58,7 +58,10 @@ impl SceneError {
 /// height at 45° to the tip circle, a common edge break for hobbed and
 /// shaved automotive gears.
 pub fn default_chamfer(module_mm: f64) -> ChamferSpec {
-    ChamferSpec { height_mm: 0.1 * module_mm, angle_deg: 45.0 }
+    ChamferSpec {
+        height_mm: 0.1 * module_mm,
+        angle_deg: 45.0,
+    }
 }
 
 struct Checker {
@@ -67,7 +70,11 @@ struct Checker {
 
 impl Checker {
     fn fail(&mut self, name: &str, value: impl fmt::Display, reason: impl Into<String>) {
-        self.problems.push(Problem { name: name.into(), value: value.to_string(), reason: reason.into() });
+        self.problems.push(Problem {
+            name: name.into(),
+            value: value.to_string(),
+            reason: reason.into(),
+        });
     }
 
     fn positive(&mut self, name: &str, v: f64) -> bool {
@@ -81,7 +88,11 @@ impl Checker {
 
     fn in_range(&mut self, name: &str, v: f64, lo: f64, hi: f64, why: &str) -> bool {
         if !(v.is_finite() && v > lo && v < hi) {
-            self.fail(name, v, format!("must lie strictly between {lo} and {hi} ({why})"));
+            self.fail(
+                name,
+                v,
+                format!("must lie strictly between {lo} and {hi} ({why})"),
+            );
             false
         } else {
             true
@@ -95,11 +106,23 @@ impl Checker {
             self.fail(
                 &name_h,
                 c.height_mm,
-                format!("must be at least 0 and below half the addendum ({:.4} mm)", 0.5 * addendum_mm),
+                format!(
+                    "must be at least 0 and below half the addendum ({:.4} mm)",
+                    0.5 * addendum_mm
+                ),
             );
         }
-        self.in_range(&name_a, c.angle_deg, 0.0, 90.0, "angle to the tip circle's tangent");
-        Chamfer { height: c.height_mm * 1e-3, angle: c.angle_deg.to_radians() }
+        self.in_range(
+            &name_a,
+            c.angle_deg,
+            0.0,
+            90.0,
+            "angle to the tip circle's tangent",
+        );
+        Chamfer {
+            height: c.height_mm * 1e-3,
+            angle: c.angle_deg.to_radians(),
+        }
     }
 
     fn external(&mut self, key: &str, g: &ExternalGearSpec) -> ToothForm {
@@ -114,13 +137,24 @@ impl Checker {
         sizes_ok &= self.positive(&n("bore_radius_mm"), g.bore_radius_mm);
         sizes_ok &= self.positive(&n("face_width_mm"), g.face_width_mm);
         if !(g.hob_tip_radius_mm.is_finite() && g.hob_tip_radius_mm >= 0.0) {
-            self.fail(&n("hob_tip_radius_mm"), g.hob_tip_radius_mm, "must be a finite number, zero or greater");
+            self.fail(
+                &n("hob_tip_radius_mm"),
+                g.hob_tip_radius_mm,
+                "must be a finite number, zero or greater",
+            );
             sizes_ok = false;
         }
-        let angle_ok =
-            self.in_range(&n("pressure_angle_deg"), g.pressure_angle_deg, 10.0, 35.0, "spur gear practice");
+        let angle_ok = self.in_range(
+            &n("pressure_angle_deg"),
+            g.pressure_angle_deg,
+            10.0,
+            35.0,
+            "spur gear practice",
+        );
         let reference = g.module_mm * f64::from(g.teeth) / 2.0;
-        let chamfer_spec = g.tip_chamfer.unwrap_or_else(|| default_chamfer(g.module_mm));
+        let chamfer_spec = g
+            .tip_chamfer
+            .unwrap_or_else(|| default_chamfer(g.module_mm));
         let chamfer = self.chamfer(key, &chamfer_spec, g.tip_radius_mm - reference);
         let form = ToothForm {
             kind: GearKind::External,
@@ -131,7 +165,9 @@ impl Checker {
             tip_radius: g.tip_radius_mm * 1e-3,
             root_radius: g.root_radius_mm * 1e-3,
             body_radius: g.bore_radius_mm * 1e-3,
-            root_form: RootForm::Hob { tip_radius: g.hob_tip_radius_mm * 1e-3 },
+            root_form: RootForm::Hob {
+                tip_radius: g.hob_tip_radius_mm * 1e-3,
+            },
             chamfer: (chamfer.height > 0.0).then_some(chamfer),
             face_width: g.face_width_mm * 1e-3,
         };
@@ -143,20 +179,33 @@ impl Checker {
             self.fail(
                 &n("tip_radius_mm"),
                 g.tip_radius_mm,
-                format!("must exceed the base radius {rb:.4} mm, or the teeth have no involute flank"),
+                format!(
+                    "must exceed the base radius {rb:.4} mm, or the teeth have no involute flank"
+                ),
             );
         }
         if g.root_radius_mm >= g.tip_radius_mm {
-            self.fail(&n("root_radius_mm"), g.root_radius_mm, format!("must be below the tip radius {} mm", g.tip_radius_mm));
+            self.fail(
+                &n("root_radius_mm"),
+                g.root_radius_mm,
+                format!("must be below the tip radius {} mm", g.tip_radius_mm),
+            );
         }
         if g.bore_radius_mm >= g.root_radius_mm {
-            self.fail(&n("bore_radius_mm"), g.bore_radius_mm, format!("must be below the root radius {} mm", g.root_radius_mm));
+            self.fail(
+                &n("bore_radius_mm"),
+                g.bore_radius_mm,
+                format!("must be below the root radius {} mm", g.root_radius_mm),
+            );
         }
         if g.tooth_thickness_mm >= PI * g.module_mm {
             self.fail(
                 &n("tooth_thickness_mm"),
                 g.tooth_thickness_mm,
-                format!("must be below the circular pitch π·m = {:.4} mm", PI * g.module_mm),
+                format!(
+                    "must be below the circular pitch π·m = {:.4} mm",
+                    PI * g.module_mm
+                ),
             );
         } else if g.tip_radius_mm > rb && form.thickness_at(form.tip_radius) <= 0.0 {
             self.fail(
@@ -190,9 +239,17 @@ impl Checker {
         ok &= self.positive(&n("rim_radius_mm"), g.rim_radius_mm);
         ok &= self.positive(&n("fillet_radius_mm"), g.fillet_radius_mm);
         ok &= self.positive(&n("face_width_mm"), g.face_width_mm);
-        ok &= self.in_range(&n("pressure_angle_deg"), g.pressure_angle_deg, 10.0, 35.0, "spur gear practice");
+        ok &= self.in_range(
+            &n("pressure_angle_deg"),
+            g.pressure_angle_deg,
+            10.0,
+            35.0,
+            "spur gear practice",
+        );
         let reference = g.module_mm * f64::from(g.teeth) / 2.0;
-        let chamfer = g.tip_chamfer.map(|c| self.chamfer("ring", &c, reference - g.minor_radius_mm));
+        let chamfer = g
+            .tip_chamfer
+            .map(|c| self.chamfer("ring", &c, reference - g.minor_radius_mm));
         let form = ToothForm {
             kind: GearKind::Internal,
             teeth: g.teeth,
@@ -202,7 +259,9 @@ impl Checker {
             tip_radius: g.minor_radius_mm * 1e-3,
             root_radius: g.root_radius_mm * 1e-3,
             body_radius: g.rim_radius_mm * 1e-3,
-            root_form: RootForm::Fillet { radius: g.fillet_radius_mm * 1e-3 },
+            root_form: RootForm::Fillet {
+                radius: g.fillet_radius_mm * 1e-3,
+            },
             chamfer: chamfer.filter(|c| c.height > 0.0),
             face_width: g.face_width_mm * 1e-3,
         };
@@ -218,23 +277,37 @@ impl Checker {
             );
         }
         if g.root_radius_mm <= g.minor_radius_mm {
-            self.fail(&n("root_radius_mm"), g.root_radius_mm, format!("must exceed the minor radius {} mm", g.minor_radius_mm));
+            self.fail(
+                &n("root_radius_mm"),
+                g.root_radius_mm,
+                format!("must exceed the minor radius {} mm", g.minor_radius_mm),
+            );
         }
         if g.rim_radius_mm <= g.root_radius_mm {
-            self.fail(&n("rim_radius_mm"), g.rim_radius_mm, format!("must exceed the root radius {} mm", g.root_radius_mm));
+            self.fail(
+                &n("rim_radius_mm"),
+                g.rim_radius_mm,
+                format!("must exceed the root radius {} mm", g.root_radius_mm),
+            );
         }
         if g.tooth_thickness_mm >= PI * g.module_mm {
             self.fail(
                 &n("tooth_thickness_mm"),
                 g.tooth_thickness_mm,
-                format!("must be below the circular pitch π·m = {:.4} mm", PI * g.module_mm),
+                format!(
+                    "must be below the circular pitch π·m = {:.4} mm",
+                    PI * g.module_mm
+                ),
             );
         }
         if g.fillet_radius_mm >= 0.5 * (g.root_radius_mm - g.minor_radius_mm) {
             self.fail(
                 &n("fillet_radius_mm"),
                 g.fillet_radius_mm,
-                format!("must be below half the tooth depth, {:.4} mm", 0.5 * (g.root_radius_mm - g.minor_radius_mm)),
+                format!(
+                    "must be below half the tooth depth, {:.4} mm",
+                    0.5 * (g.root_radius_mm - g.minor_radius_mm)
+                ),
             );
         }
         form
@@ -243,15 +316,29 @@ impl Checker {
 
 /// Checks every rule of a scene and converts it to SI.
 pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
-    let mut c = Checker { problems: Vec::new() };
+    let mut c = Checker {
+        problems: Vec::new(),
+    };
     let sun = c.external("sun", &scene.sun);
     let planet = c.external("planet", &scene.planet);
     let ring = c.ring(&scene.ring);
     let gears_ok = c.problems.is_empty();
 
     let m = &scene.material;
-    let mut material_ok = c.in_range("material.youngs_modulus_gpa", m.youngs_modulus_gpa, 0.0, 1.0e4, "an engineering metal or polymer");
-    material_ok &= c.in_range("material.poisson_ratio", m.poisson_ratio, 0.0, 0.5, "isotropic elastic material");
+    let mut material_ok = c.in_range(
+        "material.youngs_modulus_gpa",
+        m.youngs_modulus_gpa,
+        0.0,
+        1.0e4,
+        "an engineering metal or polymer",
+    );
+    material_ok &= c.in_range(
+        "material.poisson_ratio",
+        m.poisson_ratio,
+        0.0,
+        0.5,
+        "isotropic elastic material",
+    );
     material_ok &= c.positive("material.density_kg_per_m3", m.density_kg_per_m3);
     let material = Material {
         youngs_modulus: m.youngs_modulus_gpa * 1e9,
@@ -271,21 +358,41 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     }
     let a = &scene.analysis;
     if !(8..=100_000).contains(&a.positions_per_mesh_cycle) {
-        c.fail("analysis.positions_per_mesh_cycle", a.positions_per_mesh_cycle, "must be between 8 and 100000");
+        c.fail(
+            "analysis.positions_per_mesh_cycle",
+            a.positions_per_mesh_cycle,
+            "must be between 8 and 100000",
+        );
     }
     if !(5..=10_000).contains(&a.profile_points) {
-        c.fail("analysis.profile_points", a.profile_points, "must be between 5 and 10000");
+        c.fail(
+            "analysis.profile_points",
+            a.profile_points,
+            "must be between 5 and 10000",
+        );
     }
     if !(1..=1000).contains(&a.face_slices) {
-        c.fail("analysis.face_slices", a.face_slices, "must be between 1 and 1000");
+        c.fail(
+            "analysis.face_slices",
+            a.face_slices,
+            "must be between 1 and 1000",
+        );
     }
 
     let op = &scene.operation;
     if op.held == op.input {
-        c.fail("operation.input", op.input.name(), format!("must differ from the held member ({})", op.held.name()));
+        c.fail(
+            "operation.input",
+            op.input.name(),
+            format!("must differ from the held member ({})", op.held.name()),
+        );
     }
     if !op.input_torque_nm.is_finite() {
-        c.fail("operation.input_torque_nm", op.input_torque_nm, "must be a finite number");
+        c.fail(
+            "operation.input_torque_nm",
+            op.input_torque_nm,
+            "must be a finite number",
+        );
     }
 
     // Planet layout and the assembly condition.
@@ -295,7 +402,9 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         c.fail("planets.count", count, "must be between 1 and 32");
     } else {
         angles = match &scene.planets.angles_deg {
-            None => (0..count).map(|i| 2.0 * PI * f64::from(i) / f64::from(count)).collect(),
+            None => (0..count)
+                .map(|i| 2.0 * PI * f64::from(i) / f64::from(count))
+                .collect(),
             Some(list) => {
                 if list.len() != count as usize {
                     c.fail(
@@ -308,14 +417,20 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
             }
         };
         if angles.iter().any(|a| !a.is_finite()) {
-            c.fail("planets.angles_deg", format!("{:?}", scene.planets.angles_deg), "must be finite numbers");
+            c.fail(
+                "planets.angles_deg",
+                format!("{:?}", scene.planets.angles_deg),
+                "must be finite numbers",
+            );
             angles.clear();
         }
     }
 
     let centre_ok = c.positive("centre_distance_mm", scene.centre_distance_mm);
     if !(gears_ok && centre_ok) {
-        return Err(SceneError::Invalid { problems: c.problems });
+        return Err(SceneError::Invalid {
+            problems: c.problems,
+        });
     }
 
     let set = GearSet {
@@ -358,7 +473,9 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         }
     }
     if !c.problems.is_empty() {
-        return Err(SceneError::Invalid { problems: c.problems });
+        return Err(SceneError::Invalid {
+            problems: c.problems,
+        });
     }
 
     // Centre distance must be reachable by both meshes.
@@ -366,13 +483,23 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     let ext = (set.sun.base_radius() + set.planet.base_radius()) * 1e3;
     let int = (set.ring.base_radius() - set.planet.base_radius()) * 1e3;
     if a_mm <= ext {
-        c.fail("centre_distance_mm", a_mm, format!("must exceed the sum of sun and planet base radii, {ext:.4} mm"));
+        c.fail(
+            "centre_distance_mm",
+            a_mm,
+            format!("must exceed the sum of sun and planet base radii, {ext:.4} mm"),
+        );
     }
     if a_mm <= int {
-        c.fail("centre_distance_mm", a_mm, format!("must exceed the ring base radius less the planet's, {int:.4} mm"));
+        c.fail(
+            "centre_distance_mm",
+            a_mm,
+            format!("must exceed the ring base radius less the planet's, {int:.4} mm"),
+        );
     }
     if !c.problems.is_empty() {
-        return Err(SceneError::Invalid { problems: c.problems });
+        return Err(SceneError::Invalid {
+            problems: c.problems,
+        });
     }
 
     for mesh in MeshKind::ALL {
@@ -396,9 +523,19 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         let eps = path.nominal_contact_ratio();
         if eps < 1.0 {
             c.fail(
-                &format!("{}.tip_radius_mm", if mesh == MeshKind::SunPlanet { "sun" } else { "ring" }),
+                &format!(
+                    "{}.tip_radius_mm",
+                    if mesh == MeshKind::SunPlanet {
+                        "sun"
+                    } else {
+                        "ring"
+                    }
+                ),
                 format!("{} (contact ratio {eps:.4})", path.gear1_tip_radius_mm()),
-                format!("the {} mesh's contact ratio must be at least 1: lengthen the teeth", mesh.name()),
+                format!(
+                    "the {} mesh's contact ratio must be at least 1: lengthen the teeth",
+                    mesh.name()
+                ),
             );
         }
         // Tip/root interference: each gear's start of active profile must lie
@@ -468,7 +605,11 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     sorted.sort_by(f64::total_cmp);
     if sorted.len() > 1 {
         for i in 0..sorted.len() {
-            let next = if i + 1 < sorted.len() { sorted[i + 1] } else { sorted[0] + 2.0 * PI };
+            let next = if i + 1 < sorted.len() {
+                sorted[i + 1]
+            } else {
+                sorted[0] + 2.0 * PI
+            };
             let gap = next - sorted[i];
             let chord = 2.0 * set.centre_distance * (gap / 2.0).sin();
             if chord <= 2.0 * set.planet.tip_radius {
@@ -489,6 +630,8 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     if c.problems.is_empty() {
         Ok(set)
     } else {
-        Err(SceneError::Invalid { problems: c.problems })
+        Err(SceneError::Invalid {
+            problems: c.problems,
+        })
     }
 }

@@ -1,0 +1,8 @@
+//! Reports for the command-line tool: JSON documents and plots. This is the
+//! shell around the physics: it converts to the field's units only where a
+//! person reads (plots), and writes every file atomically.
+
+pub mod ltca;
+pub mod plot;
+
+pub use plot::write_atomic;
