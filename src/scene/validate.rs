@@ -314,6 +314,15 @@ impl Checker {
     }
 }
 
+/// The scene key of a gear's tip radius (the ring's is its minor radius).
+fn tip_key(gear: &str) -> String {
+    if gear == "ring" {
+        "ring.minor_radius_mm".into()
+    } else {
+        format!("{gear}.tip_radius_mm")
+    }
+}
+
 /// Checks every rule of a scene and converts it to SI.
 pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     let mut c = Checker {
@@ -322,6 +331,21 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     let sun = c.external("sun", &scene.sun);
     let planet = c.external("planet", &scene.planet);
     let ring = c.ring(&scene.ring);
+    // Same base pitch on all gears: a mesh needs it, whatever else is wrong.
+    for (key, g) in [("planet", &planet), ("ring", &ring)] {
+        let (p, p0) = (g.base_pitch(), sun.base_pitch());
+        if p.is_finite() && p0.is_finite() && p > 0.0 && p0 > 0.0 && (p - p0).abs() > 1e-9 {
+            c.fail(
+                &format!("{key}.module_mm"),
+                g.module * 1e3,
+                format!(
+                    "module and pressure angle must give the sun's base pitch {:.5} mm (this gives {:.5} mm)",
+                    p0 * 1e3,
+                    p * 1e3
+                ),
+            );
+        }
+    }
     let gears_ok = c.problems.is_empty();
 
     let m = &scene.material;
@@ -458,26 +482,6 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         },
     };
 
-    // Same module and pressure angle on all gears (a mesh needs equal base pitches).
-    for (key, g) in [("planet", &set.planet), ("ring", &set.ring)] {
-        if (g.base_pitch() - set.sun.base_pitch()).abs() > 1e-9 {
-            c.fail(
-                &format!("{key}.module_mm"),
-                g.module * 1e3,
-                format!(
-                    "module and pressure angle must give the sun's base pitch {:.5} mm (this gives {:.5} mm)",
-                    set.sun.base_pitch() * 1e3,
-                    g.base_pitch() * 1e3
-                ),
-            );
-        }
-    }
-    if !c.problems.is_empty() {
-        return Err(SceneError::Invalid {
-            problems: c.problems,
-        });
-    }
-
     // Centre distance must be reachable by both meshes.
     let a_mm = scene.centre_distance_mm;
     let ext = (set.sun.base_radius() + set.planet.base_radius()) * 1e3;
@@ -528,7 +532,7 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
                     if mesh == MeshKind::SunPlanet {
                         "sun"
                     } else {
-                        "ring"
+                        "planet"
                     }
                 ),
                 format!("{} (contact ratio {eps:.4})", path.gear1_tip_radius_mm()),
@@ -555,7 +559,7 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         };
         if interferes1 {
             c.fail(
-                &format!("{k2}.tip_radius_mm"),
+                &tip_key(k2),
                 g2.tip_radius * 1e3,
                 format!(
                     "tip/root interference in the {} mesh: the {k2} tip reaches {k1} radius {:.4} mm, below its form radius {:.4} mm where the fillet begins",
@@ -565,7 +569,7 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         }
         if interferes2 {
             c.fail(
-                &format!("{k1}.tip_radius_mm"),
+                &tip_key(k1),
                 g1.tip_radius * 1e3,
                 format!(
                     "tip/root interference in the {} mesh: the {k1} tip reaches {k2} radius {:.4} mm, beyond its form radius {:.4} mm where the fillet begins",
@@ -574,12 +578,12 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
             );
         }
         // Root clearance: the mating tip circle must not reach the root circle.
-        for (clearance, tip_key, root_key) in path.root_clearances() {
+        for (clearance, tip_gear, root_key) in path.root_clearances() {
             if clearance <= 0.0 {
                 c.fail(
-                    &format!("{tip_key}.tip_radius_mm"),
+                    &tip_key(tip_gear),
                     format!("clearance {:.4} mm", clearance * 1e3),
-                    format!("the {tip_key} tip circle must clear the {root_key} root circle in the {} mesh", mesh.name()),
+                    format!("the {tip_gear} tip circle must clear the {root_key} root circle in the {} mesh", mesh.name()),
                 );
             }
         }
