@@ -477,8 +477,8 @@ pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
         let g = |u: f64| {
             let mut f = 0.0;
             let mut k = 0.0;
-            for p in 0..n {
-                let (fp, x) = model.planet_load(p, lambda, u, guesses[p]);
+            for (p, guess) in guesses.iter().enumerate() {
+                let (fp, x) = model.planet_load(p, lambda, u, *guess);
                 f += fp;
                 // Series stiffness of the planet's two meshes at this state.
                 let ks = model

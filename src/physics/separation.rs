@@ -59,7 +59,7 @@ impl SeparationTable {
     /// [`NO_CONTACT`] outside the table.
     pub fn at(&self, s: f64) -> f64 {
         let x = (s - self.start) / self.step;
-        if !(x >= 0.0) || x > (self.values.len() - 1) as f64 {
+        if x.is_nan() || x < 0.0 || x > (self.values.len() - 1) as f64 {
             return NO_CONTACT;
         }
         let i = (x.floor() as usize).min(self.values.len() - 2);

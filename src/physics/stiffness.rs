@@ -134,8 +134,8 @@ impl ToothComplianceCurve {
         let mut prev = integrand(0.0);
         for k in 1..=SECTION_STEPS {
             let cur = integrand(k as f64 * d);
-            for m in 0..3 {
-                j[m][k] = j[m][k - 1] + 0.5 * d * (prev.0[m] + cur.0[m]);
+            for (m, column) in j.iter_mut().enumerate() {
+                column[k] = column[k - 1] + 0.5 * d * (prev.0[m] + cur.0[m]);
             }
             inv_area[k] = inv_area[k - 1] + 0.5 * d * (prev.1 + cur.1);
             prev = cur;

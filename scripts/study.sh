@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# The main job: the published example (MODEL.md §1) end to end, with plots.
+# Output: out/ (JSON and report) and out/plots/ (SVG and PNG).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+cargo build --release --quiet
+mkdir -p out/plots
+bin=target/release/planetwear
+echo "== scene example-2004 (out/example-2004.toml)"
+"$bin" scene show example-2004 > out/example-2004.toml.tmp && mv out/example-2004.toml.tmp out/example-2004.toml
+echo "== loaded tooth contact analysis (out/ltca.json, out/plots/)"
+start=$(date +%s%N)
+"$bin" ltca --scene example-2004 --out out/ltca.json --plots out/plots
+end=$(date +%s%N)
+echo "LTCA took $(( (end - start) / 1000000 )) ms"
+echo "== done: see out/ltca.json and out/plots/*.png"

@@ -1,0 +1,151 @@
+//! The command-line tool as a user runs it.
+
+use std::process::Command;
+
+fn planetwear(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_planetwear"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+#[test]
+fn scene_show_prints_an_editable_file_that_validates() {
+    let out = planetwear(&["scene", "show", "example-2004"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("teeth = 34") && text.contains("centre_distance_mm = 39.0"),
+        "{text}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("edited.toml");
+    std::fs::write(
+        &path,
+        text.replace("input_torque_nm = 750.0", "input_torque_nm = 300.0"),
+    )
+    .unwrap();
+    let out = planetwear(&[
+        "ltca",
+        "--scene",
+        path.to_str().unwrap(),
+        "--json",
+        "--samples",
+        "40",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["input_torque"], 300.0);
+}
+
+#[test]
+fn ltca_json_has_the_documented_keys_in_si_units() {
+    let out = planetwear(&[
+        "ltca",
+        "--scene",
+        "example-2004",
+        "--json",
+        "--samples",
+        "60",
+    ]);
+    assert!(out.status.success());
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let meshes = doc["meshes"].as_array().unwrap();
+    assert_eq!(meshes.len(), 2);
+    for m in meshes {
+        for key in [
+            "contact_ratio_nominal",
+            "contact_ratio_loaded",
+            "peak_hertz_pressure",
+            "max_hertz_half_width",
+        ] {
+            assert!(m[key].as_f64().unwrap() > 0.0, "{key}");
+        }
+        for key in [
+            "mesh_stiffness_nominal",
+            "mesh_stiffness_loaded",
+            "static_transmission_error",
+        ] {
+            for stat in ["mean", "peak_to_peak", "min", "max"] {
+                assert!(m[key][stat].is_number(), "{key}.{stat}");
+            }
+        }
+        // SI: a mesh stiffness of some 1e8..1e9 N/m, a base pitch of 4.39e-3 m.
+        let k = m["mesh_stiffness_nominal"]["mean"].as_f64().unwrap();
+        assert!(k > 1e8 && k < 2e9, "{k}");
+        assert!((m["base_pitch"].as_f64().unwrap() - 4.3905e-3).abs() < 1e-7);
+    }
+    let shares = doc["planets"]["mean_load"].as_array().unwrap();
+    assert_eq!(shares.len(), 4);
+}
+
+#[test]
+fn plots_are_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = planetwear(&[
+        "ltca",
+        "--scene",
+        "example-2004",
+        "--samples",
+        "40",
+        "--plots",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for stem in [
+        "sun_planet_mesh_stiffness",
+        "ring_planet_transmission_error",
+        "sun_planet_pair_load",
+        "planet_load_sharing",
+    ] {
+        for ext in ["svg", "png"] {
+            let p = dir.path().join(format!("{stem}.{ext}"));
+            assert!(
+                std::fs::metadata(&p)
+                    .map(|m| m.len() > 1000)
+                    .unwrap_or(false),
+                "{}",
+                p.display()
+            );
+        }
+    }
+}
+
+#[test]
+fn bad_input_gets_a_clear_error() {
+    let out = planetwear(&["ltca", "--scene", "no-such-scene"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("neither a built-in scene (example-2004) nor an existing file"),
+        "{err}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.toml");
+    let text = planetwear::scene::Scene::example_2004()
+        .to_toml()
+        .replace("count = 4", "count = 3");
+    std::fs::write(
+        &path,
+        text.replace("centre_distance_mm = 39.0", "centre_distance_mm = -1.0"),
+    )
+    .unwrap();
+    let out = planetwear(&["ltca", "--scene", path.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("centre_distance_mm = -1: must be a finite number greater than zero"),
+        "{err}"
+    );
+    let out = planetwear(&["ltca", "--scene", "example-2004", "--torque=-5"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--torque"));
+}
