@@ -341,7 +341,7 @@ fn format_tick(v: f64, range: &Range<f64>) -> String {
     }
     if max_abs >= 1e6 || step < 1e-3 {
         let v_exp = v.abs().log10().floor();
-        let decimals = (v_exp - step_exp).clamp(0.0, 12.0) as usize;
+        let decimals = (v_exp - step_exp).clamp(0.0, 16.0) as usize;
         return trim_scientific(&format!("{v:.decimals$e}"));
     }
     let decimals = (-step_exp).clamp(0.0, 8.0) as usize;
