@@ -12,11 +12,7 @@ use planetwear::report::write_atomic;
 use planetwear::scene::Scene;
 
 #[derive(Parser)]
-#[command(
-    name = "planetwear",
-    version,
-    about = "Planetary gear dynamics with tooth wear"
-)]
+#[command(name = "planetwear", version, about = "Planetary gear dynamics with tooth wear")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -77,8 +73,8 @@ fn load_scene(arg: &str) -> Result<Scene> {
             Scene::BUILTIN.join(", ")
         );
     }
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("reading scene file {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading scene file {}", path.display()))?;
     Scene::from_toml(&text).with_context(|| format!("in scene file {}", path.display()))
 }
 
@@ -88,29 +84,14 @@ fn validated(scene: &Scene) -> Result<GearSet> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Scene {
-            action: SceneAction::Show { scene },
-        } => {
+        Command::Scene { action: SceneAction::Show { scene } } => {
             print!("{}", load_scene(&scene)?.to_toml());
         }
-        Command::Scene {
-            action: SceneAction::Check { scene },
-        } => {
+        Command::Scene { action: SceneAction::Check { scene } } => {
             let set = validated(&load_scene(&scene)?)?;
-            println!(
-                "scene '{}' is valid: {} planets",
-                set.name,
-                set.planet_angles.len()
-            );
+            println!("scene '{}' is valid: {} planets", set.name, set.planet_angles.len());
         }
-        Command::Ltca {
-            scene,
-            torque,
-            samples,
-            json,
-            out,
-            plots,
-        } => {
+        Command::Ltca { scene, torque, samples, json, out, plots } => {
             let mut scene = load_scene(&scene)?;
             if let Some(t) = torque {
                 scene.operation.input_torque_nm = t;
@@ -120,10 +101,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             let set = validated(&scene)?;
             if set.input_torque <= 0.0 {
-                bail!(
-                    "--torque: the LTCA needs a positive input torque (got {} N·m)",
-                    set.input_torque
-                );
+                bail!("--torque: the LTCA needs a positive input torque (got {} N·m)", set.input_torque);
             }
             let study = LtcaStudy::run(&set, set.analysis.positions_per_mesh_cycle);
             let doc = study.to_json();
@@ -132,8 +110,7 @@ fn run(cli: Cli) -> Result<()> {
                 write_atomic(path, text.as_bytes()).map_err(anyhow::Error::from)?;
             }
             if let Some(dir) = &plots {
-                std::fs::create_dir_all(dir)
-                    .with_context(|| format!("creating {}", dir.display()))?;
+                std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
                 let files = study.write_plots(dir).map_err(anyhow::Error::from)?;
                 if !json {
                     println!("wrote {} plot files to {}", files.len(), dir.display());
@@ -151,19 +128,12 @@ fn run(cli: Cli) -> Result<()> {
 
 fn print_summary(doc: &serde_json::Value) {
     let width_mm = doc["face_width"].as_f64().unwrap_or(1.0) * 1e3;
-    println!(
-        "LTCA of {} at {} N·m",
-        doc["scene"].as_str().unwrap_or("?"),
-        doc["input_torque"]
-    );
+    println!("LTCA of {} at {} N·m", doc["scene"].as_str().unwrap_or("?"), doc["input_torque"]);
     for m in doc["meshes"].as_array().into_iter().flatten() {
         let f = |k: &str| m[k].as_f64().unwrap_or(f64::NAN);
         let g = |k: &str, s: &str| m[k][s].as_f64().unwrap_or(f64::NAN);
         println!("  {}:", m["name"].as_str().unwrap_or("?"));
-        println!(
-            "    load {:.1} N/mm along the line of action",
-            f("load") / width_mm
-        );
+        println!("    load {:.1} N/mm along the line of action", f("load") / width_mm);
         println!(
             "    contact ratio: nominal {:.4}, on the involutes {:.4}, loaded {:.4} (1 pair {:.1} %, 2 pairs {:.1} %, 3 pairs {:.1} %)",
             f("contact_ratio_nominal"),

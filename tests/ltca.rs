@@ -27,24 +27,13 @@ fn pair_loads_add_up_to_the_mesh_load_and_stiffness_is_periodic() {
         for (i, s) in r.position.iter().enumerate() {
             let (f, k) = model.force(*s, r.transmission_error[i], Some(&mut pairs));
             let sum: f64 = pairs.iter().map(|p| p.force).sum();
-            assert!(
-                (sum / w - 1.0).abs() < 1e-9,
-                "{mesh:?} sum of pair loads {sum} vs {w}"
-            );
+            assert!((sum / w - 1.0).abs() < 1e-9, "{mesh:?} sum of pair loads {sum} vs {w}");
             assert!((f / w - 1.0).abs() < 1e-9);
             let (f2, k2) = model.force(s + pb, r.transmission_error[i], None);
-            assert!(
-                (f2 - f).abs() < 1e-9 * w && (k2 - k).abs() < 1e-9 * k,
-                "not periodic at {s}"
-            );
+            assert!((f2 - f).abs() < 1e-9 * w && (k2 - k).abs() < 1e-9 * k, "not periodic at {s}");
         }
-        let nominal: Vec<f64> = r
-            .position
-            .iter()
-            .map(|s| model.nominal_mesh_stiffness(*s))
-            .collect();
-        let mean =
-            nominal.iter().sum::<f64>() / nominal.len() as f64 / (set.sun.face_width * 1e3) * 1e-6;
+        let nominal: Vec<f64> = r.position.iter().map(|s| model.nominal_mesh_stiffness(*s)).collect();
+        let mean = nominal.iter().sum::<f64>() / nominal.len() as f64 / (set.sun.face_width * 1e3) * 1e-6;
         eprintln!(
             "{mesh:?}: loaded contact ratio {:.4}, mean nominal mesh stiffness {mean:.3} N/(mm·µm), TE p-p {:.3} µm",
             r.loaded_contact_ratio(),
@@ -77,10 +66,7 @@ fn mean_mesh_stiffness_of_the_example_is_inside_the_iso_band() {
         contact_ratio: model.path().nominal_contact_ratio(),
     });
     let ratio = mean / iso.mesh;
-    eprintln!(
-        "mean mesh stiffness {mean:.3} N/(mm·µm), ISO c_γα {:.3}, ratio {ratio:.3}",
-        iso.mesh
-    );
+    eprintln!("mean mesh stiffness {mean:.3} N/(mm·µm), ISO c_γα {:.3}, ratio {ratio:.3}", iso.mesh);
     assert!(ratio > 0.7 && ratio < 1.3, "ratio to ISO {ratio}");
 }
 
@@ -96,19 +82,12 @@ fn hertz_pressure_of_a_pair_matches_the_closed_form() {
         .pair_path_position
         .iter()
         .enumerate()
-        .min_by(|a, b| {
-            (a.1 - p.pitch_point())
-                .abs()
-                .total_cmp(&(b.1 - p.pitch_point()).abs())
-        })
+        .min_by(|a, b| (a.1 - p.pitch_point()).abs().total_cmp(&(b.1 - p.pitch_point()).abs()))
         .unwrap()
         .0;
     let s = r.pair_path_position[i];
     let load = r.pair_path_load[i];
-    assert!(
-        (load / w - 1.0).abs() < 1e-9,
-        "single pair at pitch point carries {load} of {w}"
-    );
+    assert!((load / w - 1.0).abs() < 1e-9, "single pair at pitch point carries {load} of {w}");
     let e = 207e9 / (2.0 * (1.0 - 0.09));
     let rho1 = s;
     let rho2 = p.tangency_distance - s;
@@ -118,19 +97,9 @@ fn hertz_pressure_of_a_pair_matches_the_closed_form() {
     let p0 = 2.0 * wl / (std::f64::consts::PI * b);
     assert!((r.pair_path_half_width[i] / b - 1.0).abs() < 1e-9);
     assert!((r.pair_path_peak_pressure[i] / p0 - 1.0).abs() < 1e-9);
-    let c = line_contact(
-        wl,
-        rho1,
-        rho2,
-        false,
-        contact_modulus(207e9, 0.3, 207e9, 0.3),
-    );
+    let c = line_contact(wl, rho1, rho2, false, contact_modulus(207e9, 0.3, 207e9, 0.3));
     assert!((c.peak_pressure / p0 - 1.0).abs() < 1e-12);
-    eprintln!(
-        "pitch point: b = {:.2} µm, p0 = {:.0} MPa",
-        b * 1e6,
-        p0 * 1e-6
-    );
+    eprintln!("pitch point: b = {:.2} µm, p0 = {:.0} MPa", b * 1e6, p0 * 1e-6);
 }
 
 #[test]
@@ -141,19 +110,13 @@ fn planets_share_the_load_equally_on_average_and_loads_add_up() {
     let total = set.input_torque / set.sun.base_radius();
     for i in 0..r.travel.len() {
         let sum: f64 = r.planet_load.iter().map(|p| p[i]).sum();
-        assert!(
-            (sum / total - 1.0).abs() < 1e-9,
-            "planet loads add to {sum} of {total}"
-        );
+        assert!((sum / total - 1.0).abs() < 1e-9, "planet loads add to {sum} of {total}");
         // Planets 0 and 2 (and 1 and 3) mesh in phase: Z_sun·90°/360° = 8.5.
         assert!((r.planet_load[0][i] - r.planet_load[2][i]).abs() < 1e-6 * total);
         assert!((r.planet_load[1][i] - r.planet_load[3][i]).abs() < 1e-6 * total);
     }
     for m in &r.planet_mean_load {
-        assert!(
-            (m / (total / 4.0) - 1.0).abs() < 2e-3,
-            "mean planet load {m}"
-        );
+        assert!((m / (total / 4.0) - 1.0).abs() < 2e-3, "mean planet load {m}");
     }
     eprintln!("load sharing factor {:.4}", r.load_sharing_factor);
 }
@@ -182,4 +145,67 @@ fn in_phase_planets_share_the_load_equally_at_every_position() {
         }
     }
     assert!((r.load_sharing_factor - 1.0).abs() < 1e-9);
+}
+
+mod deviations_and_slices {
+    use super::*;
+    use planetwear::physics::profile::ProfileDeviation;
+
+    fn uniform(depth: f64) -> ProfileDeviation {
+        ProfileDeviation { roll: vec![0.0, 1.0], depth: vec![depth, depth] }
+    }
+
+    #[test]
+    fn a_profile_deviation_adds_to_the_separation_and_to_the_static_te() {
+        let set = example();
+        let worn = MeshFlanks { gear1_drive: uniform(5e-6), ..MeshFlanks::default() };
+        let m0 = MeshModel::new(&set, MeshKind::SunPlanet, &MeshFlanks::default());
+        let m1 = MeshModel::new(&set, MeshKind::SunPlanet, &worn);
+        let p = m0.path().clone();
+        for i in 1..20 {
+            let s = p.start + (p.end - p.start) * i as f64 / 20.0;
+            let dg = m1.separation.drive.at(s) - m0.separation.drive.at(s);
+            assert!((dg - 5e-6).abs() < 2e-8, "separation change {dg} at {s}");
+            // The back flank is untouched.
+            let s_back = 0.5 * (m0.separation.back_range.0 + m0.separation.back_range.1);
+            assert!((m1.separation.back.at(s_back) - m0.separation.back.at(s_back)).abs() < 1e-9);
+        }
+        // In the single-pair zone the loaded TE moves by the deviation exactly.
+        let w = per_planet_load(&set);
+        let s = p.pitch_point();
+        let te0 = m0.approach_for(s, w);
+        let te1 = m1.approach_for(s, w);
+        assert!((te1 - te0 - 5e-6).abs() < 2e-8, "TE change {}", te1 - te0);
+    }
+
+    #[test]
+    fn equal_slices_reproduce_the_whole_face_and_a_worn_slice_unloads() {
+        let set = example();
+        let w = per_planet_load(&set);
+        let whole = MeshModel::new(&set, MeshKind::SunPlanet, &MeshFlanks::default());
+        let three = MeshModel::sliced(&set, MeshKind::SunPlanet, &vec![MeshFlanks::default(); 3]);
+        let s = whole.path().pitch_point();
+        let d1 = whole.approach_for(s, w);
+        let d3 = three.approach_for(s, w);
+        assert!((d1 - d3).abs() < 1e-12 * d1.abs().max(1e-9), "{d1} vs {d3}");
+        // Slice 0 worn by e = 2 µm: in the single-pair zone the two halves
+        // carry k/2·δ and k/2·(δ − e), so the unworn half's line load is the
+        // mean line load times 1 + k·e/(2F).
+        let worn = MeshFlanks { gear1_drive: uniform(2e-6), ..MeshFlanks::default() };
+        let two = MeshModel::sliced(&set, MeshKind::SunPlanet, &[worn, MeshFlanks::default()]);
+        let d = two.approach_for(s, w);
+        let mut pairs = Vec::new();
+        let (f, _) = two.force(s, d, Some(&mut pairs));
+        assert!((f / w - 1.0).abs() < 1e-9);
+        let loaded = pairs.iter().find(|p| p.force > 0.0).unwrap();
+        let mean_line = loaded.force / set.sun.face_width;
+        let expected = 1.0 + two.stiffness.at(loaded.position) * 2e-6 / (2.0 * w);
+        // 1e-5: the model interpolates k from its 400-per-pitch table.
+        assert!(
+            (loaded.max_line_load / mean_line / expected - 1.0).abs() < 1e-5,
+            "{} vs {}",
+            loaded.max_line_load / mean_line,
+            expected
+        );
+    }
 }

@@ -5,9 +5,7 @@ use planetwear::physics::mesh::PathOfContact;
 use planetwear::scene::Scene;
 
 fn example() -> planetwear::physics::gear::GearSet {
-    Scene::example_2004()
-        .validate()
-        .expect("the example is valid")
+    Scene::example_2004().validate().expect("the example is valid")
 }
 
 #[test]
@@ -15,37 +13,22 @@ fn sun_pitch_point_roll_angle_is_22_34_deg() {
     let set = example();
     let path = PathOfContact::new(&set, MeshKind::SunPlanet);
     let xi = path.roll_1(path.pitch_point()).to_degrees();
-    assert!(
-        (xi - 22.34).abs() < 0.005,
-        "pitch-point roll angle {xi} deg"
-    );
+    assert!((xi - 22.34).abs() < 0.005, "pitch-point roll angle {xi} deg");
 }
 
 #[test]
 fn base_pitch_is_4_3905_mm() {
     let set = example();
     for g in [&set.sun, &set.planet, &set.ring] {
-        assert!(
-            (g.base_pitch() * 1e3 - 4.3905).abs() < 5e-5,
-            "{}",
-            g.base_pitch()
-        );
+        assert!((g.base_pitch() * 1e3 - 4.3905).abs() < 5e-5, "{}", g.base_pitch());
     }
 }
 
 #[test]
 fn base_radii_match_model_md() {
     let set = example();
-    for (g, rb) in [
-        (&set.sun, 23.758),
-        (&set.planet, 12.578),
-        (&set.ring, 48.914),
-    ] {
-        assert!(
-            (g.base_radius() * 1e3 - rb).abs() < 5e-4,
-            "{} vs {rb}",
-            g.base_radius() * 1e3
-        );
+    for (g, rb) in [(&set.sun, 23.758), (&set.planet, 12.578), (&set.ring, 48.914)] {
+        assert!((g.base_radius() * 1e3 - rb).abs() < 5e-4, "{} vs {rb}", g.base_radius() * 1e3);
     }
 }
 
@@ -57,16 +40,8 @@ fn nominal_contact_ratios_follow_from_the_radii() {
     // Closed forms of FORMULAS.md evaluated by hand with the given radii:
     // sun–planet (sqrt(26.37²−rb_s²) − (39 sin α − sqrt(15.25²−rb_p²))) / p_b = 1.3436,
     // ring–planet (sqrt(15.25²−rb_p²) − sqrt(51.725²−rb_r²) + 39 sin α) / p_b = 1.3598.
-    assert!(
-        (sp.nominal_contact_ratio() - 1.3436).abs() < 2e-3,
-        "{}",
-        sp.nominal_contact_ratio()
-    );
-    assert!(
-        (rp.nominal_contact_ratio() - 1.3598).abs() < 2e-3,
-        "{}",
-        rp.nominal_contact_ratio()
-    );
+    assert!((sp.nominal_contact_ratio() - 1.3436).abs() < 2e-3, "{}", sp.nominal_contact_ratio());
+    assert!((rp.nominal_contact_ratio() - 1.3598).abs() < 2e-3, "{}", rp.nominal_contact_ratio());
     // Sun active profile from ~13.4° to ~27.6° of roll (MODEL.md §1).
     assert!((sp.roll_1(sp.start_sharp).to_degrees() - 13.4).abs() < 0.05);
     assert!((sp.roll_1(sp.end_sharp).to_degrees() - 27.6).abs() < 0.05);
@@ -94,10 +69,7 @@ fn every_root_has_clearance() {
         }
         let (r1, r2) = path.active_profile_start_radii();
         let (g1, g2) = set.mesh_gears(mesh);
-        assert!(
-            r1 > g1.form_radius(),
-            "{mesh:?} gear 1 start of active profile below form radius"
-        );
+        assert!(r1 > g1.form_radius(), "{mesh:?} gear 1 start of active profile below form radius");
         match mesh {
             MeshKind::SunPlanet => assert!(r2 > g2.form_radius()),
             MeshKind::RingPlanet => assert!(r2 < g2.form_radius()),

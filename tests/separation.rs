@@ -18,19 +18,11 @@ fn perfect_involutes_touch_along_the_whole_path_and_back_flanks_sit_one_backlash
         let inner = (p.start + 0.02e-3, p.end - 0.02e-3);
         let mut worst_d: f64 = 0.0;
         let mut worst_b: f64 = 0.0;
-        for s in sep
-            .drive
-            .positions()
-            .filter(|s| *s > inner.0 && *s < inner.1)
-        {
+        for s in sep.drive.positions().filter(|s| *s > inner.0 && *s < inner.1) {
             worst_d = worst_d.max(sep.drive.at(s).abs());
         }
         let back_inner = (sep.back_range.0 + 0.02e-3, sep.back_range.1 - 0.02e-3);
-        for s in sep
-            .back
-            .positions()
-            .filter(|s| *s > back_inner.0 && *s < back_inner.1)
-        {
+        for s in sep.back.positions().filter(|s| *s > back_inner.0 && *s < back_inner.1) {
             worst_b = worst_b.max((sep.back.at(s) - sep.normal_backlash).abs());
         }
         eprintln!(
@@ -38,14 +30,8 @@ fn perfect_involutes_touch_along_the_whole_path_and_back_flanks_sit_one_backlash
             sep.normal_backlash
         );
         // Polyline chords of the 400-point involute sag by ~1e-9 m.
-        assert!(
-            worst_d < 2e-8,
-            "{mesh:?} drive separation on the path {worst_d}"
-        );
-        assert!(
-            worst_b < 2e-8,
-            "{mesh:?} back separation on the path {worst_b}"
-        );
+        assert!(worst_d < 2e-8, "{mesh:?} drive separation on the path {worst_d}");
+        assert!(worst_b < 2e-8, "{mesh:?} back separation on the path {worst_b}");
         // Outside the path the chamfered tip corner leaves a gap that grows.
         let before = sep.drive.at(p.start - 0.3e-3);
         let after = sep.drive.at(p.end + 0.3e-3);
@@ -66,11 +52,6 @@ fn fillet_joins_the_involute_at_the_form_radius() {
             g.form_radius() * 1e3,
             o.root_half_angle
         );
-        assert!(
-            (o.form_radius - g.form_radius()).abs() < 2e-6,
-            "{} vs {}",
-            o.form_radius,
-            g.form_radius()
-        );
+        assert!((o.form_radius - g.form_radius()).abs() < 2e-6, "{} vs {}", o.form_radius, g.form_radius());
     }
 }

@@ -21,11 +21,7 @@ fn iso_tr_6336_30_example_1_to_0_1_percent() {
         contact_ratio: (17.46485 / 12.37047 - 0.25) / 0.75,
     };
     let s = iso_stiffness(&p);
-    assert!(
-        (s.single_theoretical / 17.85584 - 1.0).abs() < 1e-3,
-        "c'_th {}",
-        s.single_theoretical
-    );
+    assert!((s.single_theoretical / 17.85584 - 1.0).abs() < 1e-3, "c'_th {}", s.single_theoretical);
     assert!((s.single / 12.37047 - 1.0).abs() < 1e-3, "c' {}", s.single);
     assert!((s.mesh / 17.46485 - 1.0).abs() < 1e-3, "c_γα {}", s.mesh);
 }
@@ -50,13 +46,7 @@ fn pair_stiffness_of_the_example_lies_in_the_iso_band() {
         for s in [p.start, p.pitch_point(), p.end] {
             let c1 = k.gear1.at(p.roll_1(s));
             let c2 = k.gear2.at(p.roll_2(s));
-            eprintln!(
-                "  s={:.3}mm gear1 {:?}\n    gear2 {:?}\n    hertz {:e}",
-                s * 1e3,
-                c1,
-                c2,
-                k.hertz
-            );
+            eprintln!("  s={:.3}mm gear1 {:?}\n    gear2 {:?}\n    hertz {:e}", s * 1e3, c1, c2, k.hertz);
         }
         // ISO 6336-1: c' ≈ 14 N/(mm·µm) for solid steel spur gears; the
         // energy method is known to sit within about ±40 % of it.

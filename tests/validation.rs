@@ -17,8 +17,7 @@ fn problems(scene: &Scene) -> Vec<String> {
 fn expect(scene: &Scene, name: &str, words: &str) {
     let list = problems(scene);
     assert!(
-        list.iter()
-            .any(|p| p.starts_with(name) && p.contains(words)),
+        list.iter().any(|p| p.starts_with(name) && p.contains(words)),
         "expected a problem on {name} saying '{words}', got {list:#?}"
     );
 }
@@ -43,22 +42,11 @@ fn tip_radius_below_base_radius() {
     let mut s = ex();
     s.sun.tip_radius_mm = 23.5;
     s.sun.root_radius_mm = 22.0;
-    s.sun.tip_chamfer = Some(ChamferSpec {
-        height_mm: 0.0,
-        angle_deg: 45.0,
-    });
-    expect(
-        &s,
-        "sun.tip_radius_mm",
-        "must exceed the base radius 23.758",
-    );
+    s.sun.tip_chamfer = Some(ChamferSpec { height_mm: 0.0, angle_deg: 45.0 });
+    expect(&s, "sun.tip_radius_mm", "must exceed the base radius 23.758");
     let mut s = ex();
     s.ring.minor_radius_mm = 48.0;
-    expect(
-        &s,
-        "ring.minor_radius_mm",
-        "must exceed the ring's base radius",
-    );
+    expect(&s, "ring.minor_radius_mm", "must exceed the ring's base radius");
 }
 
 #[test]
@@ -84,14 +72,8 @@ fn contact_ratio_below_one() {
     let mut s = ex();
     s.sun.tip_radius_mm = 25.6;
     s.planet.tip_radius_mm = 14.0;
-    s.sun.tip_chamfer = Some(ChamferSpec {
-        height_mm: 0.02,
-        angle_deg: 45.0,
-    });
-    s.planet.tip_chamfer = Some(ChamferSpec {
-        height_mm: 0.02,
-        angle_deg: 45.0,
-    });
+    s.sun.tip_chamfer = Some(ChamferSpec { height_mm: 0.02, angle_deg: 45.0 });
+    s.planet.tip_chamfer = Some(ChamferSpec { height_mm: 0.02, angle_deg: 45.0 });
     expect(&s, "sun.tip_radius_mm", "contact ratio must be at least 1");
 }
 
@@ -109,22 +91,14 @@ fn tip_root_interference_and_root_clearance() {
     expect(&s, "planet.tip_radius_mm", "must clear the sun root circle");
     let mut s = ex();
     s.ring.minor_radius_mm = 51.0;
-    expect(
-        &s,
-        "ring.minor_radius_mm",
-        "tip/root interference in the ring_planet mesh",
-    );
+    expect(&s, "ring.minor_radius_mm", "tip/root interference in the ring_planet mesh");
 }
 
 #[test]
 fn assembly_condition_and_overlapping_planets() {
     let mut s = ex();
     s.planets.angles_deg = Some(vec![0.0, 91.0, 180.0, 270.0]);
-    expect(
-        &s,
-        "planets.angles_deg[1]",
-        "multiples of 360°/(Z_sun + Z_ring)",
-    );
+    expect(&s, "planets.angles_deg[1]", "multiples of 360°/(Z_sun + Z_ring)");
     let mut s = ex();
     s.planets.count = 8;
     expect(&s, "planets.angles_deg", "neighbouring planets overlap");
@@ -136,21 +110,11 @@ fn assembly_condition_and_overlapping_planets() {
 #[test]
 fn chamfer_limits() {
     let mut s = ex();
-    s.sun.tip_chamfer = Some(ChamferSpec {
-        height_mm: 1.0,
-        angle_deg: 45.0,
-    });
+    s.sun.tip_chamfer = Some(ChamferSpec { height_mm: 1.0, angle_deg: 45.0 });
     expect(&s, "sun.tip_chamfer.height_mm", "below half the addendum");
     let mut s = ex();
-    s.planet.tip_chamfer = Some(ChamferSpec {
-        height_mm: 0.1,
-        angle_deg: 95.0,
-    });
-    expect(
-        &s,
-        "planet.tip_chamfer.angle_deg",
-        "strictly between 0 and 90",
-    );
+    s.planet.tip_chamfer = Some(ChamferSpec { height_mm: 0.1, angle_deg: 95.0 });
+    expect(&s, "planet.tip_chamfer.angle_deg", "strictly between 0 and 90");
 }
 
 #[test]
@@ -160,21 +124,13 @@ fn material_operation_and_modules() {
     expect(&s, "material.poisson_ratio", "strictly between 0 and 0.5");
     let mut s = ex();
     s.operation.input = s.operation.held;
-    expect(
-        &s,
-        "operation.input",
-        "must differ from the held member (carrier)",
-    );
+    expect(&s, "operation.input", "must differ from the held member (carrier)");
     let mut s = ex();
     s.planet.module_mm = 1.25;
     expect(&s, "planet.module_mm", "sun's base pitch");
     let mut s = ex();
     s.centre_distance_mm = 30.0;
-    expect(
-        &s,
-        "centre_distance_mm",
-        "must exceed the sum of sun and planet base radii",
-    );
+    expect(&s, "centre_distance_mm", "must exceed the sum of sun and planet base radii");
 }
 
 #[test]
@@ -192,9 +148,7 @@ fn syntax_errors_name_the_line_and_unknown_keys_are_refused() {
     let e = Scene::from_toml(&text).unwrap_err();
     assert!(matches!(e, SceneError::Syntax { .. }));
     assert!(e.to_string().contains("line"), "{e}");
-    let text = ex()
-        .to_toml()
-        .replace("teeth = 34", "teeth = 34\ntooth_count = 34");
+    let text = ex().to_toml().replace("teeth = 34", "teeth = 34\ntooth_count = 34");
     let e = Scene::from_toml(&text).unwrap_err();
     assert!(e.to_string().contains("tooth_count"), "{e}");
 }

@@ -1,4 +1,4 @@
-//! The validated gear set in SI units: tooth forms, material, supports,
+//! The validated gear set in SI units: tooth forms, material, operation.
 //! operation. Only [`crate::scene::Scene::validate`] builds a [`GearSet`], so
 //! every function of the physics can rely on its invariants (positive sizes,
 //! tips outside base circles, contact ratios above one, no interference).
@@ -230,29 +230,6 @@ impl Material {
     }
 }
 
-/// Bearing stiffnesses [N/m].
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Supports {
-    /// Sun bearing, per direction [N/m].
-    pub sun_radial: f64,
-    /// Ring bearing, per direction [N/m].
-    pub ring_radial: f64,
-    /// Carrier bearing, per direction [N/m].
-    pub carrier_radial: f64,
-    /// Planet bearing, radial and tangential [N/m].
-    pub planet_bearing: f64,
-}
-
-/// Which degrees of freedom a model carries.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Fidelity {
-    /// One rotation per body.
-    Torsional,
-    /// Two in-plane translations and one rotation per body (Lin & Parker).
-    TransverseTorsional,
-}
-
 /// Resolution of the quasi-static analyses.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Analysis {
@@ -262,8 +239,6 @@ pub struct Analysis {
     pub profile_points: usize,
     /// Slices across the face width.
     pub face_slices: usize,
-    /// Degrees of freedom of whole-set analyses.
-    pub fidelity: Fidelity,
 }
 
 /// Which of the two meshes of a planet.
@@ -312,8 +287,6 @@ pub struct GearSet {
     pub input: Member,
     /// Torque on the driving member [N·m].
     pub input_torque: f64,
-    /// Bearings.
-    pub supports: Supports,
     /// Analysis resolution.
     pub analysis: Analysis,
 }
@@ -357,17 +330,26 @@ impl GearSet {
         let (rb1, rb2) = (g1.base_radius(), g2.base_radius());
         match g2.kind {
             GearKind::External => {
-                g1.base_pitch()
-                    - 2.0 * rb1 * g1.base_half_angle()
-                    - 2.0 * rb2 * g2.base_half_angle()
+                g1.base_pitch() - 2.0 * rb1 * g1.base_half_angle() - 2.0 * rb2 * g2.base_half_angle()
                     + 2.0 * (rb1 + rb2) * aw
             }
             GearKind::Internal => {
-                2.0 * rb2 * g2.base_half_angle()
-                    - 2.0 * rb1 * g1.base_half_angle()
-                    - 2.0 * (rb2 - rb1) * aw
+                2.0 * rb2 * g2.base_half_angle() - 2.0 * rb1 * g1.base_half_angle() - 2.0 * (rb2 - rb1) * aw
             }
         }
+    }
+
+    /// Tooth force along the line of action of each planet's meshes [N]
+    /// under the input torque, with the carrier frame's torque balance
+    /// T_sun = n F r_b,sun, T_ring = n F r_b,ring, T_carrier = −n F (r_b,sun + r_b,ring)
+    /// (frictionless, equal sun and ring mesh forces on a planet).
+    pub fn mesh_load_per_planet(&self) -> f64 {
+        let lever = match self.input {
+            Member::Sun => self.sun.base_radius(),
+            Member::Ring => self.ring.base_radius(),
+            Member::Carrier => self.sun.base_radius() + self.ring.base_radius(),
+        };
+        self.input_torque.abs() / (self.planet_angles.len() as f64 * lever)
     }
 
     /// Circumferential backlash at the operating pitch circle [m].

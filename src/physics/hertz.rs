@@ -25,17 +25,11 @@ pub fn contact_modulus(e1: f64, nu1: f64, e2: f64, nu2: f64) -> f64 {
 pub fn line_contact(w: f64, rho1: f64, rho2: f64, concave2: bool, e_star: f64) -> LineContact {
     let curvature = 1.0 / rho1 + if concave2 { -1.0 / rho2 } else { 1.0 / rho2 };
     if w <= 0.0 || curvature <= 0.0 {
-        return LineContact {
-            half_width: 0.0,
-            peak_pressure: 0.0,
-        };
+        return LineContact { half_width: 0.0, peak_pressure: 0.0 };
     }
     let r = 1.0 / curvature;
     let b = (4.0 * w * r / (std::f64::consts::PI * e_star)).sqrt();
-    LineContact {
-        half_width: b,
-        peak_pressure: 2.0 * w / (std::f64::consts::PI * b),
-    }
+    LineContact { half_width: b, peak_pressure: 2.0 * w / (std::f64::consts::PI * b) }
 }
 
 /// Pressure [Pa] at distance `x` [m] from the band's centre.
@@ -57,9 +51,7 @@ mod tests {
         let c = line_contact(263_000.0, 8e-3, 6e-3, false, e);
         let n = 20_000;
         let h = 2.0 * c.half_width / n as f64;
-        let sum: f64 = (0..n)
-            .map(|i| pressure_at(&c, -c.half_width + (i as f64 + 0.5) * h) * h)
-            .sum();
+        let sum: f64 = (0..n).map(|i| pressure_at(&c, -c.half_width + (i as f64 + 0.5) * h) * h).sum();
         assert!((sum / 263_000.0 - 1.0).abs() < 1e-4, "{sum}");
     }
 }

@@ -43,9 +43,7 @@ pub struct IsoStiffness {
 
 /// Evaluates ISO 6336-1 method B.
 pub fn iso_stiffness(p: &IsoPair) -> IsoStiffness {
-    const C: [f64; 9] = [
-        0.04723, 0.15551, 0.25791, -0.00635, -0.11654, -0.00193, -0.24188, 0.00529, 0.00182,
-    ];
+    const C: [f64; 9] = [0.04723, 0.15551, 0.25791, -0.00635, -0.11654, -0.00193, -0.24188, 0.00529, 0.00182];
     let beta_b = (p.helix.tan() * p.rack_pressure_angle.cos()).atan();
     let zn = |z: f64| z / (beta_b.cos().powi(2) * p.helix.cos());
     let zn1 = zn(p.z1);
@@ -60,12 +58,8 @@ pub fn iso_stiffness(p: &IsoPair) -> IsoStiffness {
         + C[7] * p.x1 * p.x1
         + C[8] * p.x2 * p.x2;
     let single_theoretical = 1.0 / q;
-    let c_b = (1.0 + 0.5 * (1.2 - p.rack_dedendum))
-        * (1.0 - 0.02 * (20.0 - p.rack_pressure_angle.to_degrees()));
+    let c_b =
+        (1.0 + 0.5 * (1.2 - p.rack_dedendum)) * (1.0 - 0.02 * (20.0 - p.rack_pressure_angle.to_degrees()));
     let single = single_theoretical * 0.8 * 1.0 * c_b * p.helix.cos();
-    IsoStiffness {
-        single_theoretical,
-        single,
-        mesh: single * (0.75 * p.contact_ratio + 0.25),
-    }
+    IsoStiffness { single_theoretical, single, mesh: single * (0.75 * p.contact_ratio + 0.25) }
 }

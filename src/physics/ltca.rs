@@ -11,7 +11,8 @@
 //! Whole set (torsional statics, central members on their axes, carrier and
 //! output member held): planet n carries F_n through its sun and ring meshes
 //! in series, F_sp(δ_s) = F_rp(δ_r) with δ_s + δ_r = u_s (the sun's rotation
-//! as a displacement along the line of action), and Σ F_n = T_sun / r_b,sun.
+//! as a displacement along the line of action), and Σ F_n = n·F with F the
+//! tooth force the input torque makes ([`GearSet::mesh_load_per_planet`]).
 //! Every tooth sits at its real angular position: the sun mesh of the planet
 //! at ψ_n is at travel λ − r_b,sun ψ_n, and its ring mesh follows from the
 //! planet's own tooth positions (see [`SetModel::ring_position`]).
@@ -25,12 +26,20 @@ use super::separation::{MeshFlanks, MeshSeparation, NO_CONTACT};
 use super::stiffness::PairStiffness;
 
 /// Contact model of one mesh: separations and pair stiffness on one grid.
+///
+/// The face width may be cut into J slices across the face, each with its
+/// own flank deviations and so its own separation tables; the pair
+/// stiffness of the energy method is proportional to the face width, so a
+/// slice carries exactly 1/J of it.
 #[derive(Clone, Debug)]
 pub struct MeshModel {
-    /// Separation tables.
+    /// Separation tables of the first slice (of the whole face when J = 1).
     pub separation: MeshSeparation,
-    /// Pair stiffness.
+    /// Separation tables of every slice across the face (J ≥ 1).
+    pub slices: Vec<MeshSeparation>,
+    /// Pair stiffness of the whole face width.
     pub stiffness: PairStiffness,
+    face_width: f64,
     drive_k: Vec<f64>,
     back_k: Vec<f64>,
 }
@@ -46,31 +55,45 @@ pub struct PairContact {
     pub force: f64,
     /// Stiffness of the pair in contact [N/m] (0 when open).
     pub stiffness: f64,
+    /// Largest load per unit face width over the slices [N/m].
+    pub max_line_load: f64,
 }
 
 /// Samples per base pitch of the contact tables.
 pub const TABLE_SAMPLES_PER_PITCH: usize = 400;
 
 impl MeshModel {
-    /// The contact model of a mesh with the given flank deviations.
+    /// The contact model of a mesh whose flanks carry the same deviations
+    /// across the whole face.
     pub fn new(set: &GearSet, mesh: MeshKind, flanks: &MeshFlanks) -> Self {
+        Self::sliced(set, mesh, std::slice::from_ref(flanks))
+    }
+
+    /// The contact model of a mesh cut into `slices.len()` slices across the
+    /// face, slice j with flank deviations `slices[j]` (no slices means one
+    /// unworn slice). Slices with equal deviations share one computation.
+    pub fn sliced(set: &GearSet, mesh: MeshKind, slices: &[MeshFlanks]) -> Self {
         let path = PathOfContact::new(set, mesh);
         let step = path.base_pitch / TABLE_SAMPLES_PER_PITCH as f64;
-        let separation = MeshSeparation::new(set, mesh, flanks, step);
+        let default = [MeshFlanks::default()];
+        let slices = if slices.is_empty() { &default[..] } else { slices };
+        let mut tables: Vec<MeshSeparation> = Vec::with_capacity(slices.len());
+        for (j, flanks) in slices.iter().enumerate() {
+            match slices[..j].iter().position(|f| f == flanks) {
+                Some(same) => tables.push(tables[same].clone()),
+                None => tables.push(MeshSeparation::new(set, mesh, flanks, step)),
+            }
+        }
+        let separation = tables[0].clone();
         let stiffness = PairStiffness::new(set, mesh);
-        let drive_k = separation
-            .drive
-            .positions()
-            .map(|s| stiffness.at(s))
-            .collect();
-        let back_k = separation
-            .back
-            .positions()
-            .map(|s| stiffness.at(separation.back_mirror - s))
-            .collect();
+        let drive_k = separation.drive.positions().map(|s| stiffness.at(s)).collect();
+        let back_k = separation.back.positions().map(|s| stiffness.at(separation.back_mirror - s)).collect();
+        let (g1, g2) = set.mesh_gears(mesh);
         Self {
             separation,
+            slices: tables,
             stiffness,
+            face_width: g1.face_width.min(g2.face_width),
             drive_k,
             back_k,
         }
@@ -100,38 +123,37 @@ impl MeshModel {
     /// Mesh force [N] and tangent stiffness [N/m] at approach `delta` [m],
     /// with the reference pair at position `s` [m]; pairs are filled into
     /// `pairs` when given.
-    pub fn force(
-        &self,
-        s: f64,
-        delta: f64,
-        mut pairs: Option<&mut Vec<PairContact>>,
-    ) -> (f64, f64) {
+    pub fn force(&self, s: f64, delta: f64, mut pairs: Option<&mut Vec<PairContact>>) -> (f64, f64) {
         if let Some(p) = pairs.as_deref_mut() {
             p.clear();
         }
         let pb = self.path().base_pitch;
+        let fraction = 1.0 / self.slices.len() as f64;
+        let slice_width = self.face_width * fraction;
         let (mut f, mut k) = (0.0, 0.0);
         for index in self.pair_range(s) {
             let pos = s + f64::from(index) * pb;
-            let gd = self.separation.drive.at(pos);
-            let gb = self.separation.back.at(pos);
-            let (mut fp, mut kp) = (0.0, 0.0);
-            if gd < NO_CONTACT && delta > gd {
-                kp = self.lookup(&self.drive_k, pos);
-                fp = kp * (delta - gd);
-            } else if gb < NO_CONTACT && -delta > gb {
-                kp = self.lookup(&self.back_k, pos);
-                fp = -kp * (-delta - gb);
+            let (mut fp, mut kp, mut line) = (0.0, 0.0, 0.0_f64);
+            for slice in &self.slices {
+                let gd = slice.drive.at(pos);
+                let gb = slice.back.at(pos);
+                let (fs, ks) = if gd < NO_CONTACT && delta > gd {
+                    let kj = fraction * self.lookup(&self.drive_k, pos);
+                    (kj * (delta - gd), kj)
+                } else if gb < NO_CONTACT && -delta > gb {
+                    let kj = fraction * self.lookup(&self.back_k, pos);
+                    (-kj * (-delta - gb), kj)
+                } else {
+                    (0.0, 0.0)
+                };
+                fp += fs;
+                kp += ks;
+                line = line.max(fs.abs() / slice_width);
             }
             f += fp;
             k += kp;
             if let Some(p) = pairs.as_deref_mut() {
-                p.push(PairContact {
-                    index,
-                    position: pos,
-                    force: fp,
-                    stiffness: kp,
-                });
+                p.push(PairContact { index, position: pos, force: fp, stiffness: kp, max_line_load: line });
             }
         }
         (f, k)
@@ -218,12 +240,7 @@ impl CycleStats {
         let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
         let min = v.iter().cloned().fold(f64::INFINITY, f64::min);
         let max = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-        Self {
-            mean,
-            min,
-            max,
-            peak_to_peak: max - min,
-        }
+        Self { mean, min, max, peak_to_peak: max - min }
     }
 }
 
@@ -265,21 +282,16 @@ pub struct MeshLtca {
 impl MeshLtca {
     /// Loaded contact ratio: the mean number of loaded pairs.
     pub fn loaded_contact_ratio(&self) -> f64 {
-        self.pairs_in_contact
-            .iter()
-            .map(|n| f64::from(*n))
-            .sum::<f64>()
-            / self.pairs_in_contact.len() as f64
+        self.pairs_in_contact.iter().map(|n| f64::from(*n)).sum::<f64>() / self.pairs_in_contact.len() as f64
     }
 
     /// Fraction of the cycle with exactly `n` pairs in contact.
     pub fn fraction_with_pairs(&self, n: u32) -> f64 {
-        self.pairs_in_contact.iter().filter(|k| **k == n).count() as f64
-            / self.pairs_in_contact.len() as f64
+        self.pairs_in_contact.iter().filter(|k| **k == n).count() as f64 / self.pairs_in_contact.len() as f64
     }
 }
 
-fn hertz_of(model: &MeshModel, set: &GearSet, pos: f64, force: f64) -> (f64, f64) {
+fn hertz_of(model: &MeshModel, set: &GearSet, pos: f64, line_load: f64) -> (f64, f64) {
     let p = model.path();
     let s = pos.clamp(p.start, p.end);
     let e_star = contact_modulus(
@@ -288,18 +300,7 @@ fn hertz_of(model: &MeshModel, set: &GearSet, pos: f64, force: f64) -> (f64, f64
         set.material.youngs_modulus,
         set.material.poisson_ratio,
     );
-    let width = set
-        .sun
-        .face_width
-        .min(set.planet.face_width)
-        .min(set.ring.face_width);
-    let c = line_contact(
-        force.abs() / width,
-        p.rho_1(s),
-        p.rho_2(s),
-        p.kind == GearKind::Internal,
-        e_star,
-    );
+    let c = line_contact(line_load, p.rho_1(s), p.rho_2(s), p.kind == GearKind::Internal, e_star);
     (c.peak_pressure, c.half_width)
 }
 
@@ -334,7 +335,7 @@ pub fn mesh_ltca(set: &GearSet, model: &MeshModel, load: f64, samples: usize) ->
         let mut n = 0;
         let (mut pmax, mut bmax): (f64, f64) = (0.0, 0.0);
         for c in &pairs {
-            let (pp, b) = hertz_of(model, set, c.position, c.force);
+            let (pp, b) = hertz_of(model, set, c.position, c.max_line_load);
             if c.force != 0.0 {
                 n += 1;
                 pmax = pmax.max(pp);
@@ -346,18 +347,13 @@ pub fn mesh_ltca(set: &GearSet, model: &MeshModel, load: f64, samples: usize) ->
         out.roll_angle_gear1.push(p.roll_1(s));
         out.transmission_error.push(delta);
         out.mesh_stiffness_loaded.push(k);
-        out.mesh_stiffness_nominal
-            .push(model.nominal_mesh_stiffness(s));
+        out.mesh_stiffness_nominal.push(model.nominal_mesh_stiffness(s));
         out.pairs_in_contact.push(n);
         out.peak_pressure.push(pmax);
         out.half_width.push(bmax);
     }
     along.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let first = along
-        .iter()
-        .position(|a| a.1 != 0.0)
-        .unwrap_or(0)
-        .saturating_sub(1);
+    let first = along.iter().position(|a| a.1 != 0.0).unwrap_or(0).saturating_sub(1);
     let last = (along.iter().rposition(|a| a.1 != 0.0).unwrap_or(0) + 2).min(along.len());
     for (pos, f, pp, b) in &along[first..last] {
         out.pair_path_position.push(*pos);
@@ -383,22 +379,22 @@ pub struct SetModel {
 }
 
 impl SetModel {
-    /// Models of both meshes, unworn.
+    /// Models of both meshes, unworn, with the scene's face slices.
     pub fn new(set: &GearSet) -> Self {
-        Self::with_flanks(set, &MeshFlanks::default(), &MeshFlanks::default())
+        let slices = vec![MeshFlanks::default(); set.analysis.face_slices.max(1)];
+        Self::with_flanks(set, &slices, &slices)
     }
 
-    /// Models of both meshes with flank deviations.
-    pub fn with_flanks(set: &GearSet, sun_planet: &MeshFlanks, ring_planet: &MeshFlanks) -> Self {
-        let sp = MeshModel::new(set, MeshKind::SunPlanet, sun_planet);
-        let rp = MeshModel::new(set, MeshKind::RingPlanet, ring_planet);
+    /// Models of both meshes with flank deviations per face slice.
+    pub fn with_flanks(set: &GearSet, sun_planet: &[MeshFlanks], ring_planet: &[MeshFlanks]) -> Self {
+        let sp = MeshModel::sliced(set, MeshKind::SunPlanet, sun_planet);
+        let rp = MeshModel::sliced(set, MeshKind::RingPlanet, ring_planet);
         // Planet tooth directions seen from the sun mesh (a space facing the
         // sun) and from the mirrored ring mesh (a tooth facing the ring)
         // differ by π + π/Z_p; both meshes' positions follow the planet's
         // angle, so the ring position is the sun position shifted by
         // (offset_r − offset_s) − j_n,s/2 − r_b,p (π + π/Z_p).
-        let off =
-            |m: &MeshModel| m.separation.back_mirror / 2.0 - m.separation.normal_backlash / 2.0;
+        let off = |m: &MeshModel| m.separation.back_mirror / 2.0 - m.separation.normal_backlash / 2.0;
         let zp = f64::from(set.planet.teeth);
         let ring_shift = off(&rp)
             - off(&sp)
@@ -458,10 +454,13 @@ pub struct SetLtca {
     pub load_sharing_factor: f64,
 }
 
-/// Quasi-static LTCA of the whole set under the input torque.
+/// Quasi-static LTCA of the whole set under the input torque: the total
+/// tooth force n·F of [`GearSet::mesh_load_per_planet`] on the drive flanks,
+/// whichever member is driven (the carrier-frame torque balance gives the
+/// same tooth forces for every choice of held and driven member).
 pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
-    let total = set.input_torque / set.sun.base_radius();
     let n = model.planet_angles.len();
+    let total = set.mesh_load_per_planet() * n as f64;
     let pb = model.sun_planet.path().base_pitch;
     let mut guesses = vec![0.0; n];
     let mut us = 0.0;
@@ -481,14 +480,8 @@ pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
                 let (fp, x) = model.planet_load(p, lambda, u, *guess);
                 f += fp;
                 // Series stiffness of the planet's two meshes at this state.
-                let ks = model
-                    .sun_planet
-                    .force(model.sun_position(p, lambda), x, None)
-                    .1;
-                let kr = model
-                    .ring_planet
-                    .force(model.ring_position(p, lambda), u - x, None)
-                    .1;
+                let ks = model.sun_planet.force(model.sun_position(p, lambda), x, None).1;
+                let kr = model.ring_planet.force(model.ring_position(p, lambda), u - x, None).1;
                 if ks + kr > 0.0 {
                     k += ks * kr / (ks + kr);
                 }
@@ -508,12 +501,6 @@ pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
     for p in 0..n {
         out.planet_mean_load[p] = out.planet_load[p].iter().sum::<f64>() / samples as f64;
     }
-    out.load_sharing_factor = out
-        .planet_load
-        .iter()
-        .flatten()
-        .cloned()
-        .fold(0.0, f64::max)
-        / mean_all;
+    out.load_sharing_factor = out.planet_load.iter().flatten().cloned().fold(0.0, f64::max) / mean_all;
     out
 }

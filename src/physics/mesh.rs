@@ -139,10 +139,7 @@ impl PathOfContact {
     /// Radii [m] of the start of active profile of gear 1 (at the start of
     /// contact) and of gear 2 (at the end of contact), sharp tips.
     pub fn active_profile_start_radii(&self) -> (f64, f64) {
-        (
-            self.radius_1(self.start_sharp),
-            self.radius_2(self.end_sharp),
-        )
+        (self.radius_1(self.start_sharp), self.radius_2(self.end_sharp))
     }
 
     /// Radial clearance [m] between each tip circle and the mating root

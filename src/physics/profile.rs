@@ -266,16 +266,9 @@ impl FlankOutline {
                     // External gear with a circular fillet: tangent to the root
                     // circle from outside (centre at r_f + ρ).
                     let r_form = form.form_radius();
-                    (
-                        form.involute_half_angle(r_form) + rho / form.root_radius,
-                        form.roll_at(r_form),
-                    )
+                    (form.involute_half_angle(r_form) + rho / form.root_radius, form.roll_at(r_form))
                 };
-                let sign = if form.kind == GearKind::Internal {
-                    -1.0
-                } else {
-                    1.0
-                };
+                let sign = if form.kind == GearKind::Internal { -1.0 } else { 1.0 };
                 let rc = form.root_radius - sign * rho;
                 let c = polar(rc, phi_c);
                 let t = polar(radius_at_roll(xi_t, form.base_radius()), {
@@ -339,13 +332,7 @@ impl FlankOutline {
             regions.push(Region::TipLand);
         }
         let form_radius = radius_at_roll(xi_form, form.base_radius());
-        Self {
-            points,
-            regions,
-            root_half_angle,
-            form_radius,
-            involute_roll_range: (xi_form, xi_end),
-        }
+        Self { points, regions, root_half_angle, form_radius, involute_roll_range: (xi_form, xi_end) }
     }
 
     /// The same outline mirrored to the lower (−y) flank.
@@ -374,9 +361,6 @@ impl FlankOutline {
 
     /// Index of the first fillet point (the root chord end).
     pub fn root_index(&self) -> usize {
-        self.regions
-            .iter()
-            .position(|r| *r == Region::Fillet)
-            .unwrap_or(0)
+        self.regions.iter().position(|r| *r == Region::Fillet).unwrap_or(0)
     }
 }

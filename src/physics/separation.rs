@@ -135,12 +135,7 @@ impl<'a> RadialIndex<'a> {
                 bucket.push(i);
             }
         }
-        Self {
-            pts,
-            r_min,
-            width,
-            buckets,
-        }
+        Self { pts, r_min, width, buckets }
     }
 
     /// Polar angles where the circle of radius `r` about the origin crosses
@@ -203,11 +198,7 @@ fn contact_rotation(a: &[P], b: &[P], dir: f64, window: f64) -> Option<f64> {
 }
 
 fn place(outline: &[P], angle: f64, centre: P) -> Vec<P> {
-    outline
-        .iter()
-        .map(|p| rot(*p, angle))
-        .map(|p| [p[0] + centre[0], p[1] + centre[1]])
-        .collect()
+    outline.iter().map(|p| rot(*p, angle)).map(|p| [p[0] + centre[0], p[1] + centre[1]]).collect()
 }
 
 /// Position on the line of action of gear 1's tooth-0 drive flank at travel 0:
@@ -243,12 +234,9 @@ impl MeshSeparation {
                 [a, 0.0],
                 -rb1 / rb2,
             ),
-            GearKind::Internal => (
-                (up2_drive.mirrored().points, p2 / 2.0),
-                (up2_back.points, -p2 / 2.0),
-                [-a, 0.0],
-                rb1 / rb2,
-            ),
+            GearKind::Internal => {
+                ((up2_drive.mirrored().points, p2 / 2.0), (up2_back.points, -p2 / 2.0), [-a, 0.0], rb1 / rb2)
+            }
         };
         let window = g1.angular_pitch() / 2.0;
         // Tooth 0's back flank meets the back line of action where its drive
@@ -274,22 +262,11 @@ impl MeshSeparation {
                     }
                 })
                 .collect();
-            SeparationTable {
-                start: lo,
-                step,
-                values,
-            }
+            SeparationTable { start: lo, step, values }
         };
         let drive = table(1.0, &g1_drive, &g2_drive);
         let back = table(-1.0, &g1_back, &g2_back);
         let back_range = (mirror(path.end), mirror(path.start));
-        Self {
-            path,
-            drive,
-            back,
-            normal_backlash: jn,
-            back_range,
-            back_mirror: 2.0 * offset + jn,
-        }
+        Self { path, drive, back, normal_backlash: jn, back_range, back_mirror: 2.0 * offset + jn }
     }
 }

@@ -60,9 +60,7 @@ pub fn sainsot_coefficients(theta_f: f64, h_f: f64) -> [f64; 4] {
         [-5.574e-5, -1.9986e-3, -2.3015e-4, 4.7702e-3, 0.0271, 6.8045],
         [60.111e-5, 28.100e-3, -83.431e-4, -9.9256e-3, 0.1624, 0.9086],
         [-50.952e-5, 185.50e-3, 0.0538e-4, 53.300e-3, 0.2895, 0.9236],
-        [
-            -6.2042e-5, 9.0889e-3, -4.0964e-4, 7.8297e-3, -0.1472, 0.6904,
-        ],
+        [-6.2042e-5, 9.0889e-3, -4.0964e-4, 7.8297e-3, -0.1472, 0.6904],
     ];
     C.map(|[a, b, c, d, e, f]| {
         a / (theta_f * theta_f) + b * h_f * h_f + c * h_f / theta_f + d / theta_f + e * h_f + f
@@ -112,24 +110,14 @@ impl ToothComplianceCurve {
         let depth = dir * (x_tip - x_root);
         let d = depth / SECTION_STEPS as f64;
         // Cumulative integrals from the root chord.
-        let mut j = [
-            vec![0.0; SECTION_STEPS + 1],
-            vec![0.0; SECTION_STEPS + 1],
-            vec![0.0; SECTION_STEPS + 1],
-        ];
+        let mut j =
+            [vec![0.0; SECTION_STEPS + 1], vec![0.0; SECTION_STEPS + 1], vec![0.0; SECTION_STEPS + 1]];
         let mut inv_area = vec![0.0; SECTION_STEPS + 1];
         let integrand = |xi: f64| {
             let h = outline.half_thickness_at(x_root + dir * xi).max(1e-6);
             let inertia = (2.0 * h).powi(3) * width / 12.0;
             let area = 2.0 * h * width;
-            (
-                [
-                    1.0 / (e_plane * inertia),
-                    xi / (e_plane * inertia),
-                    xi * xi / (e_plane * inertia),
-                ],
-                1.0 / area,
-            )
+            ([1.0 / (e_plane * inertia), xi / (e_plane * inertia), xi * xi / (e_plane * inertia)], 1.0 / area)
         };
         let mut prev = integrand(0.0);
         for k in 1..=SECTION_STEPS {
@@ -165,8 +153,8 @@ impl ToothComplianceCurve {
             let (fx, fy) = (-normal_angle.cos(), -normal_angle.sin());
             let xi_c = dir * (xc - x_root);
             let b = xi_c * fy - dir * yc * fx;
-            let bending = b * b * at(&j[0], xi_c) - 2.0 * b * fy * at(&j[1], xi_c)
-                + fy * fy * at(&j[2], xi_c);
+            let bending =
+                b * b * at(&j[0], xi_c) - 2.0 * b * fy * at(&j[1], xi_c) + fy * fy * at(&j[2], xi_c);
             let shear = 1.2 * fy * fy / g * at(&inv_area, xi_c);
             let axial = fx * fx / e_plane * at(&inv_area, xi_c);
             // Where the force line crosses the centreline, measured from the root chord.
@@ -178,23 +166,14 @@ impl ToothComplianceCurve {
             let foundation = cos2 / (e * width)
                 * (coef[0] * ratio * ratio + coef[1] * ratio + coef[2] * (1.0 + coef[3] * tan2));
             roll.push(xr);
-            compliance.push(ToothCompliance {
-                bending,
-                shear,
-                axial,
-                foundation,
-            });
+            compliance.push(ToothCompliance { bending, shear, axial, foundation });
         }
         // Internal teeth run from the form circle inward: keep the grid increasing.
         if roll.first() > roll.last() {
             roll.reverse();
             compliance.reverse();
         }
-        Self {
-            roll,
-            compliance,
-            foundation_coefficients: coef,
-        }
+        Self { roll, compliance, foundation_coefficients: coef }
     }
 
     /// Compliance at roll angle `xi`, clamped to the involute's ends.
@@ -255,9 +234,8 @@ impl PairStiffness {
     /// action. Outside the involutes (tip-corner contact) the compliance of
     /// the nearest involute end is used.
     pub fn at(&self, s: f64) -> f64 {
-        let c = self.hertz
-            + self.gear1.total_at(self.path.roll_1(s))
-            + self.gear2.total_at(self.path.roll_2(s));
+        let c =
+            self.hertz + self.gear1.total_at(self.path.roll_1(s)) + self.gear2.total_at(self.path.roll_2(s));
         1.0 / c
     }
 }

@@ -26,11 +26,7 @@ pub struct LtcaStudy {
 /// ISO 6336-1 stiffness of a mesh of the set: profile shifts from the tooth
 /// thicknesses with the backlash shared equally; basic-rack dedendum from
 /// the root radius.
-fn iso_for(
-    set: &GearSet,
-    mesh: MeshKind,
-    contact_ratio: f64,
-) -> crate::physics::iso6336::IsoStiffness {
+fn iso_for(set: &GearSet, mesh: MeshKind, contact_ratio: f64) -> crate::physics::iso6336::IsoStiffness {
     let (g1, g2) = set.mesh_gears(mesh);
     let j = set.circumferential_backlash(mesh);
     let a = g1.pressure_angle;
@@ -58,27 +54,18 @@ impl LtcaStudy {
     /// Runs the single-mesh and whole-set analyses at `samples` positions per mesh cycle.
     pub fn run(set: &GearSet, samples: usize) -> Self {
         let model = SetModel::new(set);
-        let load = set.input_torque / set.sun.base_radius() / set.planet_angles.len() as f64;
+        let load = set.mesh_load_per_planet();
         let mut meshes = Vec::new();
         let mut stiffness_summary = Vec::new();
-        for (mesh, m) in [
-            (MeshKind::SunPlanet, &model.sun_planet),
-            (MeshKind::RingPlanet, &model.ring_planet),
-        ] {
+        for (mesh, m) in
+            [(MeshKind::SunPlanet, &model.sun_planet), (MeshKind::RingPlanet, &model.ring_planet)]
+        {
             let r = mesh_ltca(set, m, load, samples);
             let p = m.path();
-            let width = set
-                .sun
-                .face_width
-                .min(set.planet.face_width)
-                .min(set.ring.face_width);
+            let width = set.sun.face_width.min(set.planet.face_width).min(set.ring.face_width);
             let iso = iso_for(set, mesh, p.nominal_contact_ratio());
-            let singles: Vec<f64> = (0..=200)
-                .map(|i| {
-                    m.stiffness
-                        .at(p.start + (p.end - p.start) * i as f64 / 200.0)
-                })
-                .collect();
+            let singles: Vec<f64> =
+                (0..=200).map(|i| m.stiffness.at(p.start + (p.end - p.start) * i as f64 / 200.0)).collect();
             let nominal = CycleStats::of(&r.mesh_stiffness_nominal);
             stiffness_summary.push(json!({
                 "single_pair_stiffness": {
@@ -101,12 +88,7 @@ impl LtcaStudy {
             meshes.push(r);
         }
         let whole_set = set_ltca(set, &model, samples);
-        Self {
-            set: set.clone(),
-            meshes,
-            whole_set,
-            stiffness_summary,
-        }
+        Self { set: set.clone(), meshes, whole_set, stiffness_summary }
     }
 
     /// The JSON document (SI units).
@@ -191,11 +173,7 @@ impl LtcaStudy {
         let mut files = Vec::new();
         for r in &self.meshes {
             let x = deg(&r.roll_angle_gear1);
-            let gear1 = if r.name == "sun_planet" {
-                "sun"
-            } else {
-                "planet"
-            };
+            let gear1 = if r.name == "sun_planet" { "sun" } else { "planet" };
             let per = |v: &[f64]| v.iter().map(|k| k / width_mm * 1e-6).collect::<Vec<_>>();
             files.extend(write_chart(
                 &Chart {
@@ -203,16 +181,8 @@ impl LtcaStudy {
                     x_label: format!("{gear1} roll angle (deg)"),
                     y_label: "mesh stiffness (N/(mm·µm))".into(),
                     series: vec![
-                        Series::new(
-                            "loaded (pairs in contact)",
-                            x.clone(),
-                            per(&r.mesh_stiffness_loaded),
-                        ),
-                        Series::new(
-                            "nominal path (sharp tips)",
-                            x.clone(),
-                            per(&r.mesh_stiffness_nominal),
-                        ),
+                        Series::new("loaded (pairs in contact)", x.clone(), per(&r.mesh_stiffness_loaded)),
+                        Series::new("nominal path (sharp tips)", x.clone(), per(&r.mesh_stiffness_nominal)),
                     ],
                     vlines: vec![],
                 },

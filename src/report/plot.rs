@@ -73,12 +73,7 @@ pub struct Series {
 impl Series {
     /// Creates a line series with the given label and coordinates.
     pub fn new(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
-        Self {
-            label: label.into(),
-            x,
-            y,
-            style: SeriesStyle::Line,
-        }
+        Self { label: label.into(), x, y, style: SeriesStyle::Line }
     }
 
     /// Returns this series with its drawing style replaced by `style`.
@@ -178,9 +173,7 @@ pub enum PlotError {
 pub fn write_chart(chart: &Chart, stem: &Path) -> Result<Vec<PathBuf>, PlotError> {
     validate(chart)?;
     if stem.file_name().is_none() {
-        return Err(PlotError::InvalidStem {
-            path: stem.to_path_buf(),
-        });
+        return Err(PlotError::InvalidStem { path: stem.to_path_buf() });
     }
     ensure_font()?;
     let (x_range, y_range) = axis_ranges(chart)?;
@@ -216,22 +209,13 @@ fn validate(chart: &Chart) -> Result<(), PlotError> {
         }
         for (axis, values) in [("x", &s.x), ("y", &s.y)] {
             if let Some((index, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-                return Err(PlotError::NonFinite {
-                    series: s.label.clone(),
-                    axis,
-                    index,
-                    value,
-                });
+                return Err(PlotError::NonFinite { series: s.label.clone(), axis, index, value });
             }
         }
     }
     for (index, (value, label)) in chart.vlines.iter().enumerate() {
         if !value.is_finite() {
-            return Err(PlotError::NonFiniteMarker {
-                label: label.clone(),
-                index,
-                value: *value,
-            });
+            return Err(PlotError::NonFiniteMarker { label: label.clone(), index, value: *value });
         }
     }
     if chart.series.iter().all(|s| s.x.is_empty()) {
@@ -244,15 +228,12 @@ fn validate(chart: &Chart) -> Result<(), PlotError> {
 fn ensure_font() -> Result<(), PlotError> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
-        plotters::style::register_font(FONT_FAMILY, FontStyle::Normal, dejavu::sans::regular())
-            .is_ok()
+        plotters::style::register_font(FONT_FAMILY, FontStyle::Normal, dejavu::sans::regular()).is_ok()
     });
     if ok {
         Ok(())
     } else {
-        Err(PlotError::Backend(
-            "the embedded DejaVu Sans font could not be loaded".to_string(),
-        ))
+        Err(PlotError::Backend("the embedded DejaVu Sans font could not be loaded".to_string()))
     }
 }
 
@@ -270,11 +251,8 @@ fn with_suffix(stem: &Path, suffix: &str) -> PathBuf {
 
 /// Computes the x and y axis ranges, with a margin, covering all points and marker lines.
 fn axis_ranges(chart: &Chart) -> Result<(Range<f64>, Range<f64>), PlotError> {
-    let xs = chart
-        .series
-        .iter()
-        .flat_map(|s| s.x.iter().copied())
-        .chain(chart.vlines.iter().map(|(x, _)| *x));
+    let xs =
+        chart.series.iter().flat_map(|s| s.x.iter().copied()).chain(chart.vlines.iter().map(|(x, _)| *x));
     let ys = chart.series.iter().flat_map(|s| s.y.iter().copied());
     let x = padded_range(xs).ok_or(PlotError::RangeTooLarge { axis: "x" })?;
     let y = padded_range(ys).ok_or(PlotError::RangeTooLarge { axis: "y" })?;
@@ -293,9 +271,7 @@ const MIN_RELATIVE_SPAN: f64 = 1e-12;
 /// It returns `None` when the values are so far apart that the width of the range
 /// overflows `f64`. An empty iterator gives `0.0..1.0`.
 fn padded_range(values: impl Iterator<Item = f64>) -> Option<Range<f64>> {
-    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-        (lo.min(v), hi.max(v))
-    });
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
     if !(lo.is_finite() && hi.is_finite()) {
         return Some(0.0..1.0);
     }
@@ -330,11 +306,7 @@ fn padded_range(values: impl Iterator<Item = f64>) -> Option<Range<f64>> {
 fn format_tick(v: f64, range: &Range<f64>) -> String {
     // Plotters places at most ten ticks, so their spacing is at least `step`.
     let step = (range.end - range.start) / 10.0;
-    let step_exp = if step > 0.0 && step.is_finite() {
-        (step.log10() + 1e-9).floor()
-    } else {
-        0.0
-    };
+    let step_exp = if step > 0.0 && step.is_finite() { (step.log10() + 1e-9).floor() } else { 0.0 };
     let max_abs = range.start.abs().max(range.end.abs());
     if v == 0.0 {
         return "0".to_string();
@@ -346,10 +318,7 @@ fn format_tick(v: f64, range: &Range<f64>) -> String {
     }
     let decimals = (-step_exp).clamp(0.0, 8.0) as usize;
     let s = format!("{v:.decimals$}");
-    if s.trim_start_matches('-')
-        .chars()
-        .all(|c| c == '0' || c == '.')
-    {
+    if s.trim_start_matches('-').chars().all(|c| c == '0' || c == '.') {
         // Avoid printing "-0" or "-0.00".
         s.trim_start_matches('-').to_string()
     } else {
@@ -409,13 +378,8 @@ fn draw<DB: DrawingBackend>(
 
     for (i, (x, label)) in chart.vlines.iter().enumerate() {
         let style = VLINE_COLOUR.stroke_width(1);
-        ctx.draw_series(DashedLineSeries::new(
-            [(*x, y_range.start), (*x, y_range.end)],
-            8,
-            5,
-            style,
-        ))
-        .map_err(backend_err)?;
+        ctx.draw_series(DashedLineSeries::new([(*x, y_range.start), (*x, y_range.end)], 8, 5, style))
+            .map_err(backend_err)?;
         if !label.is_empty() {
             // Stagger labels vertically so that nearby markers do not overlap completely.
             let y = y_range.end - y_span * (0.02 + 0.045 * (i % 4) as f64);
@@ -440,9 +404,7 @@ fn draw<DB: DrawingBackend>(
         let has_points = matches!(style, SeriesStyle::Points | SeriesStyle::LineAndPoints);
 
         if has_line {
-            let anno = ctx
-                .draw_series(LineSeries::new(points.clone(), line_style))
-                .map_err(backend_err)?;
+            let anno = ctx.draw_series(LineSeries::new(points.clone(), line_style)).map_err(backend_err)?;
             anno.label(label);
             if has_points {
                 anno.legend(move |(x, y)| {
@@ -455,12 +417,10 @@ fn draw<DB: DrawingBackend>(
             }
         }
         if has_points {
-            let anno = ctx
-                .draw_series(points.map(|p| Circle::new(p, 3, marker_style)))
-                .map_err(backend_err)?;
+            let anno =
+                ctx.draw_series(points.map(|p| Circle::new(p, 3, marker_style))).map_err(backend_err)?;
             if !has_line {
-                anno.label(s.label.clone())
-                    .legend(move |(x, y)| Circle::new((x + 12, y), 4, marker_style));
+                anno.label(s.label.clone()).legend(move |(x, y)| Circle::new((x + 12, y), 4, marker_style));
             }
         }
     }
@@ -482,14 +442,8 @@ fn draw<DB: DrawingBackend>(
 fn temp_path(target: &Path, ext: &str) -> PathBuf {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let nanos = SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.subsec_nanos())
-        .unwrap_or(0);
-    let name = target
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let nanos = SystemTime::now().duration_since(UNIX_EPOCH).map(|d| d.subsec_nanos()).unwrap_or(0);
+    let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let tmp_name = format!(".{name}.tmp-{}-{n}-{nanos}{ext}", std::process::id());
     target.with_file_name(tmp_name)
 }
@@ -513,15 +467,9 @@ fn create_temp(target: &Path, ext: &str) -> Result<(PathBuf, File), PlotError> {
 fn commit_temp(tmp: &Path, target: &Path) -> Result<(), PlotError> {
     let result = File::open(tmp)
         .and_then(|f| f.sync_all())
-        .map_err(|source| PlotError::Io {
-            path: tmp.to_path_buf(),
-            source,
-        })
+        .map_err(|source| PlotError::Io { path: tmp.to_path_buf(), source })
         .and_then(|()| {
-            fs::rename(tmp, target).map_err(|source| PlotError::Io {
-                path: target.to_path_buf(),
-                source,
-            })
+            fs::rename(tmp, target).map_err(|source| PlotError::Io { path: target.to_path_buf(), source })
         });
     if result.is_err() {
         let _ = fs::remove_file(tmp);

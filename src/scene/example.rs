@@ -1,8 +1,7 @@
 //! The 2004 scene: the automatic-transmission planetary set of MODEL.md §1.
 
 use super::{
-    AnalysisSpec, ExternalGearSpec, MaterialSpec, OperationSpec, PlanetLayoutSpec, RingGearSpec,
-    Scene, SupportSpec,
+    AnalysisSpec, ExternalGearSpec, MaterialSpec, OperationSpec, PlanetLayoutSpec, RingGearSpec, Scene,
 };
 use crate::physics::gear::Member;
 
@@ -52,18 +51,10 @@ impl Scene {
                 face_width_mm: 30.0,
                 tip_chamfer: None,
             },
-            planets: PlanetLayoutSpec {
-                count: 4,
-                angles_deg: None,
-            },
+            planets: PlanetLayoutSpec { count: 4, angles_deg: None },
             centre_distance_mm: 39.0,
             material: MaterialSpec::default(),
-            operation: OperationSpec {
-                held: Member::Carrier,
-                input: Member::Sun,
-                input_torque_nm: 750.0,
-            },
-            supports: SupportSpec::default(),
+            operation: OperationSpec { held: Member::Carrier, input: Member::Sun, input_torque_nm: 750.0 },
             analysis: AnalysisSpec::default(),
         }
     }

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 pub use validate::{Problem, SceneError};
 
-use crate::physics::gear::{Fidelity, GearSet, Member};
+use crate::physics::gear::{GearSet, Member};
 
 /// A planetary gear set as written in a scene file (engineering units).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -38,9 +38,6 @@ pub struct Scene {
     pub material: MaterialSpec,
     /// Which member is held fixed, which one is driven, and the drive torque.
     pub operation: OperationSpec,
-    /// Bearing supports (defaults documented in docs/PARAMETERS.md).
-    #[serde(default)]
-    pub supports: SupportSpec,
     /// Resolution of the quasi-static analyses.
     #[serde(default)]
     pub analysis: AnalysisSpec,
@@ -141,11 +138,7 @@ pub struct MaterialSpec {
 impl Default for MaterialSpec {
     /// Steel (MODEL.md §1).
     fn default() -> Self {
-        Self {
-            youngs_modulus_gpa: 207.0,
-            poisson_ratio: 0.3,
-            density_kg_per_m3: 7850.0,
-        }
+        Self { youngs_modulus_gpa: 207.0, poisson_ratio: 0.3, density_kg_per_m3: 7850.0 }
     }
 }
 
@@ -161,31 +154,6 @@ pub struct OperationSpec {
     pub input_torque_nm: f64,
 }
 
-/// Bearing supports. Defaults and their reasons: docs/PARAMETERS.md.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct SupportSpec {
-    /// Radial bearing stiffness of the sun, per direction x and y [N/m].
-    pub sun_radial_n_per_m: f64,
-    /// Radial bearing stiffness of the ring, per direction [N/m].
-    pub ring_radial_n_per_m: f64,
-    /// Radial bearing stiffness of the carrier, per direction [N/m].
-    pub carrier_radial_n_per_m: f64,
-    /// Stiffness of each planet bearing, radial and tangential [N/m].
-    pub planet_bearing_n_per_m: f64,
-}
-
-impl Default for SupportSpec {
-    fn default() -> Self {
-        Self {
-            sun_radial_n_per_m: 1.0e8,
-            ring_radial_n_per_m: 1.0e9,
-            carrier_radial_n_per_m: 1.0e9,
-            planet_bearing_n_per_m: 3.0e8,
-        }
-    }
-}
-
 /// Resolution of the quasi-static analyses.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -196,27 +164,18 @@ pub struct AnalysisSpec {
     pub profile_points: u32,
     /// Slices across the face width (J; 1 means a 2-D profile grid).
     pub face_slices: u32,
-    /// Degrees of freedom of the whole-set analysis.
-    pub fidelity: Fidelity,
 }
 
 impl Default for AnalysisSpec {
     fn default() -> Self {
-        Self {
-            positions_per_mesh_cycle: 200,
-            profile_points: 50,
-            face_slices: 1,
-            fidelity: Fidelity::TransverseTorsional,
-        }
+        Self { positions_per_mesh_cycle: 200, profile_points: 50, face_slices: 1 }
     }
 }
 
 impl Scene {
     /// Parses a scene from TOML text.
     pub fn from_toml(text: &str) -> Result<Self, SceneError> {
-        toml::from_str(text).map_err(|e| SceneError::Syntax {
-            message: e.to_string(),
-        })
+        toml::from_str(text).map_err(|e| SceneError::Syntax { message: e.to_string() })
     }
 
     /// The scene as TOML text a user can edit.

@@ -5,9 +5,7 @@ use std::f64::consts::PI;
 use std::fmt;
 
 use super::{ChamferSpec, ExternalGearSpec, RingGearSpec, Scene};
-use crate::physics::gear::{
-    Analysis, Chamfer, GearKind, GearSet, Material, MeshKind, RootForm, Supports, ToothForm,
-};
+use crate::physics::gear::{Analysis, Chamfer, GearKind, GearSet, Material, MeshKind, RootForm, ToothForm};
 use crate::physics::mesh::PathOfContact;
 
 /// One broken rule of a scene.
@@ -58,10 +56,7 @@ impl SceneError {
 /// height at 45° to the tip circle, a common edge break for hobbed and
 /// shaved automotive gears.
 pub fn default_chamfer(module_mm: f64) -> ChamferSpec {
-    ChamferSpec {
-        height_mm: 0.1 * module_mm,
-        angle_deg: 45.0,
-    }
+    ChamferSpec { height_mm: 0.1 * module_mm, angle_deg: 45.0 }
 }
 
 struct Checker {
@@ -70,11 +65,7 @@ struct Checker {
 
 impl Checker {
     fn fail(&mut self, name: &str, value: impl fmt::Display, reason: impl Into<String>) {
-        self.problems.push(Problem {
-            name: name.into(),
-            value: value.to_string(),
-            reason: reason.into(),
-        });
+        self.problems.push(Problem { name: name.into(), value: value.to_string(), reason: reason.into() });
     }
 
     fn positive(&mut self, name: &str, v: f64) -> bool {
@@ -88,11 +79,7 @@ impl Checker {
 
     fn in_range(&mut self, name: &str, v: f64, lo: f64, hi: f64, why: &str) -> bool {
         if !(v.is_finite() && v > lo && v < hi) {
-            self.fail(
-                name,
-                v,
-                format!("must lie strictly between {lo} and {hi} ({why})"),
-            );
+            self.fail(name, v, format!("must lie strictly between {lo} and {hi} ({why})"));
             false
         } else {
             true
@@ -106,23 +93,11 @@ impl Checker {
             self.fail(
                 &name_h,
                 c.height_mm,
-                format!(
-                    "must be at least 0 and below half the addendum ({:.4} mm)",
-                    0.5 * addendum_mm
-                ),
+                format!("must be at least 0 and below half the addendum ({:.4} mm)", 0.5 * addendum_mm),
             );
         }
-        self.in_range(
-            &name_a,
-            c.angle_deg,
-            0.0,
-            90.0,
-            "angle to the tip circle's tangent",
-        );
-        Chamfer {
-            height: c.height_mm * 1e-3,
-            angle: c.angle_deg.to_radians(),
-        }
+        self.in_range(&name_a, c.angle_deg, 0.0, 90.0, "angle to the tip circle's tangent");
+        Chamfer { height: c.height_mm * 1e-3, angle: c.angle_deg.to_radians() }
     }
 
     fn external(&mut self, key: &str, g: &ExternalGearSpec) -> ToothForm {
@@ -144,17 +119,10 @@ impl Checker {
             );
             sizes_ok = false;
         }
-        let angle_ok = self.in_range(
-            &n("pressure_angle_deg"),
-            g.pressure_angle_deg,
-            10.0,
-            35.0,
-            "spur gear practice",
-        );
+        let angle_ok =
+            self.in_range(&n("pressure_angle_deg"), g.pressure_angle_deg, 10.0, 35.0, "spur gear practice");
         let reference = g.module_mm * f64::from(g.teeth) / 2.0;
-        let chamfer_spec = g
-            .tip_chamfer
-            .unwrap_or_else(|| default_chamfer(g.module_mm));
+        let chamfer_spec = g.tip_chamfer.unwrap_or_else(|| default_chamfer(g.module_mm));
         let chamfer = self.chamfer(key, &chamfer_spec, g.tip_radius_mm - reference);
         let form = ToothForm {
             kind: GearKind::External,
@@ -165,9 +133,7 @@ impl Checker {
             tip_radius: g.tip_radius_mm * 1e-3,
             root_radius: g.root_radius_mm * 1e-3,
             body_radius: g.bore_radius_mm * 1e-3,
-            root_form: RootForm::Hob {
-                tip_radius: g.hob_tip_radius_mm * 1e-3,
-            },
+            root_form: RootForm::Hob { tip_radius: g.hob_tip_radius_mm * 1e-3 },
             chamfer: (chamfer.height > 0.0).then_some(chamfer),
             face_width: g.face_width_mm * 1e-3,
         };
@@ -179,9 +145,7 @@ impl Checker {
             self.fail(
                 &n("tip_radius_mm"),
                 g.tip_radius_mm,
-                format!(
-                    "must exceed the base radius {rb:.4} mm, or the teeth have no involute flank"
-                ),
+                format!("must exceed the base radius {rb:.4} mm, or the teeth have no involute flank"),
             );
         }
         if g.root_radius_mm >= g.tip_radius_mm {
@@ -202,10 +166,7 @@ impl Checker {
             self.fail(
                 &n("tooth_thickness_mm"),
                 g.tooth_thickness_mm,
-                format!(
-                    "must be below the circular pitch π·m = {:.4} mm",
-                    PI * g.module_mm
-                ),
+                format!("must be below the circular pitch π·m = {:.4} mm", PI * g.module_mm),
             );
         } else if g.tip_radius_mm > rb && form.thickness_at(form.tip_radius) <= 0.0 {
             self.fail(
@@ -239,17 +200,9 @@ impl Checker {
         ok &= self.positive(&n("rim_radius_mm"), g.rim_radius_mm);
         ok &= self.positive(&n("fillet_radius_mm"), g.fillet_radius_mm);
         ok &= self.positive(&n("face_width_mm"), g.face_width_mm);
-        ok &= self.in_range(
-            &n("pressure_angle_deg"),
-            g.pressure_angle_deg,
-            10.0,
-            35.0,
-            "spur gear practice",
-        );
+        ok &= self.in_range(&n("pressure_angle_deg"), g.pressure_angle_deg, 10.0, 35.0, "spur gear practice");
         let reference = g.module_mm * f64::from(g.teeth) / 2.0;
-        let chamfer = g
-            .tip_chamfer
-            .map(|c| self.chamfer("ring", &c, reference - g.minor_radius_mm));
+        let chamfer = g.tip_chamfer.map(|c| self.chamfer("ring", &c, reference - g.minor_radius_mm));
         let form = ToothForm {
             kind: GearKind::Internal,
             teeth: g.teeth,
@@ -259,9 +212,7 @@ impl Checker {
             tip_radius: g.minor_radius_mm * 1e-3,
             root_radius: g.root_radius_mm * 1e-3,
             body_radius: g.rim_radius_mm * 1e-3,
-            root_form: RootForm::Fillet {
-                radius: g.fillet_radius_mm * 1e-3,
-            },
+            root_form: RootForm::Fillet { radius: g.fillet_radius_mm * 1e-3 },
             chamfer: chamfer.filter(|c| c.height > 0.0),
             face_width: g.face_width_mm * 1e-3,
         };
@@ -294,10 +245,7 @@ impl Checker {
             self.fail(
                 &n("tooth_thickness_mm"),
                 g.tooth_thickness_mm,
-                format!(
-                    "must be below the circular pitch π·m = {:.4} mm",
-                    PI * g.module_mm
-                ),
+                format!("must be below the circular pitch π·m = {:.4} mm", PI * g.module_mm),
             );
         }
         if g.fillet_radius_mm >= 0.5 * (g.root_radius_mm - g.minor_radius_mm) {
@@ -325,9 +273,7 @@ fn tip_key(gear: &str) -> String {
 
 /// Checks every rule of a scene and converts it to SI.
 pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
-    let mut c = Checker {
-        problems: Vec::new(),
-    };
+    let mut c = Checker { problems: Vec::new() };
     let sun = c.external("sun", &scene.sun);
     let planet = c.external("planet", &scene.planet);
     let ring = c.ring(&scene.ring);
@@ -349,37 +295,21 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     let gears_ok = c.problems.is_empty();
 
     let m = &scene.material;
-    let mut material_ok = c.in_range(
+    c.in_range(
         "material.youngs_modulus_gpa",
         m.youngs_modulus_gpa,
         0.0,
         1.0e4,
         "an engineering metal or polymer",
     );
-    material_ok &= c.in_range(
-        "material.poisson_ratio",
-        m.poisson_ratio,
-        0.0,
-        0.5,
-        "isotropic elastic material",
-    );
-    material_ok &= c.positive("material.density_kg_per_m3", m.density_kg_per_m3);
+    c.in_range("material.poisson_ratio", m.poisson_ratio, 0.0, 0.5, "isotropic elastic material");
+    c.positive("material.density_kg_per_m3", m.density_kg_per_m3);
     let material = Material {
         youngs_modulus: m.youngs_modulus_gpa * 1e9,
         poisson_ratio: m.poisson_ratio,
         density: m.density_kg_per_m3,
     };
-    let _ = material_ok;
 
-    let s = &scene.supports;
-    for (name, v) in [
-        ("supports.sun_radial_n_per_m", s.sun_radial_n_per_m),
-        ("supports.ring_radial_n_per_m", s.ring_radial_n_per_m),
-        ("supports.carrier_radial_n_per_m", s.carrier_radial_n_per_m),
-        ("supports.planet_bearing_n_per_m", s.planet_bearing_n_per_m),
-    ] {
-        c.positive(name, v);
-    }
     let a = &scene.analysis;
     if !(8..=100_000).contains(&a.positions_per_mesh_cycle) {
         c.fail(
@@ -389,18 +319,10 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         );
     }
     if !(5..=10_000).contains(&a.profile_points) {
-        c.fail(
-            "analysis.profile_points",
-            a.profile_points,
-            "must be between 5 and 10000",
-        );
+        c.fail("analysis.profile_points", a.profile_points, "must be between 5 and 10000");
     }
     if !(1..=1000).contains(&a.face_slices) {
-        c.fail(
-            "analysis.face_slices",
-            a.face_slices,
-            "must be between 1 and 1000",
-        );
+        c.fail("analysis.face_slices", a.face_slices, "must be between 1 and 1000");
     }
 
     let op = &scene.operation;
@@ -412,11 +334,7 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         );
     }
     if !op.input_torque_nm.is_finite() {
-        c.fail(
-            "operation.input_torque_nm",
-            op.input_torque_nm,
-            "must be a finite number",
-        );
+        c.fail("operation.input_torque_nm", op.input_torque_nm, "must be a finite number");
     }
 
     // Planet layout and the assembly condition.
@@ -426,9 +344,7 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         c.fail("planets.count", count, "must be between 1 and 32");
     } else {
         angles = match &scene.planets.angles_deg {
-            None => (0..count)
-                .map(|i| 2.0 * PI * f64::from(i) / f64::from(count))
-                .collect(),
+            None => (0..count).map(|i| 2.0 * PI * f64::from(i) / f64::from(count)).collect(),
             Some(list) => {
                 if list.len() != count as usize {
                     c.fail(
@@ -441,20 +357,14 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
             }
         };
         if angles.iter().any(|a| !a.is_finite()) {
-            c.fail(
-                "planets.angles_deg",
-                format!("{:?}", scene.planets.angles_deg),
-                "must be finite numbers",
-            );
+            c.fail("planets.angles_deg", format!("{:?}", scene.planets.angles_deg), "must be finite numbers");
             angles.clear();
         }
     }
 
     let centre_ok = c.positive("centre_distance_mm", scene.centre_distance_mm);
     if !(gears_ok && centre_ok) {
-        return Err(SceneError::Invalid {
-            problems: c.problems,
-        });
+        return Err(SceneError::Invalid { problems: c.problems });
     }
 
     let set = GearSet {
@@ -468,17 +378,10 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         held: op.held,
         input: op.input,
         input_torque: op.input_torque_nm,
-        supports: Supports {
-            sun_radial: s.sun_radial_n_per_m,
-            ring_radial: s.ring_radial_n_per_m,
-            carrier_radial: s.carrier_radial_n_per_m,
-            planet_bearing: s.planet_bearing_n_per_m,
-        },
         analysis: Analysis {
             positions_per_mesh_cycle: a.positions_per_mesh_cycle as usize,
             profile_points: a.profile_points as usize,
             face_slices: a.face_slices as usize,
-            fidelity: a.fidelity,
         },
     };
 
@@ -501,9 +404,7 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         );
     }
     if !c.problems.is_empty() {
-        return Err(SceneError::Invalid {
-            problems: c.problems,
-        });
+        return Err(SceneError::Invalid { problems: c.problems });
     }
 
     for mesh in MeshKind::ALL {
@@ -527,19 +428,9 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         let eps = path.nominal_contact_ratio();
         if eps < 1.0 {
             c.fail(
-                &format!(
-                    "{}.tip_radius_mm",
-                    if mesh == MeshKind::SunPlanet {
-                        "sun"
-                    } else {
-                        "planet"
-                    }
-                ),
+                &format!("{}.tip_radius_mm", if mesh == MeshKind::SunPlanet { "sun" } else { "planet" }),
                 format!("{} (contact ratio {eps:.4})", path.gear1_tip_radius_mm()),
-                format!(
-                    "the {} mesh's contact ratio must be at least 1: lengthen the teeth",
-                    mesh.name()
-                ),
+                format!("the {} mesh's contact ratio must be at least 1: lengthen the teeth", mesh.name()),
             );
         }
         // Tip/root interference: each gear's start of active profile must lie
@@ -583,7 +474,10 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
                 c.fail(
                     &tip_key(tip_gear),
                     format!("clearance {:.4} mm", clearance * 1e3),
-                    format!("the {tip_gear} tip circle must clear the {root_key} root circle in the {} mesh", mesh.name()),
+                    format!(
+                        "the {tip_gear} tip circle must clear the {root_key} root circle in the {} mesh",
+                        mesh.name()
+                    ),
                 );
             }
         }
@@ -609,11 +503,7 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     sorted.sort_by(f64::total_cmp);
     if sorted.len() > 1 {
         for i in 0..sorted.len() {
-            let next = if i + 1 < sorted.len() {
-                sorted[i + 1]
-            } else {
-                sorted[0] + 2.0 * PI
-            };
+            let next = if i + 1 < sorted.len() { sorted[i + 1] } else { sorted[0] + 2.0 * PI };
             let gap = next - sorted[i];
             let chord = 2.0 * set.centre_distance * (gap / 2.0).sin();
             if chord <= 2.0 * set.planet.tip_radius {
@@ -634,8 +524,6 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     if c.problems.is_empty() {
         Ok(set)
     } else {
-        Err(SceneError::Invalid {
-            problems: c.problems,
-        })
+        Err(SceneError::Invalid { problems: c.problems })
     }
 }

@@ -11,31 +11,17 @@ fn sample_chart() -> Chart {
         x_label: "Time [s]".to_string(),
         y_label: "Force [N]".to_string(),
         series: vec![
-            Series::new(
-                "sun-planet",
-                x.clone(),
-                x.iter().map(|t| t.sin() * 100.0).collect(),
-            ),
-            Series::new(
-                "ring-planet",
-                x.clone(),
-                x.iter().map(|t| t.cos() * 80.0).collect(),
-            )
-            .with_style(SeriesStyle::LineAndPoints),
+            Series::new("sun-planet", x.clone(), x.iter().map(|t| t.sin() * 100.0).collect()),
+            Series::new("ring-planet", x.clone(), x.iter().map(|t| t.cos() * 80.0).collect())
+                .with_style(SeriesStyle::LineAndPoints),
             Series::new(
                 "measured",
                 x.iter().step_by(10).copied().collect(),
-                x.iter()
-                    .step_by(10)
-                    .map(|t| (t * 1.3).sin() * 60.0)
-                    .collect(),
+                x.iter().step_by(10).map(|t| (t * 1.3).sin() * 60.0).collect(),
             )
             .with_style(SeriesStyle::Points),
         ],
-        vlines: vec![
-            (2.5, "fault onset".to_string()),
-            (7.0, "shutdown".to_string()),
-        ],
+        vlines: vec![(2.5, "fault onset".to_string()), (7.0, "shutdown".to_string())],
     }
 }
 
@@ -48,10 +34,7 @@ fn writes_svg_and_png_for_three_series() {
     let dir = tempfile::tempdir().unwrap();
     let stem = dir.path().join("forces");
     let paths = write_chart(&sample_chart(), &stem).unwrap();
-    assert_eq!(
-        paths,
-        vec![dir.path().join("forces.svg"), dir.path().join("forces.png")]
-    );
+    assert_eq!(paths, vec![dir.path().join("forces.svg"), dir.path().join("forces.png")]);
 
     let svg = String::from_utf8(read(&paths[0])).unwrap();
     assert!(svg.starts_with("<svg"), "not an SVG document");
@@ -69,11 +52,7 @@ fn writes_svg_and_png_for_three_series() {
     }
 
     let png = read(&paths[1]);
-    assert!(
-        png.len() > 1000,
-        "PNG suspiciously small: {} bytes",
-        png.len()
-    );
+    assert!(png.len() > 1000, "PNG suspiciously small: {} bytes", png.len());
     assert_eq!(png[..8], PNG_MAGIC);
 
     // Only the two outputs remain: no temporary files are left behind.
@@ -117,10 +96,7 @@ fn constant_and_single_point_series_render() {
     };
     write_chart(&chart, &dir.path().join("flat")).unwrap();
 
-    let zero = Chart {
-        series: vec![Series::new("zero", vec![0.0], vec![0.0])],
-        ..Chart::default()
-    };
+    let zero = Chart { series: vec![Series::new("zero", vec![0.0], vec![0.0])], ..Chart::default() };
     write_chart(&zero, &dir.path().join("zero")).unwrap();
 }
 
@@ -130,18 +106,10 @@ fn many_series_and_extreme_values_render() {
     let series = (0..12)
         .map(|i| {
             let k = f64::from(i);
-            Series::new(
-                format!("s{i}"),
-                vec![0.0, 1e-9, 2e-9],
-                vec![k * 1e12, -k * 1e12, k],
-            )
+            Series::new(format!("s{i}"), vec![0.0, 1e-9, 2e-9], vec![k * 1e12, -k * 1e12, k])
         })
         .collect();
-    let chart = Chart {
-        title: "Many".to_string(),
-        series,
-        ..Chart::default()
-    };
+    let chart = Chart { title: "Many".to_string(), series, ..Chart::default() };
     write_chart(&chart, &dir.path().join("many")).unwrap();
 }
 
@@ -153,10 +121,7 @@ fn huge_and_tiny_values_render() {
         ("tiny", vec![0.0, 1e-310], vec![5e-324, -5e-324]),
         ("offset", vec![1e16, 1e16 + 2.0], vec![1.0, 1.0 + 1e-15]),
     ] {
-        let chart = Chart {
-            series: vec![Series::new(name, x, y)],
-            ..Chart::default()
-        };
+        let chart = Chart { series: vec![Series::new(name, x, y)], ..Chart::default() };
         write_chart(&chart, &dir.path().join(name)).unwrap();
     }
 }
@@ -165,18 +130,11 @@ fn huge_and_tiny_values_render() {
 fn unrepresentable_span_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
     let chart = Chart {
-        series: vec![Series::new(
-            "huge",
-            vec![0.0, 1.0],
-            vec![-f64::MAX, f64::MAX],
-        )],
+        series: vec![Series::new("huge", vec![0.0, 1.0], vec![-f64::MAX, f64::MAX])],
         ..Chart::default()
     };
     let err = write_chart(&chart, &dir.path().join("huge")).unwrap_err();
-    assert!(
-        matches!(err, PlotError::RangeTooLarge { axis: "y" }),
-        "{err:?}"
-    );
+    assert!(matches!(err, PlotError::RangeTooLarge { axis: "y" }), "{err:?}");
 }
 
 #[test]
@@ -192,20 +150,11 @@ fn padded_range_is_never_empty() {
         vec![1e16, 1e16 + 2.0],
     ] {
         let r = padded_range(values.iter().copied()).unwrap();
-        assert!(
-            r.start < r.end && (r.end - r.start).is_finite(),
-            "{values:?} gave {r:?}"
-        );
-        assert!(
-            values.iter().all(|v| r.contains(v) || *v == r.end),
-            "{values:?} not in {r:?}"
-        );
+        assert!(r.start < r.end && (r.end - r.start).is_finite(), "{values:?} gave {r:?}");
+        assert!(values.iter().all(|v| r.contains(v) || *v == r.end), "{values:?} not in {r:?}");
     }
     let r = padded_range([0.0, 10.0].into_iter()).unwrap();
-    assert!(
-        (r.start + 0.5).abs() < 1e-12 && (r.end - 10.5).abs() < 1e-12,
-        "{r:?}"
-    );
+    assert!((r.start + 0.5).abs() < 1e-12 && (r.end - 10.5).abs() < 1e-12, "{r:?}");
     assert_eq!(padded_range(std::iter::empty()), Some(0.0..1.0));
     assert_eq!(padded_range([-f64::MAX, f64::MAX].into_iter()), None);
 }
@@ -222,10 +171,7 @@ fn tick_labels_are_short() {
     assert_eq!(format_tick(-4e7, &(-1e8..0.0)), "-4e7");
     assert_eq!(format_tick(3e7, &(0.0..1e8)), "3e7");
     assert_eq!(format_tick(1.5e-9, &(0.0..1e-9)), "1.5e-9");
-    assert_eq!(
-        format_tick(1e16 + 4.0, &(1e16..1e16 + 20.0)),
-        "1.0000000000000004e16"
-    );
+    assert_eq!(format_tick(1e16 + 4.0, &(1e16..1e16 + 20.0)), "1.0000000000000004e16");
 }
 
 #[test]
@@ -233,18 +179,9 @@ fn empty_chart_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
     let stem = dir.path().join("empty");
     let no_series = Chart::default();
-    assert!(matches!(
-        write_chart(&no_series, &stem),
-        Err(PlotError::EmptyChart)
-    ));
-    let no_points = Chart {
-        series: vec![Series::new("nothing", vec![], vec![])],
-        ..Chart::default()
-    };
-    assert!(matches!(
-        write_chart(&no_points, &stem),
-        Err(PlotError::EmptyChart)
-    ));
+    assert!(matches!(write_chart(&no_series, &stem), Err(PlotError::EmptyChart)));
+    let no_points = Chart { series: vec![Series::new("nothing", vec![], vec![])], ..Chart::default() };
+    assert!(matches!(write_chart(&no_points, &stem), Err(PlotError::EmptyChart)));
     assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
 }
 
@@ -255,11 +192,7 @@ fn length_mismatch_names_the_series() {
     chart.series[1].y.pop();
     let err = write_chart(&chart, &dir.path().join("bad")).unwrap_err();
     match &err {
-        PlotError::LengthMismatch {
-            series,
-            x_len,
-            y_len,
-        } => {
+        PlotError::LengthMismatch { series, x_len, y_len } => {
             assert_eq!(series, "ring-planet");
             assert_eq!((*x_len, *y_len), (200, 199));
         }
@@ -275,12 +208,7 @@ fn non_finite_value_names_series_and_index() {
     chart.series[2].y[3] = f64::NAN;
     let err = write_chart(&chart, &dir.path().join("bad")).unwrap_err();
     match &err {
-        PlotError::NonFinite {
-            series,
-            axis,
-            index,
-            value,
-        } => {
+        PlotError::NonFinite { series, axis, index, value } => {
             assert_eq!(series, "measured");
             assert_eq!(*axis, "y");
             assert_eq!(*index, 3);
@@ -295,11 +223,7 @@ fn non_finite_value_names_series_and_index() {
     chart.series[0].x[7] = f64::INFINITY;
     assert!(matches!(
         write_chart(&chart, &dir.path().join("bad")),
-        Err(PlotError::NonFinite {
-            axis: "x",
-            index: 7,
-            ..
-        })
+        Err(PlotError::NonFinite { axis: "x", index: 7, .. })
     ));
     assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
 }
@@ -320,14 +244,8 @@ fn non_finite_marker_is_an_error() {
 
 #[test]
 fn stem_without_file_name_is_an_error() {
-    assert!(matches!(
-        write_chart(&sample_chart(), Path::new("/")),
-        Err(PlotError::InvalidStem { .. })
-    ));
-    assert!(matches!(
-        write_chart(&sample_chart(), Path::new("")),
-        Err(PlotError::InvalidStem { .. })
-    ));
+    assert!(matches!(write_chart(&sample_chart(), Path::new("/")), Err(PlotError::InvalidStem { .. })));
+    assert!(matches!(write_chart(&sample_chart(), Path::new("")), Err(PlotError::InvalidStem { .. })));
 }
 
 #[test]
@@ -336,11 +254,7 @@ fn missing_directory_is_an_io_error_with_path() {
     let stem = dir.path().join("no-such-dir").join("chart");
     match write_chart(&sample_chart(), &stem).unwrap_err() {
         PlotError::Io { path, source } => {
-            assert!(
-                path.starts_with(dir.path().join("no-such-dir")),
-                "{}",
-                path.display()
-            );
+            assert!(path.starts_with(dir.path().join("no-such-dir")), "{}", path.display());
             assert_eq!(source.kind(), std::io::ErrorKind::NotFound);
         }
         other => panic!("unexpected error {other:?}"),
