@@ -1,0 +1,115 @@
+//! Modal analysis against closed forms and the structure Lin & Parker proved.
+
+use planetwear::physics::gear::Member;
+use planetwear::physics::lumped::{Fidelity, LumpedSet};
+use planetwear::physics::modes::{natural_modes, Mode, ModeClass};
+
+/// A benchmark-like set in the style of Lin & Parker (1999), Table 1 orders
+/// of magnitude; the laws tested hold for any values.
+fn set(n: usize, fidelity: Fidelity, held: Option<Member>) -> LumpedSet {
+    LumpedSet {
+        central_mass: [5.43, 2.35, 0.4],
+        central_rotational_mass: [6.29, 3.0, 0.39],
+        planet_mass: 0.66,
+        planet_rotational_mass: 0.61,
+        central_bearing: [1e8, 1e8, 1e8],
+        central_torsional: [0.0, 1e9, 0.0],
+        planet_bearing: 1e8,
+        sun_mesh: 5e8,
+        ring_mesh: 5e8,
+        sun_pressure_angle: 24.6f64.to_radians(),
+        ring_pressure_angle: 24.6f64.to_radians(),
+        planet_angles: (0..n).map(|i| 2.0 * std::f64::consts::PI * i as f64 / n as f64).collect(),
+        held,
+        fidelity,
+    }
+}
+
+fn count(modes: &[Mode], class: ModeClass) -> usize {
+    modes.iter().filter(|m| m.class == class).count()
+}
+
+#[test]
+fn torsional_closed_form_with_the_carrier_held() {
+    for n in [3usize, 4, 5] {
+        let mut s = set(n, Fidelity::Torsional, Some(Member::Carrier));
+        s.central_torsional = [0.0, 0.0, 0.0];
+        let modes = natural_modes(&s);
+        let two_pi = 2.0 * std::f64::consts::PI;
+        // Planet modes: ω² = (k_sp + k_rp)/m_p, multiplicity n − 1.
+        let wp = ((s.sun_mesh + s.ring_mesh) / s.planet_rotational_mass).sqrt() / two_pi;
+        let planet: Vec<&Mode> = modes.iter().filter(|m| m.class == ModeClass::Planet).collect();
+        assert_eq!(planet.len(), n - 1, "n = {n}");
+        for m in &planet {
+            assert!((m.frequency / wp - 1.0).abs() < 1e-9, "{} vs {wp}", m.frequency);
+            assert_eq!(m.multiplicity, n - 1);
+        }
+        // The chain sun —(n k_sp)— planets (n m_p) —(n k_rp)— ring, free-free:
+        // ω⁴ m1 m2 m3 − ω² [k1 m3 (m1 + m2) + k2 m1 (m2 + m3)] + k1 k2 (m1 + m2 + m3) = 0.
+        let (m1, m2, m3) =
+            (s.central_rotational_mass[2], n as f64 * s.planet_rotational_mass, s.central_rotational_mass[1]);
+        let (k1, k2) = (n as f64 * s.sun_mesh, n as f64 * s.ring_mesh);
+        let a = m1 * m2 * m3;
+        let b = k1 * m3 * (m1 + m2) + k2 * m1 * (m2 + m3);
+        let c = k1 * k2 * (m1 + m2 + m3);
+        let disc = (b * b - 4.0 * a * c).sqrt();
+        let roots = [((b - disc) / (2.0 * a)).sqrt() / two_pi, ((b + disc) / (2.0 * a)).sqrt() / two_pi];
+        let rot: Vec<f64> =
+            modes.iter().filter(|m| m.class == ModeClass::Rotational).map(|m| m.frequency).collect();
+        assert_eq!(rot.len(), 2, "n = {n}: {rot:?}");
+        for (f, r) in rot.iter().zip(roots) {
+            assert!((f / r - 1.0).abs() < 1e-9, "{f} vs {r}");
+        }
+        assert_eq!(count(&modes, ModeClass::RigidBody), 1);
+    }
+}
+
+#[test]
+fn transverse_torsional_mode_structure_for_3_4_5_planets() {
+    for n in [3usize, 4, 5] {
+        // Nothing held (torsional supports only on the ring): 9 + 3n modes.
+        let modes = natural_modes(&set(n, Fidelity::TransverseTorsional, None));
+        assert_eq!(modes.len(), 9 + 3 * n);
+        assert_eq!(count(&modes, ModeClass::Rotational) + count(&modes, ModeClass::RigidBody), 6, "n = {n}");
+        assert_eq!(count(&modes, ModeClass::Translational), 12, "n = {n}");
+        assert_eq!(count(&modes, ModeClass::Planet), 3 * (n - 3), "n = {n}");
+        assert_eq!(count(&modes, ModeClass::Mixed), 0);
+        for m in &modes {
+            match m.class {
+                ModeClass::Translational => assert_eq!(m.multiplicity, 2, "{m:?}"),
+                ModeClass::Planet => assert_eq!(m.multiplicity, n - 3),
+                ModeClass::Rotational => assert_eq!(m.multiplicity, 1),
+                _ => {}
+            }
+        }
+        // Carrier held in rotation: one rotational mode fewer.
+        let held = natural_modes(&set(n, Fidelity::TransverseTorsional, Some(Member::Carrier)));
+        assert_eq!(held.len(), 8 + 3 * n);
+        assert_eq!(count(&held, ModeClass::Rotational) + count(&held, ModeClass::RigidBody), 5);
+        assert_eq!(count(&held, ModeClass::Translational), 12);
+        assert_eq!(count(&held, ModeClass::Planet), 3 * (n - 3));
+    }
+}
+
+#[test]
+fn planet_mode_frequencies_do_not_depend_on_the_number_of_planets() {
+    let planet_freqs = |n: usize, f: Fidelity| -> Vec<f64> {
+        let mut v: Vec<f64> = natural_modes(&set(n, f, Some(Member::Carrier)))
+            .iter()
+            .filter(|m| m.class == ModeClass::Planet)
+            .map(|m| m.frequency)
+            .collect();
+        v.dedup_by(|a, b| (*a / *b - 1.0).abs() < 1e-6);
+        v
+    };
+    let t4 = planet_freqs(4, Fidelity::TransverseTorsional);
+    let t5 = planet_freqs(5, Fidelity::TransverseTorsional);
+    let t6 = planet_freqs(6, Fidelity::TransverseTorsional);
+    assert_eq!(t4.len(), 3);
+    for (a, b) in t4.iter().zip(&t5).chain(t4.iter().zip(&t6)) {
+        assert!((a / b - 1.0).abs() < 1e-9, "{a} vs {b}");
+    }
+    let r3 = planet_freqs(3, Fidelity::Torsional);
+    let r5 = planet_freqs(5, Fidelity::Torsional);
+    assert!((r3[0] / r5[0] - 1.0).abs() < 1e-9);
+}
