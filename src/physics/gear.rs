@@ -289,6 +289,122 @@ pub struct GearSet {
     pub input_torque: f64,
     /// Analysis resolution.
     pub analysis: Analysis,
+    /// Bearing supports.
+    pub supports: Supports,
+    /// Masses and inertias of the bodies.
+    pub bodies: Bodies,
+    /// Dynamic model and integrator settings.
+    pub dynamics: DynamicsSettings,
+}
+
+/// Bearing stiffnesses and damping.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Supports {
+    /// Sun bearing, per direction [N/m].
+    pub sun_radial: f64,
+    /// Ring bearing, per direction [N/m].
+    pub ring_radial: f64,
+    /// Carrier bearing, per direction [N/m].
+    pub carrier_radial: f64,
+    /// Planet bearing, radial and tangential [N/m].
+    pub planet_bearing: f64,
+    /// Damping ratio of every bearing [-].
+    pub bearing_damping_ratio: f64,
+}
+
+/// Mass and polar moment of inertia of a body.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Body {
+    /// Mass [kg].
+    pub mass: f64,
+    /// Polar moment of inertia about its own axis [kg·m²].
+    pub inertia: f64,
+}
+
+/// The bodies of the set (the carrier's without its planets).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bodies {
+    /// Sun.
+    pub sun: Body,
+    /// Each planet.
+    pub planet: Body,
+    /// Ring.
+    pub ring: Body,
+    /// Carrier (plates and pins).
+    pub carrier: Body,
+}
+
+/// How the input member is driven in the dynamic model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Drive {
+    /// Constant input torque; the output carries the balancing torque and the
+    /// running speed is set by the initial condition.
+    Torque,
+    /// The input member is driven through a torsional shaft from a source
+    /// turning at the set speed; the output carries the balancing torque.
+    Speed,
+}
+
+/// Time integrator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegratorKind {
+    /// Generalized-α (Chung–Hulbert), fixed steps per mesh cycle.
+    GeneralizedAlpha,
+    /// Adaptive Runge–Kutta 5(4) (Dormand–Prince) with contact events.
+    Rk45,
+}
+
+/// Dynamic model and integrator settings, SI.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DynamicsSettings {
+    /// Degrees of freedom.
+    pub fidelity: super::lumped::Fidelity,
+    /// Mesh damping ratio [-].
+    pub mesh_damping_ratio: f64,
+    /// Drive of the input member.
+    pub drive: Drive,
+    /// Input member speed of a single run [rad/s].
+    pub input_speed: f64,
+    /// Input shaft torsional stiffness for the speed drive [N·m/rad].
+    pub shaft_stiffness: f64,
+    /// Integrator.
+    pub integrator: IntegratorKind,
+    /// Generalized-α spectral radius at infinity [-].
+    pub rho_infinity: f64,
+    /// Generalized-α steps per mesh cycle.
+    pub steps_per_mesh_cycle: usize,
+    /// Adaptive method's relative tolerance [-].
+    pub relative_tolerance: f64,
+    /// Run-in [input revolutions].
+    pub run_in_revolutions: f64,
+    /// Measured window [input revolutions].
+    pub measured_revolutions: f64,
+    /// Output samples per mesh cycle.
+    pub samples_per_mesh_cycle: usize,
+}
+
+impl Bodies {
+    /// Bodies derived from the geometry (MODEL.md §1): sun and planet annuli
+    /// from bore to root, the ring from tooth tip to rim outside; the carrier
+    /// as two plates 0.3 face widths thick from the sun's root circle to the
+    /// planets' root circles' outer reach, plus one pin per planet filling the
+    /// planet bore at the centre distance (docs/PARAMETERS.md).
+    pub fn from_geometry(set: &GearSet) -> Self {
+        let rho = set.material.density;
+        let body = |g: &ToothForm| Body { mass: g.body_mass(rho), inertia: g.body_inertia(rho) };
+        let t = 0.3 * set.sun.face_width;
+        let (ri, ro) = (set.sun.root_radius, set.centre_distance + set.planet.root_radius);
+        let plates = 2.0 * rho * PI * (ro * ro - ri * ri) * t;
+        let n = set.planet_angles.len() as f64;
+        let pins = n * rho * PI * set.planet.body_radius.powi(2) * set.planet.face_width;
+        let carrier = Body {
+            mass: plates + pins,
+            inertia: 0.5 * plates * (ri * ri + ro * ro) + pins * set.centre_distance.powi(2),
+        };
+        Self { sun: body(&set.sun), planet: body(&set.planet), ring: body(&set.ring), carrier }
+    }
 }
 
 impl GearSet {

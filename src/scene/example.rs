@@ -56,6 +56,9 @@ impl Scene {
             material: MaterialSpec::default(),
             operation: OperationSpec { held: Member::Carrier, input: Member::Sun, input_torque_nm: 750.0 },
             analysis: AnalysisSpec::default(),
+            supports: Default::default(),
+            inertia: Default::default(),
+            dynamics: Default::default(),
         }
     }
 }

@@ -14,7 +14,9 @@ use serde::{Deserialize, Serialize};
 
 pub use validate::{Problem, SceneError};
 
+pub use crate::physics::gear::{Drive, IntegratorKind};
 use crate::physics::gear::{GearSet, Member};
+pub use crate::physics::lumped::Fidelity;
 
 /// A planetary gear set as written in a scene file (engineering units).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -41,6 +43,122 @@ pub struct Scene {
     /// Resolution of the quasi-static analyses.
     #[serde(default)]
     pub analysis: AnalysisSpec,
+    /// Bearing supports (defaults and reasons: docs/PARAMETERS.md).
+    #[serde(default)]
+    pub supports: SupportSpec,
+    /// Inertia overrides; omitted values are derived from the geometry.
+    #[serde(default)]
+    pub inertia: InertiaSpec,
+    /// Dynamic model and integrator settings.
+    #[serde(default)]
+    pub dynamics: DynamicsSpec,
+}
+
+/// Bearing supports of the members.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SupportSpec {
+    /// Radial bearing stiffness of the sun, per direction [N/m].
+    pub sun_radial_n_per_m: f64,
+    /// Radial bearing stiffness of the ring, per direction [N/m].
+    pub ring_radial_n_per_m: f64,
+    /// Radial bearing stiffness of the carrier, per direction [N/m].
+    pub carrier_radial_n_per_m: f64,
+    /// Stiffness of each planet bearing, radial and tangential [N/m].
+    pub planet_bearing_n_per_m: f64,
+    /// Damping ratio of every bearing (on the mode of the supported body on its bearing).
+    pub bearing_damping_ratio: f64,
+}
+
+impl Default for SupportSpec {
+    fn default() -> Self {
+        Self {
+            sun_radial_n_per_m: 1.0e8,
+            ring_radial_n_per_m: 1.0e9,
+            carrier_radial_n_per_m: 1.0e9,
+            planet_bearing_n_per_m: 3.0e8,
+            bearing_damping_ratio: 0.02,
+        }
+    }
+}
+
+/// Optional overrides of masses [kg] and polar moments of inertia [kg·m²].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InertiaSpec {
+    /// Sun mass [kg].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sun_mass_kg: Option<f64>,
+    /// Sun polar moment of inertia [kg·m²].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sun_inertia_kg_m2: Option<f64>,
+    /// Planet mass [kg].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub planet_mass_kg: Option<f64>,
+    /// Planet polar moment of inertia [kg·m²].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub planet_inertia_kg_m2: Option<f64>,
+    /// Ring mass [kg].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ring_mass_kg: Option<f64>,
+    /// Ring polar moment of inertia [kg·m²].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ring_inertia_kg_m2: Option<f64>,
+    /// Carrier mass without planets [kg].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub carrier_mass_kg: Option<f64>,
+    /// Carrier polar moment of inertia without planets [kg·m²].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub carrier_inertia_kg_m2: Option<f64>,
+}
+
+/// Dynamic model and integrator settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DynamicsSpec {
+    /// Degrees of freedom.
+    pub fidelity: Fidelity,
+    /// Viscous mesh damping as a ratio of the mesh mode's critical damping.
+    pub mesh_damping_ratio: f64,
+    /// How the input is driven.
+    pub drive: Drive,
+    /// Input speed [rpm] of a single run (sweeps set their own).
+    pub input_speed_rpm: f64,
+    /// Torsional stiffness of the input shaft for the speed drive [N·m/rad].
+    pub shaft_stiffness_nm_per_rad: f64,
+    /// Integrator.
+    pub integrator: IntegratorKind,
+    /// Spectral radius at infinite frequency of the generalized-α method.
+    pub rho_infinity: f64,
+    /// Steps per mesh cycle of the generalized-α method.
+    pub steps_per_mesh_cycle: u32,
+    /// Relative tolerance of the adaptive method.
+    pub relative_tolerance: f64,
+    /// Run-in before measuring, in input revolutions.
+    pub run_in_revolutions: f64,
+    /// Measured window, in input revolutions (rounded to whole mesh cycles).
+    pub measured_revolutions: f64,
+    /// Samples per mesh cycle of the recorded outputs.
+    pub samples_per_mesh_cycle: u32,
+}
+
+impl Default for DynamicsSpec {
+    fn default() -> Self {
+        Self {
+            fidelity: Fidelity::TransverseTorsional,
+            mesh_damping_ratio: 0.05,
+            drive: Drive::Torque,
+            input_speed_rpm: 3000.0,
+            shaft_stiffness_nm_per_rad: 5.0e4,
+            integrator: IntegratorKind::GeneralizedAlpha,
+            rho_infinity: 0.9,
+            steps_per_mesh_cycle: 120,
+            relative_tolerance: 1e-6,
+            run_in_revolutions: 1.0,
+            measured_revolutions: 2.0,
+            samples_per_mesh_cycle: 60,
+        }
+    }
 }
 
 /// An external spur gear (sun or planet) as written in a scene file.

@@ -5,7 +5,10 @@ use std::f64::consts::PI;
 use std::fmt;
 
 use super::{ChamferSpec, ExternalGearSpec, RingGearSpec, Scene};
-use crate::physics::gear::{Analysis, Chamfer, GearKind, GearSet, Material, MeshKind, RootForm, ToothForm};
+use crate::physics::gear::{
+    Analysis, Bodies, Body, Chamfer, DynamicsSettings, GearKind, GearSet, Material, MeshKind, RootForm,
+    Supports, ToothForm,
+};
 use crate::physics::mesh::PathOfContact;
 
 /// One broken rule of a scene.
@@ -325,6 +328,62 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         c.fail("analysis.face_slices", a.face_slices, "must be between 1 and 1000");
     }
 
+    let sp = &scene.supports;
+    for (name, v) in [
+        ("supports.sun_radial_n_per_m", sp.sun_radial_n_per_m),
+        ("supports.ring_radial_n_per_m", sp.ring_radial_n_per_m),
+        ("supports.carrier_radial_n_per_m", sp.carrier_radial_n_per_m),
+        ("supports.planet_bearing_n_per_m", sp.planet_bearing_n_per_m),
+    ] {
+        c.positive(name, v);
+    }
+    if !(sp.bearing_damping_ratio.is_finite() && (0.0..1.0).contains(&sp.bearing_damping_ratio)) {
+        c.fail("supports.bearing_damping_ratio", sp.bearing_damping_ratio, "must be at least 0 and below 1");
+    }
+    let inertia = &scene.inertia;
+    for (name, v) in [
+        ("inertia.sun_mass_kg", inertia.sun_mass_kg),
+        ("inertia.sun_inertia_kg_m2", inertia.sun_inertia_kg_m2),
+        ("inertia.planet_mass_kg", inertia.planet_mass_kg),
+        ("inertia.planet_inertia_kg_m2", inertia.planet_inertia_kg_m2),
+        ("inertia.ring_mass_kg", inertia.ring_mass_kg),
+        ("inertia.ring_inertia_kg_m2", inertia.ring_inertia_kg_m2),
+        ("inertia.carrier_mass_kg", inertia.carrier_mass_kg),
+        ("inertia.carrier_inertia_kg_m2", inertia.carrier_inertia_kg_m2),
+    ] {
+        if let Some(v) = v {
+            c.positive(name, v);
+        }
+    }
+    let d = &scene.dynamics;
+    if !(d.mesh_damping_ratio.is_finite() && (0.0..1.0).contains(&d.mesh_damping_ratio)) {
+        c.fail("dynamics.mesh_damping_ratio", d.mesh_damping_ratio, "must be at least 0 and below 1");
+    }
+    if !d.input_speed_rpm.is_finite() || d.input_speed_rpm.abs() > 1.0e6 {
+        c.fail(
+            "dynamics.input_speed_rpm",
+            d.input_speed_rpm,
+            "must be a finite speed below 1e6 rpm in magnitude",
+        );
+    }
+    c.positive("dynamics.shaft_stiffness_nm_per_rad", d.shaft_stiffness_nm_per_rad);
+    if !(d.rho_infinity.is_finite() && (0.0..=1.0).contains(&d.rho_infinity)) {
+        c.fail("dynamics.rho_infinity", d.rho_infinity, "must lie between 0 and 1 (spectral radius)");
+    }
+    if !(4..=100_000).contains(&d.steps_per_mesh_cycle) {
+        c.fail("dynamics.steps_per_mesh_cycle", d.steps_per_mesh_cycle, "must be between 4 and 100000");
+    }
+    if !(d.relative_tolerance.is_finite() && d.relative_tolerance >= 1e-14 && d.relative_tolerance <= 1e-1) {
+        c.fail("dynamics.relative_tolerance", d.relative_tolerance, "must lie between 1e-14 and 0.1");
+    }
+    if !(d.run_in_revolutions.is_finite() && d.run_in_revolutions >= 0.0) {
+        c.fail("dynamics.run_in_revolutions", d.run_in_revolutions, "must be zero or more");
+    }
+    c.positive("dynamics.measured_revolutions", d.measured_revolutions);
+    if !(8..=100_000).contains(&d.samples_per_mesh_cycle) {
+        c.fail("dynamics.samples_per_mesh_cycle", d.samples_per_mesh_cycle, "must be between 8 and 100000");
+    }
+
     let op = &scene.operation;
     if op.held == op.input {
         c.fail(
@@ -382,6 +441,55 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
             positions_per_mesh_cycle: a.positions_per_mesh_cycle as usize,
             profile_points: a.profile_points as usize,
             face_slices: a.face_slices as usize,
+        },
+        supports: Supports {
+            sun_radial: sp.sun_radial_n_per_m,
+            ring_radial: sp.ring_radial_n_per_m,
+            carrier_radial: sp.carrier_radial_n_per_m,
+            planet_bearing: sp.planet_bearing_n_per_m,
+            bearing_damping_ratio: sp.bearing_damping_ratio,
+        },
+        bodies: Bodies {
+            sun: Body { mass: 0.0, inertia: 0.0 },
+            planet: Body { mass: 0.0, inertia: 0.0 },
+            ring: Body { mass: 0.0, inertia: 0.0 },
+            carrier: Body { mass: 0.0, inertia: 0.0 },
+        },
+        dynamics: DynamicsSettings {
+            fidelity: d.fidelity,
+            mesh_damping_ratio: d.mesh_damping_ratio,
+            drive: d.drive,
+            input_speed: d.input_speed_rpm * std::f64::consts::PI / 30.0,
+            shaft_stiffness: d.shaft_stiffness_nm_per_rad,
+            integrator: d.integrator,
+            rho_infinity: d.rho_infinity,
+            steps_per_mesh_cycle: d.steps_per_mesh_cycle as usize,
+            relative_tolerance: d.relative_tolerance,
+            run_in_revolutions: d.run_in_revolutions,
+            measured_revolutions: d.measured_revolutions,
+            samples_per_mesh_cycle: d.samples_per_mesh_cycle as usize,
+        },
+    };
+    // Bodies from the geometry, then the user's overrides.
+    let mut set = set;
+    let derived = Bodies::from_geometry(&set);
+    let pick = |v: Option<f64>, d: f64| v.unwrap_or(d);
+    set.bodies = Bodies {
+        sun: Body {
+            mass: pick(inertia.sun_mass_kg, derived.sun.mass),
+            inertia: pick(inertia.sun_inertia_kg_m2, derived.sun.inertia),
+        },
+        planet: Body {
+            mass: pick(inertia.planet_mass_kg, derived.planet.mass),
+            inertia: pick(inertia.planet_inertia_kg_m2, derived.planet.inertia),
+        },
+        ring: Body {
+            mass: pick(inertia.ring_mass_kg, derived.ring.mass),
+            inertia: pick(inertia.ring_inertia_kg_m2, derived.ring.inertia),
+        },
+        carrier: Body {
+            mass: pick(inertia.carrier_mass_kg, derived.carrier.mass),
+            inertia: pick(inertia.carrier_inertia_kg_m2, derived.carrier.inertia),
         },
     };
 
