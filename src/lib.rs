@@ -8,3 +8,4 @@
 pub mod physics;
 pub mod report;
 pub mod scene;
+pub mod solver;

@@ -159,6 +159,69 @@ impl MeshModel {
         (f, k)
     }
 
+    /// Mesh force [N], its derivatives ∂F/∂δ [N/m] and ∂F/∂s [N/m] (the
+    /// exact derivatives of the interpolated contact law, contact status
+    /// frozen), and the event values of the pairs: for pair k the value
+    /// δ − g_drive (drive flank) and −δ − g_back (back flank) are written to
+    /// slot `2·(k mod slots)` and `2·(k mod slots) + 1` of `events`, which
+    /// must hold `2·slots` values; slots of pairs outside the tables read
+    /// −[`NO_CONTACT`]. Each slot's value is continuous in s because pairs
+    /// enter and leave the tables out of contact.
+    pub fn force_with_derivatives(&self, s: f64, delta: f64, events: &mut [f64]) -> (f64, f64, f64) {
+        let pb = self.path().base_pitch;
+        let fraction = 1.0 / self.slices.len() as f64;
+        let slots = events.len() / 2;
+        for e in events.iter_mut() {
+            *e = -NO_CONTACT;
+        }
+        let (mut f, mut kd, mut ks) = (0.0, 0.0, 0.0);
+        for index in self.pair_range(s) {
+            let pos = s + f64::from(index) * pb;
+            let slot = 2 * (i64::from(index).rem_euclid(slots as i64) as usize);
+            let (mut ed, mut eb) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+            for slice in &self.slices {
+                let gd = slice.drive.at(pos);
+                let gb = slice.back.at(pos);
+                ed = ed.max(delta - gd);
+                eb = eb.max(-delta - gb);
+                if gd < NO_CONTACT && delta > gd {
+                    let k = fraction * self.lookup(&self.drive_k, pos);
+                    let dk = fraction * self.slope(&self.drive_k, pos);
+                    f += k * (delta - gd);
+                    kd += k;
+                    ks += dk * (delta - gd) - k * slice.drive.slope_at(pos);
+                } else if gb < NO_CONTACT && -delta > gb {
+                    let k = fraction * self.lookup(&self.back_k, pos);
+                    let dk = fraction * self.slope(&self.back_k, pos);
+                    f -= k * (-delta - gb);
+                    kd += k;
+                    ks -= dk * (-delta - gb) - k * slice.back.slope_at(pos);
+                }
+            }
+            if slot + 1 < events.len() {
+                events[slot] = ed;
+                events[slot + 1] = eb;
+            }
+        }
+        (f, kd, ks)
+    }
+
+    /// Event slots a mesh needs: more than the pairs its tables can hold.
+    pub fn event_slots(&self) -> usize {
+        let t = &self.separation.drive;
+        ((t.end() - t.start) / self.path().base_pitch).ceil() as usize + 2
+    }
+
+    fn slope(&self, table: &[f64], s: f64) -> f64 {
+        let t = &self.separation.drive;
+        let x = (s - t.start) / t.step;
+        if x < 0.0 || x > (table.len() - 1) as f64 {
+            return 0.0;
+        }
+        let i = (x.floor() as usize).min(table.len() - 2);
+        (table[i + 1] - table[i]) / t.step
+    }
+
     /// Sum of the pair stiffnesses of the pairs on the nominal (sharp-tip)
     /// path at position `s` [N/m]: the geometric mesh stiffness.
     pub fn nominal_mesh_stiffness(&self, s: f64) -> f64 {
@@ -375,7 +438,8 @@ pub struct SetModel {
     /// Planet angles [rad].
     pub planet_angles: Vec<f64>,
     base_radius_sun: f64,
-    ring_shift: f64,
+    /// Offset [m] from a planet's sun-mesh position to its ring-mesh position.
+    pub ring_shift: f64,
 }
 
 impl SetModel {

@@ -1,6 +1,7 @@
 //! The physics core: pure functions of validated input. No I/O, no FMI, no
 //! printing, no `unsafe`.
 
+pub mod dynamics;
 pub mod gear;
 pub mod hertz;
 pub mod involute;
@@ -11,4 +12,5 @@ pub mod mesh;
 pub mod modes;
 pub mod profile;
 pub mod separation;
+pub mod spectrum;
 pub mod stiffness;

@@ -67,6 +67,16 @@ impl SeparationTable {
         self.values[i] + t * (self.values[i + 1] - self.values[i])
     }
 
+    /// Slope d(separation)/ds [-] of the interpolant at `s`; zero outside.
+    pub fn slope_at(&self, s: f64) -> f64 {
+        let x = (s - self.start) / self.step;
+        if x.is_nan() || x < 0.0 || x > (self.values.len() - 1) as f64 {
+            return 0.0;
+        }
+        let i = (x.floor() as usize).min(self.values.len() - 2);
+        (self.values[i + 1] - self.values[i]) / self.step
+    }
+
     /// Positions [m] of the samples.
     pub fn positions(&self) -> impl Iterator<Item = f64> + '_ {
         (0..self.values.len()).map(|i| self.start + i as f64 * self.step)

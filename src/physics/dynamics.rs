@@ -1,0 +1,459 @@
+//! The nonlinear tooth-by-tooth dynamic model of the planetary set.
+//!
+//! Coordinates: Lin & Parker's, reduced to the scene's fidelity with the held
+//! member's rotation removed ([`super::lumped`]). Equations:
+//!
+//! M q̈ + C_b q̇ + K_b q + Σ_meshes b (F(s, δ) + c_m δ̇ [in contact]) = f_ext(t)
+//!
+//! with δ = bᵀq the mesh approach along the line of action, F the tooth
+//! forces of all pairs of that mesh at their real positions
+//! ([`MeshModel::force_with_derivatives`]), c_m the viscous mesh damping of
+//! the mesh mode (damping ratio ζ_m on the mean stiffness and the two gears'
+//! rotational masses), acting only while a pair touches. Positions follow
+//! from the gears' rotations relative to the carrier:
+//! s_sn = u_s − (r_b,s/a) u_c − r_b,s ψ_n and s_rn = −u_r + (r_b,r/a) u_c − r_b,s ψ_n + Δ
+//! (Δ the geometric offset of [`SetModel::ring_shift`]), so planet phasing
+//! is geometry, not a prescribed phase. External forces: the input torque
+//! (or a torsional shaft from a source at constant speed) and the balancing
+//! torque on the output member, both as generalised forces on u.
+
+use nalgebra::DMatrix;
+
+use super::gear::{Drive, GearSet, Member, MeshKind};
+use super::ltca::{CycleStats, SetModel};
+use super::lumped::{add_outer, Coordinate, LumpedSet, Reduction};
+use crate::solver::SecondOrderSystem;
+
+/// One mesh of one planet in the dynamic model.
+#[derive(Clone, Debug)]
+struct Link {
+    planet: usize,
+    kind: MeshKind,
+    /// Reduced mesh vector b (δ = bᵀq).
+    b: Vec<f64>,
+    /// Nonzero entries of b.
+    b_nz: Vec<(usize, f64)>,
+    /// Position s = Σ p_i q_i + s0.
+    p_nz: Vec<(usize, f64)>,
+    s0: f64,
+    /// Viscous mesh damping [N·s/m].
+    damping: f64,
+}
+
+/// Per-mesh state of the last force evaluation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MeshState {
+    /// Position of the reference pair [m].
+    pub position: f64,
+    /// Approach along the line of action [m].
+    pub approach: f64,
+    /// Elastic mesh force (sum of the tooth forces) [N].
+    pub force: f64,
+    /// Tangent stiffness ∂F/∂δ [N/m].
+    pub stiffness: f64,
+    /// ∂F/∂s [N/m].
+    pub position_derivative: f64,
+    /// Damping force [N] (zero out of contact).
+    pub damping_force: f64,
+}
+
+/// The dynamic model of a gear set.
+#[derive(Clone, Debug)]
+pub struct PlanetaryDynamics {
+    /// The contact models and phasing.
+    pub contact: SetModel,
+    /// The mean-stiffness linear model (masses, supports).
+    pub lumped: LumpedSet,
+    /// Reduction of the fidelity level.
+    pub reduction: Reduction,
+    mass: Vec<f64>,
+    k_support: DMatrix<f64>,
+    c_support: DMatrix<f64>,
+    links: Vec<Link>,
+    f_ext: Vec<f64>,
+    speed_drive: Option<SpeedDrive>,
+    /// Index of the input member's rotation among the reduced coordinates.
+    pub input_index: usize,
+    /// Lever of the input member's rotation: u = lever·θ [m].
+    pub input_lever: f64,
+    /// Rigid-body velocity pattern: reduced velocities per rad/s of the input member.
+    pub rigid_velocity: Vec<f64>,
+    /// Mesh frequency per rad/s of input speed [Hz·s/rad].
+    pub mesh_frequency_per_input_speed: f64,
+    /// State of every mesh after the last force evaluation (planet-major: sun, ring).
+    pub meshes: Vec<MeshState>,
+    slots: Vec<usize>,
+    events_scratch: Vec<f64>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct SpeedDrive {
+    /// Shaft stiffness on u [N/m].
+    stiffness: f64,
+    /// Shaft damping on u [N·s/m].
+    damping: f64,
+    /// Source speed on u [m/s].
+    speed: f64,
+    /// Source position on u at t = 0 [m] (pretension carrying the mean torque).
+    offset: f64,
+}
+
+/// Errors of the dynamic model.
+#[derive(Debug, thiserror::Error)]
+pub enum DynamicsError {
+    /// A parameter or request cannot be used.
+    #[error("{name} = {value}: {reason}")]
+    InvalidParameter {
+        /// Parameter.
+        name: String,
+        /// Value.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+}
+
+/// Speeds of sun, ring and carrier [rad/s] for a unit input speed, the held
+/// member at rest (Willis: ω_s − ω_c = R (ω_r − ω_c), R = −Z_r/Z_s).
+pub fn rigid_speeds(set: &GearSet) -> (f64, f64, f64) {
+    let r = -f64::from(set.ring.teeth) / f64::from(set.sun.teeth);
+    match (set.held, set.input) {
+        (Member::Carrier, Member::Sun) => (1.0, 1.0 / r, 0.0),
+        (Member::Carrier, Member::Ring) => (r, 1.0, 0.0),
+        (Member::Ring, Member::Sun) => (1.0, 0.0, 1.0 / (1.0 - r)),
+        (Member::Ring, Member::Carrier) => (1.0 - r, 0.0, 1.0),
+        (Member::Sun, Member::Ring) => (0.0, 1.0, r / (r - 1.0)),
+        (Member::Sun, Member::Carrier) => (0.0, (r - 1.0) / r, 1.0),
+        // Validation refuses held == input.
+        _ => (0.0, 0.0, 0.0),
+    }
+}
+
+fn lever(set: &GearSet, m: Member) -> f64 {
+    match m {
+        Member::Sun => set.sun.base_radius(),
+        Member::Ring => set.ring.base_radius(),
+        Member::Carrier => set.centre_distance,
+    }
+}
+
+impl PlanetaryDynamics {
+    /// The dynamic model of a validated gear set with its contact models.
+    pub fn new(set: &GearSet, contact: SetModel) -> Result<Self, DynamicsError> {
+        let alpha_s = set.operating_pressure_angle(MeshKind::SunPlanet);
+        let alpha_r = set.operating_pressure_angle(MeshKind::RingPlanet);
+        let load = set.mesh_load_per_planet().max(1.0);
+        let mean_stiffness = |m: &super::ltca::MeshModel| {
+            let p = m.path();
+            let samples: Vec<f64> = (0..64)
+                .map(|i| {
+                    let s = p.start + p.base_pitch * f64::from(i) / 64.0;
+                    let d = m.approach_for(s, load);
+                    m.force(s, d, None).1
+                })
+                .collect();
+            CycleStats::of(&samples).mean
+        };
+        let k_sp = mean_stiffness(&contact.sun_planet);
+        let k_rp = mean_stiffness(&contact.ring_planet);
+        let b = &set.bodies;
+        let (rbs, rbr, rbp, a) =
+            (set.sun.base_radius(), set.ring.base_radius(), set.planet.base_radius(), set.centre_distance);
+        let lumped = LumpedSet {
+            central_mass: [b.carrier.mass, b.ring.mass, b.sun.mass],
+            central_rotational_mass: [
+                b.carrier.inertia / (a * a),
+                b.ring.inertia / (rbr * rbr),
+                b.sun.inertia / (rbs * rbs),
+            ],
+            planet_mass: b.planet.mass,
+            planet_rotational_mass: b.planet.inertia / (rbp * rbp),
+            central_bearing: [set.supports.carrier_radial, set.supports.ring_radial, set.supports.sun_radial],
+            central_torsional: [0.0; 3],
+            planet_bearing: set.supports.planet_bearing,
+            sun_mesh: k_sp,
+            ring_mesh: k_rp,
+            sun_pressure_angle: alpha_s,
+            ring_pressure_angle: alpha_r,
+            planet_angles: set.planet_angles.clone(),
+            held: Some(set.held),
+            fidelity: set.dynamics.fidelity,
+        };
+        let reduction = lumped.reduction();
+        let mass = lumped.mass();
+        let dim = reduction.dim();
+        let k_support = lumped.support_stiffness();
+        // Bearing damping: each support's stiffness matrix scaled by 2ζ/ω of
+        // its body on that support (c = 2ζ√(k m)).
+        let mut c_support = DMatrix::zeros(dim, dim);
+        let zeta_b = set.supports.bearing_damping_ratio;
+        if zeta_b > 0.0 {
+            let members = [Member::Carrier, Member::Ring, Member::Sun];
+            for (j, m) in members.iter().enumerate() {
+                let k = lumped.central_bearing[j];
+                let c = 2.0 * zeta_b * (k * lumped.central_mass[j]).sqrt();
+                for coord in [Coordinate::X(*m), Coordinate::Y(*m)] {
+                    if let Some(i) = reduction.position(coord) {
+                        c_support[(i, i)] += c;
+                    }
+                }
+            }
+            let cp = 2.0 * zeta_b * (lumped.planet_bearing * lumped.planet_mass).sqrt();
+            let n = set.planet_angles.len();
+            for (p, psi) in set.planet_angles.iter().enumerate() {
+                for bv in super::lumped::planet_bearing_vectors(n, p, *psi) {
+                    add_outer(&mut c_support, &reduction.reduce_vector(&bv), cp);
+                }
+            }
+        }
+        let u = |m: Member| reduction.position(Coordinate::U(m));
+        let zeta_m = set.dynamics.mesh_damping_ratio;
+        let m_rot = |x: f64, y: f64| x * y / (x + y);
+        let c_sp = 2.0
+            * zeta_m
+            * (k_sp * m_rot(lumped.central_rotational_mass[2], lumped.planet_rotational_mass)).sqrt();
+        let c_rp = 2.0
+            * zeta_m
+            * (k_rp * m_rot(lumped.central_rotational_mass[1], lumped.planet_rotational_mass)).sqrt();
+        let mut links = Vec::new();
+        for (p, (bs, br)) in lumped.mesh_vectors().into_iter().enumerate() {
+            let psi = set.planet_angles[p];
+            let nz =
+                |v: &[f64]| v.iter().enumerate().filter(|(_, x)| **x != 0.0).map(|(i, x)| (i, *x)).collect();
+            let mut ps = Vec::new();
+            if let Some(i) = u(Member::Sun) {
+                ps.push((i, 1.0));
+            }
+            if let Some(i) = u(Member::Carrier) {
+                ps.push((i, -rbs / a));
+            }
+            let mut pr = Vec::new();
+            if let Some(i) = u(Member::Ring) {
+                pr.push((i, -1.0));
+            }
+            if let Some(i) = u(Member::Carrier) {
+                pr.push((i, rbr / a));
+            }
+            links.push(Link {
+                planet: p,
+                kind: MeshKind::SunPlanet,
+                b_nz: nz(&bs),
+                b: bs,
+                p_nz: ps,
+                s0: -rbs * psi,
+                damping: c_sp,
+            });
+            links.push(Link {
+                planet: p,
+                kind: MeshKind::RingPlanet,
+                b_nz: nz(&br),
+                b: br,
+                p_nz: pr,
+                s0: -rbs * psi + contact.ring_shift,
+                damping: c_rp,
+            });
+        }
+        // External generalised forces: n·F0 on sun and ring, −n·F0(cos α_s + cos α_r)
+        // on the carrier, applied to the input and output members.
+        let n = set.planet_angles.len() as f64;
+        let lever_in = match set.input {
+            Member::Sun => rbs,
+            Member::Ring => rbr,
+            Member::Carrier => -(rbs + rbr),
+        };
+        let f0 = set.input_torque / (n * lever_in);
+        let mut f_ext = vec![0.0; dim];
+        for m in [set.input, set.output()] {
+            if let Some(i) = u(m) {
+                f_ext[i] += match m {
+                    Member::Sun | Member::Ring => n * f0,
+                    Member::Carrier => -n * f0 * (alpha_s.cos() + alpha_r.cos()),
+                };
+            }
+        }
+        let input_index = u(set.input).ok_or_else(|| DynamicsError::InvalidParameter {
+            name: "operation.input".into(),
+            value: set.input.name().into(),
+            reason: "the input member cannot be the held member".into(),
+        })?;
+        let input_lever = lever(set, set.input);
+        // Rigid-body velocity at unit input speed. Willis: (ω_s − ω_c) =
+        // R (ω_r − ω_c) with R = −Z_r/Z_s; the held member at rest.
+        let (ws, wr, wc) = rigid_speeds(set);
+        let mut rigid = vec![0.0; dim];
+        if let Some(i) = u(Member::Sun) {
+            rigid[i] = ws * rbs;
+        }
+        if let Some(i) = u(Member::Ring) {
+            rigid[i] = wr * rbr;
+        }
+        if let Some(i) = u(Member::Carrier) {
+            rigid[i] = wc * a;
+        }
+        for p in 0..set.planet_angles.len() {
+            // δ_sn = u_s + u_n − η_n cos α_s = 0 with η_n = u_c for rigid motion.
+            if let Some(i) = reduction.position(Coordinate::PlanetU(p)) {
+                rigid[i] = -ws * rbs + wc * a * alpha_s.cos();
+            }
+            if let Some(i) = reduction.position(Coordinate::Eta(p)) {
+                rigid[i] = wc * a;
+            }
+        }
+        let mesh_frequency_per_input_speed =
+            ((ws - wc) * f64::from(set.sun.teeth) / (2.0 * std::f64::consts::PI)).abs();
+        let speed_drive = match set.dynamics.drive {
+            Drive::Torque => None,
+            Drive::Speed => {
+                // Shaft stiffness on u: k_θ / lever²; damping ratio 0.05 of the
+                // input body on the shaft.
+                let k = set.dynamics.shaft_stiffness / (input_lever * input_lever);
+                let c = 2.0 * 0.05 * (k * mass[input_index]).sqrt();
+                Some(SpeedDrive { stiffness: k, damping: c, speed: 0.0, offset: f_ext[input_index] / k })
+            }
+        };
+        if speed_drive.is_some() {
+            f_ext[input_index] = 0.0;
+        }
+        let slots = vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()];
+        let meshes = vec![MeshState::default(); links.len()];
+        Ok(Self {
+            contact,
+            lumped,
+            reduction,
+            mass,
+            k_support,
+            c_support,
+            links,
+            f_ext,
+            speed_drive,
+            input_index,
+            input_lever,
+            rigid_velocity: rigid,
+            mesh_frequency_per_input_speed,
+            meshes,
+            slots,
+            events_scratch: Vec::new(),
+        })
+    }
+
+    /// Number of meshes (2 per planet).
+    pub fn mesh_count(&self) -> usize {
+        self.links.len()
+    }
+
+    /// Planet and kind of mesh `i`.
+    pub fn mesh_identity(&self, i: usize) -> (usize, MeshKind) {
+        (self.links[i].planet, self.links[i].kind)
+    }
+
+    /// Sets the speed of the speed drive's source [rad/s of the input member].
+    pub fn set_drive_speed(&mut self, omega: f64) {
+        let lever = self.input_lever;
+        if let Some(d) = &mut self.speed_drive {
+            d.speed = omega * lever;
+        }
+    }
+
+    /// Rigid-body initial state at input speed `omega` [rad/s], elastic
+    /// deflection from the static load: q = 0 but for a uniform approach.
+    pub fn rigid_velocity_at(&self, omega: f64) -> Vec<f64> {
+        self.rigid_velocity.iter().map(|v| v * omega).collect()
+    }
+
+    fn model(&self, kind: MeshKind) -> &super::ltca::MeshModel {
+        match kind {
+            MeshKind::SunPlanet => &self.contact.sun_planet,
+            MeshKind::RingPlanet => &self.contact.ring_planet,
+        }
+    }
+
+    fn evaluate_meshes(&mut self, q: &[f64], v: &[f64], with_events: bool) {
+        let mut events = std::mem::take(&mut self.events_scratch);
+        events.clear();
+        for (i, link) in self.links.iter().enumerate() {
+            let delta: f64 = link.b_nz.iter().map(|(j, b)| b * q[*j]).sum();
+            let rate: f64 = link.b_nz.iter().map(|(j, b)| b * v[*j]).sum();
+            let s: f64 = link.p_nz.iter().map(|(j, p)| p * q[*j]).sum::<f64>() + link.s0;
+            let slots = self.slots[if link.kind == MeshKind::SunPlanet { 0 } else { 1 }];
+            let start = events.len();
+            events.resize(start + 2 * slots, 0.0);
+            let (f, kd, ks) = self.model(link.kind).force_with_derivatives(s, delta, &mut events[start..]);
+            if !with_events {
+                events.truncate(start);
+            }
+            let damping_force = if kd > 0.0 { link.damping * rate } else { 0.0 };
+            self.meshes[i] = MeshState {
+                position: s,
+                approach: delta,
+                force: f,
+                stiffness: kd,
+                position_derivative: ks,
+                damping_force,
+            };
+        }
+        self.events_scratch = events;
+    }
+}
+
+impl SecondOrderSystem for PlanetaryDynamics {
+    fn dim(&self) -> usize {
+        self.mass.len()
+    }
+
+    fn mass(&self) -> &[f64] {
+        &self.mass
+    }
+
+    fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
+        self.evaluate_meshes(q, v, false);
+        f.copy_from_slice(&self.f_ext);
+        let n = q.len();
+        for i in 0..n {
+            let mut acc = 0.0;
+            for j in 0..n {
+                acc += self.k_support[(i, j)] * q[j] + self.c_support[(i, j)] * v[j];
+            }
+            f[i] -= acc;
+        }
+        for (link, state) in self.links.iter().zip(&self.meshes) {
+            let total = state.force + state.damping_force;
+            for (j, b) in &link.b_nz {
+                f[*j] -= b * total;
+            }
+        }
+        if let Some(d) = self.speed_drive {
+            let i = self.input_index;
+            f[i] += d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i]);
+        }
+    }
+
+    fn jacobian(&mut self, _t: f64, q: &[f64], v: &[f64], k: &mut DMatrix<f64>, c: &mut DMatrix<f64>) {
+        self.evaluate_meshes(q, v, false);
+        k.copy_from(&self.k_support);
+        c.copy_from(&self.c_support);
+        for (link, state) in self.links.iter().zip(&self.meshes) {
+            if state.stiffness == 0.0 {
+                continue;
+            }
+            add_outer(k, &link.b, state.stiffness);
+            add_outer(c, &link.b, link.damping);
+            // ∂F/∂s · ∂s/∂q: a rank-one, non-symmetric term.
+            for (i, b) in &link.b_nz {
+                for (j, p) in &link.p_nz {
+                    k[(*i, *j)] += b * state.position_derivative * p;
+                }
+            }
+        }
+        if let Some(d) = self.speed_drive {
+            let i = self.input_index;
+            k[(i, i)] += d.stiffness;
+            c[(i, i)] += d.damping;
+        }
+    }
+
+    fn events(&mut self, _t: f64, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
+        self.evaluate_meshes(q, v, true);
+        out.clear();
+        out.extend_from_slice(&self.events_scratch);
+    }
+}
