@@ -6,9 +6,14 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
+use planetwear::physics::dynamics::PlanetaryDynamics;
 use planetwear::physics::gear::GearSet;
+use planetwear::physics::ltca::SetModel;
+use planetwear::physics::lumped::LumpedSet;
+use planetwear::physics::modes::{natural_modes, ModeClass};
 use planetwear::report::ltca::LtcaStudy;
 use planetwear::report::write_atomic;
+use planetwear::scene::lumped::LumpedScene;
 use planetwear::scene::Scene;
 
 #[derive(Parser)]
@@ -24,6 +29,15 @@ enum Command {
     Scene {
         #[command(subcommand)]
         action: SceneAction,
+    },
+    /// Natural frequencies and mode shapes of the mean-stiffness linear model.
+    Modes {
+        /// A built-in scene (example-2004, lumped-benchmark) or a scene file.
+        #[arg(long)]
+        scene: String,
+        /// Print the full result as JSON (SI units, frequencies in Hz).
+        #[arg(long)]
+        json: bool,
     },
     /// Quasi-static loaded tooth contact analysis of both meshes and of the whole set.
     Ltca {
@@ -62,6 +76,29 @@ enum SceneAction {
     },
 }
 
+/// A gear scene or a lumped-parameter scene.
+enum AnyScene {
+    Gear(Box<Scene>),
+    Lumped(LumpedScene),
+}
+
+fn load_any(arg: &str) -> Result<AnyScene> {
+    if arg == "lumped-benchmark" {
+        return Ok(AnyScene::Lumped(LumpedScene::lumped_benchmark()));
+    }
+    if Scene::builtin(arg).is_none() && Path::new(arg).exists() {
+        let text = std::fs::read_to_string(arg).with_context(|| format!("reading scene file {arg}"))?;
+        let is_lumped =
+            toml::from_str::<toml::Table>(&text).map(|t| t.contains_key("lumped")).unwrap_or(false);
+        if is_lumped {
+            return Ok(AnyScene::Lumped(
+                LumpedScene::from_toml(&text).with_context(|| format!("in scene file {arg}"))?,
+            ));
+        }
+    }
+    Ok(AnyScene::Gear(Box::new(load_scene(arg)?)))
+}
+
 fn load_scene(arg: &str) -> Result<Scene> {
     if let Some(s) = Scene::builtin(arg) {
         return Ok(s);
@@ -84,12 +121,30 @@ fn validated(scene: &Scene) -> Result<GearSet> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Scene { action: SceneAction::Show { scene } } => {
-            print!("{}", load_scene(&scene)?.to_toml());
-        }
-        Command::Scene { action: SceneAction::Check { scene } } => {
-            let set = validated(&load_scene(&scene)?)?;
-            println!("scene '{}' is valid: {} planets", set.name, set.planet_angles.len());
+        Command::Scene { action: SceneAction::Show { scene } } => match load_any(&scene)? {
+            AnyScene::Gear(s) => print!("{}", s.to_toml()),
+            AnyScene::Lumped(s) => print!("{}", s.to_toml()),
+        },
+        Command::Scene { action: SceneAction::Check { scene } } => match load_any(&scene)? {
+            AnyScene::Gear(s) => {
+                let set = validated(&s)?;
+                println!("scene '{}' is valid: {} planets", set.name, set.planet_angles.len());
+            }
+            AnyScene::Lumped(s) => {
+                let set = s.validate()?;
+                println!("lumped scene '{}' is valid: {} planets", s.name, set.planet_angles.len());
+            }
+        },
+        Command::Modes { scene, json } => {
+            let (name, lumped) = match load_any(&scene)? {
+                AnyScene::Gear(s) => {
+                    let set = validated(&s)?;
+                    let model = PlanetaryDynamics::new(&set, SetModel::new(&set))?;
+                    (set.name.clone(), model.lumped)
+                }
+                AnyScene::Lumped(s) => (s.name.clone(), s.validate()?),
+            };
+            report_modes(&name, &lumped, json)?;
         }
         Command::Ltca { scene, torque, samples, json, out, plots } => {
             let mut scene = load_scene(&scene)?;
@@ -122,6 +177,42 @@ fn run(cli: Cli) -> Result<()> {
                 print_summary(&doc);
             }
         }
+    }
+    Ok(())
+}
+
+fn report_modes(name: &str, set: &LumpedSet, json: bool) -> Result<()> {
+    let modes = natural_modes(set);
+    let red = set.reduction();
+    if json {
+        let doc = serde_json::json!({
+            "scene": name,
+            "fidelity": set.fidelity,
+            "held": set.held,
+            "mean_mesh_stiffness": {"sun_planet": set.sun_mesh, "ring_planet": set.ring_mesh},
+            "coordinates": red.coordinates.iter().map(|c| format!("{c:?}")).collect::<Vec<_>>(),
+            "modes": modes,
+        });
+        println!("{}", serde_json::to_string_pretty(&doc)?);
+        return Ok(());
+    }
+    println!(
+        "natural modes of {name} ({:?}, held {:?}); mean mesh stiffness sun–planet {:.4e} N/m, ring–planet {:.4e} N/m",
+        set.fidelity, set.held, set.sun_mesh, set.ring_mesh
+    );
+    println!("  {:>12}  {:<14} {:>12}", "frequency Hz", "class", "multiplicity");
+    let mut i = 0;
+    while i < modes.len() {
+        let m = &modes[i];
+        let class = match m.class {
+            ModeClass::RigidBody => "rigid body",
+            ModeClass::Rotational => "rotational",
+            ModeClass::Translational => "translational",
+            ModeClass::Planet => "planet",
+            ModeClass::Mixed => "mixed",
+        };
+        println!("  {:>12.1}  {:<14} {:>12}", m.frequency, class, m.multiplicity);
+        i += m.multiplicity.max(1);
     }
     Ok(())
 }

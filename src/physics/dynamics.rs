@@ -407,13 +407,12 @@ impl SecondOrderSystem for PlanetaryDynamics {
     fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
         self.evaluate_meshes(q, v, false);
         f.copy_from_slice(&self.f_ext);
-        let n = q.len();
-        for i in 0..n {
+        for (i, fi) in f.iter_mut().enumerate() {
             let mut acc = 0.0;
-            for j in 0..n {
-                acc += self.k_support[(i, j)] * q[j] + self.c_support[(i, j)] * v[j];
+            for (j, (qj, vj)) in q.iter().zip(v).enumerate() {
+                acc += self.k_support[(i, j)] * qj + self.c_support[(i, j)] * vj;
             }
-            f[i] -= acc;
+            *fi -= acc;
         }
         for (link, state) in self.links.iter().zip(&self.meshes) {
             let total = state.force + state.damping_force;

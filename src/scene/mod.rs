@@ -8,6 +8,7 @@
 //! naming the parameter and what is allowed.
 
 mod example;
+pub mod lumped;
 mod validate;
 
 use serde::{Deserialize, Serialize};
@@ -311,7 +312,7 @@ impl Scene {
         }
     }
 
-    /// Names of the built-in scenes.
+    /// Names of the built-in gear scenes.
     pub const BUILTIN: &'static [&'static str] = &["example-2004"];
 
     /// Checks every rule and converts to SI.

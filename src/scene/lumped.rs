@@ -1,0 +1,215 @@
+//! A planetary set given directly as a lumped-parameter model (masses,
+//! rotational masses I/r², support stiffnesses, constant mesh stiffnesses,
+//! pressure angles, planet angles), so published benchmark systems can be
+//! entered as they are printed.
+
+use serde::{Deserialize, Serialize};
+
+use super::validate::Problem;
+use super::SceneError;
+use crate::physics::gear::Member;
+use crate::physics::lumped::{Fidelity, LumpedSet};
+
+/// One central member of a lumped scene.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CentralSpec {
+    /// Mass [kg].
+    pub mass_kg: f64,
+    /// Rotational mass I/r² [kg] (r: base radius, or centre distance for the carrier).
+    pub rotational_mass_kg: f64,
+    /// Bearing stiffness per translation direction [N/m].
+    pub bearing_n_per_m: f64,
+    /// Torsional support stiffness on u = rθ [N/m] (0: free).
+    #[serde(default)]
+    pub torsional_n_per_m: f64,
+}
+
+/// The planets of a lumped scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanetSpec {
+    /// Mass [kg].
+    pub mass_kg: f64,
+    /// Rotational mass I/r_b² [kg].
+    pub rotational_mass_kg: f64,
+    /// Planet bearing stiffness, radial and tangential [N/m].
+    pub bearing_n_per_m: f64,
+    /// Number of planets (equally spaced unless `angles_deg` is given).
+    pub count: u32,
+    /// Planet angles [deg].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angles_deg: Option<Vec<f64>>,
+}
+
+/// The model section of a lumped scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LumpedSpec {
+    /// Degrees of freedom.
+    pub fidelity: Fidelity,
+    /// Member held in rotation, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held: Option<Member>,
+    /// Carrier.
+    pub carrier: CentralSpec,
+    /// Ring.
+    pub ring: CentralSpec,
+    /// Sun.
+    pub sun: CentralSpec,
+    /// Planets.
+    pub planet: PlanetSpec,
+    /// Sun–planet mesh stiffness [N/m].
+    pub sun_mesh_n_per_m: f64,
+    /// Ring–planet mesh stiffness [N/m].
+    pub ring_mesh_n_per_m: f64,
+    /// Sun–planet pressure angle [deg].
+    pub sun_pressure_angle_deg: f64,
+    /// Ring–planet pressure angle [deg].
+    pub ring_pressure_angle_deg: f64,
+}
+
+/// A lumped scene file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LumpedScene {
+    /// Name.
+    pub name: String,
+    /// The model.
+    pub lumped: LumpedSpec,
+}
+
+impl LumpedScene {
+    /// Parses a lumped scene from TOML.
+    pub fn from_toml(text: &str) -> Result<Self, SceneError> {
+        toml::from_str(text).map_err(|e| SceneError::Syntax { message: e.to_string() })
+    }
+
+    /// A benchmark-style system with the orders of magnitude of the example
+    /// in Lin & Parker (1999) — the values are this project's, not a copy of
+    /// the paper's table: four planets, nothing held, ring torsional support
+    /// 1e9 N/m, bearings 1e8 N/m, meshes 5e8 N/m, 24.6° pressure angles.
+    pub fn lumped_benchmark() -> Self {
+        let c = |m: f64, j: f64, t: f64| CentralSpec {
+            mass_kg: m,
+            rotational_mass_kg: j,
+            bearing_n_per_m: 1e8,
+            torsional_n_per_m: t,
+        };
+        Self {
+            name: "lumped-benchmark".into(),
+            lumped: LumpedSpec {
+                fidelity: Fidelity::TransverseTorsional,
+                held: None,
+                carrier: c(5.43, 6.29, 0.0),
+                ring: c(2.35, 3.00, 1e9),
+                sun: c(0.40, 0.39, 0.0),
+                planet: PlanetSpec {
+                    mass_kg: 0.66,
+                    rotational_mass_kg: 0.61,
+                    bearing_n_per_m: 1e8,
+                    count: 4,
+                    angles_deg: None,
+                },
+                sun_mesh_n_per_m: 5e8,
+                ring_mesh_n_per_m: 5e8,
+                sun_pressure_angle_deg: 24.6,
+                ring_pressure_angle_deg: 24.6,
+            },
+        }
+    }
+
+    /// The scene as TOML.
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// Validates into the linear model.
+    pub fn validate(&self) -> Result<LumpedSet, SceneError> {
+        let l = &self.lumped;
+        let mut problems = Vec::new();
+        let mut positive = |name: &str, v: f64, zero_ok: bool| {
+            let ok = v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0));
+            if !ok {
+                problems.push(Problem {
+                    name: name.into(),
+                    value: v.to_string(),
+                    reason: if zero_ok {
+                        "must be zero or a finite positive number"
+                    } else {
+                        "must be a finite number greater than zero"
+                    }
+                    .into(),
+                });
+            }
+        };
+        for (key, c) in [("carrier", &l.carrier), ("ring", &l.ring), ("sun", &l.sun)] {
+            positive(&format!("lumped.{key}.mass_kg"), c.mass_kg, false);
+            positive(&format!("lumped.{key}.rotational_mass_kg"), c.rotational_mass_kg, false);
+            positive(&format!("lumped.{key}.bearing_n_per_m"), c.bearing_n_per_m, true);
+            positive(&format!("lumped.{key}.torsional_n_per_m"), c.torsional_n_per_m, true);
+        }
+        positive("lumped.planet.mass_kg", l.planet.mass_kg, false);
+        positive("lumped.planet.rotational_mass_kg", l.planet.rotational_mass_kg, false);
+        positive("lumped.planet.bearing_n_per_m", l.planet.bearing_n_per_m, false);
+        positive("lumped.sun_mesh_n_per_m", l.sun_mesh_n_per_m, false);
+        positive("lumped.ring_mesh_n_per_m", l.ring_mesh_n_per_m, false);
+        for (name, a) in [
+            ("lumped.sun_pressure_angle_deg", l.sun_pressure_angle_deg),
+            ("lumped.ring_pressure_angle_deg", l.ring_pressure_angle_deg),
+        ] {
+            if !(a.is_finite() && a > 0.0 && a < 45.0) {
+                problems.push(Problem {
+                    name: name.into(),
+                    value: a.to_string(),
+                    reason: "must lie strictly between 0 and 45".into(),
+                });
+            }
+        }
+        let n = l.planet.count;
+        let angles: Vec<f64> = match &l.planet.angles_deg {
+            None => (0..n).map(|i| 2.0 * std::f64::consts::PI * f64::from(i) / f64::from(n.max(1))).collect(),
+            Some(a) => a.iter().map(|d| d.to_radians()).collect(),
+        };
+        if !(1..=32).contains(&n) {
+            problems.push(Problem {
+                name: "lumped.planet.count".into(),
+                value: n.to_string(),
+                reason: "must be between 1 and 32".into(),
+            });
+        } else if angles.len() != n as usize || angles.iter().any(|a| !a.is_finite()) {
+            problems.push(Problem {
+                name: "lumped.planet.angles_deg".into(),
+                value: format!("{:?}", l.planet.angles_deg),
+                reason: format!("must list exactly lumped.planet.count = {n} finite angles"),
+            });
+        }
+        if !problems.is_empty() {
+            return Err(SceneError::Invalid { problems });
+        }
+        Ok(LumpedSet {
+            central_mass: [l.carrier.mass_kg, l.ring.mass_kg, l.sun.mass_kg],
+            central_rotational_mass: [
+                l.carrier.rotational_mass_kg,
+                l.ring.rotational_mass_kg,
+                l.sun.rotational_mass_kg,
+            ],
+            planet_mass: l.planet.mass_kg,
+            planet_rotational_mass: l.planet.rotational_mass_kg,
+            central_bearing: [l.carrier.bearing_n_per_m, l.ring.bearing_n_per_m, l.sun.bearing_n_per_m],
+            central_torsional: [
+                l.carrier.torsional_n_per_m,
+                l.ring.torsional_n_per_m,
+                l.sun.torsional_n_per_m,
+            ],
+            planet_bearing: l.planet.bearing_n_per_m,
+            sun_mesh: l.sun_mesh_n_per_m,
+            ring_mesh: l.ring_mesh_n_per_m,
+            sun_pressure_angle: l.sun_pressure_angle_deg.to_radians(),
+            ring_pressure_angle: l.ring_pressure_angle_deg.to_radians(),
+            planet_angles: angles,
+            held: l.held,
+            fidelity: l.fidelity,
+        })
+    }
+}
