@@ -79,12 +79,12 @@ enum SceneAction {
 /// A gear scene or a lumped-parameter scene.
 enum AnyScene {
     Gear(Box<Scene>),
-    Lumped(LumpedScene),
+    Lumped(Box<LumpedScene>),
 }
 
 fn load_any(arg: &str) -> Result<AnyScene> {
     if arg == "lumped-benchmark" {
-        return Ok(AnyScene::Lumped(LumpedScene::lumped_benchmark()));
+        return Ok(AnyScene::Lumped(Box::new(LumpedScene::lumped_benchmark())));
     }
     if Scene::builtin(arg).is_none() && Path::new(arg).exists() {
         let text = std::fs::read_to_string(arg).with_context(|| format!("reading scene file {arg}"))?;
