@@ -91,9 +91,8 @@ fn load_any(arg: &str) -> Result<AnyScene> {
         let is_lumped =
             toml::from_str::<toml::Table>(&text).map(|t| t.contains_key("lumped")).unwrap_or(false);
         if is_lumped {
-            return Ok(AnyScene::Lumped(
-                LumpedScene::from_toml(&text).with_context(|| format!("in scene file {arg}"))?,
-            ));
+            let scene = LumpedScene::from_toml(&text).with_context(|| format!("in scene file {arg}"))?;
+            return Ok(AnyScene::Lumped(Box::new(scene)));
         }
     }
     Ok(AnyScene::Gear(Box::new(load_scene(arg)?)))
