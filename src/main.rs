@@ -11,7 +11,11 @@ use planetwear::physics::gear::GearSet;
 use planetwear::physics::ltca::SetModel;
 use planetwear::physics::lumped::LumpedSet;
 use planetwear::physics::modes::{natural_modes, ModeClass};
+use planetwear::physics::response::{steady_state, sweep, Direction, SteadyState};
 use planetwear::report::ltca::LtcaStudy;
+use planetwear::report::sweep::{
+    find_peaks, sweep_csv, write_csv, write_forced_response, write_steady_state,
+};
 use planetwear::report::write_atomic;
 use planetwear::scene::lumped::LumpedScene;
 use planetwear::scene::Scene;
@@ -36,6 +40,48 @@ enum Command {
         #[arg(long)]
         scene: String,
         /// Print the full result as JSON (SI units, frequencies in Hz).
+        #[arg(long)]
+        json: bool,
+    },
+    /// Steady-state dynamic response at one input speed.
+    Run {
+        /// A built-in scene name or a scene file.
+        #[arg(long)]
+        scene: String,
+        /// Input speed [rpm]; default: the scene's dynamics.input_speed_rpm.
+        #[arg(long)]
+        speed: Option<f64>,
+        /// Print the result as JSON (SI units; forces in N).
+        #[arg(long)]
+        json: bool,
+        /// Write time-history and order-spectrum plots into this directory.
+        #[arg(long)]
+        plots: Option<PathBuf>,
+    },
+    /// Speed sweep with continuation: forced-response curves, CSV, plots.
+    Sweep {
+        /// A built-in scene name or a scene file.
+        #[arg(long)]
+        scene: String,
+        /// First speed [rpm].
+        #[arg(long)]
+        from: f64,
+        /// Last speed [rpm].
+        #[arg(long)]
+        to: f64,
+        /// Speed step [rpm].
+        #[arg(long)]
+        step: f64,
+        /// up, down or both (both run in parallel).
+        #[arg(long, default_value = "both")]
+        direction: String,
+        /// Output directory (CSV, plots, sweep.json).
+        #[arg(long)]
+        out: PathBuf,
+        /// Speeds [rpm] whose time histories and order spectra are plotted.
+        #[arg(long, value_delimiter = ',')]
+        histories: Vec<f64>,
+        /// Print the summary (peaks, figures) as JSON.
         #[arg(long)]
         json: bool,
     },
@@ -134,6 +180,109 @@ fn run(cli: Cli) -> Result<()> {
                 println!("lumped scene '{}' is valid: {} planets", s.name, set.planet_angles.len());
             }
         },
+        Command::Run { scene, speed, json, plots } => {
+            let set = validated(&load_scene(&scene)?)?;
+            let mut model = PlanetaryDynamics::new(&set, SetModel::new(&set))?;
+            let rpm = speed.unwrap_or(set.dynamics.input_speed * 30.0 / std::f64::consts::PI);
+            let ss = steady_state(&mut model, &set, rpm * std::f64::consts::PI / 30.0, None)?;
+            if let Some(dir) = &plots {
+                std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+                write_steady_state(&ss, &set, dir)?;
+            }
+            if json {
+                println!("{}", serde_json::to_string_pretty(&ss)?);
+            } else {
+                print_steady_state(&ss, set.sun.face_width * 1e3);
+            }
+        }
+        Command::Sweep { scene, from, to, step, direction, out, histories, json } => {
+            let set = validated(&load_scene(&scene)?)?;
+            let speeds = speed_grid(from, to, step)?;
+            let dirs: Vec<Direction> = match direction.as_str() {
+                "up" => vec![Direction::Up],
+                "down" => vec![Direction::Down],
+                "both" => vec![Direction::Up, Direction::Down],
+                other => bail!("--direction {other}: allowed are up, down, both"),
+            };
+            std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+            let model = PlanetaryDynamics::new(&set, SetModel::new(&set))?;
+            let modes = natural_modes(&model.lumped);
+            let bar = progress_bar((speeds.len() * dirs.len()) as u64);
+            let started = std::time::Instant::now();
+            let run = |d: Direction| {
+                let mut m = model.clone();
+                let mut grid = speeds.clone();
+                if d == Direction::Down {
+                    grid.reverse();
+                }
+                sweep(&set, &mut m, d, &grid, &histories, |_| bar.inc(1))
+            };
+            let results: Vec<_> = if dirs.len() == 2 {
+                let (a, b) = rayon::join(|| run(Direction::Up), || run(Direction::Down));
+                vec![a?, b?]
+            } else {
+                vec![run(dirs[0])?]
+            };
+            bar.finish_and_clear();
+            let wall = started.elapsed().as_secs_f64();
+            let width_mm = set.sun.face_width * 1e3;
+            let mut files = Vec::new();
+            for sw in &results {
+                let name = if sw.direction == Direction::Up { "sweep_up.csv" } else { "sweep_down.csv" };
+                let path = out.join(name);
+                write_csv(&path, &sweep_csv(sw, width_mm))?;
+                files.push(path);
+                for p in sw.points.iter().filter(|p| !p.time.is_empty()) {
+                    files.extend(write_steady_state(p, &set, &out)?);
+                }
+            }
+            files.extend(write_forced_response(&results, &set, &modes, &out)?);
+            let peaks: Vec<_> = results
+                .iter()
+                .flat_map(|sw| {
+                    let mut v = find_peaks(sw, 0, width_mm, &modes, &set);
+                    v.extend(find_peaks(sw, 1, width_mm, &modes, &set));
+                    v
+                })
+                .collect();
+            let steps: u64 = results.iter().flat_map(|s| &s.points).map(|p| p.stats.steps).sum();
+            let summary = serde_json::json!({
+                "scene": set.name,
+                "speeds": speeds.len(),
+                "directions": dirs,
+                "wall_time_s": wall,
+                "internal_steps": steps,
+                "steps_per_second": steps as f64 / wall,
+                "peaks": peaks,
+                "files": files,
+            });
+            write_atomic(&out.join("sweep.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&summary)?);
+            } else {
+                println!(
+                    "swept {} speeds × {} directions in {wall:.2} s ({steps} steps, {:.0} steps/s); {} files in {}",
+                    speeds.len(),
+                    dirs.len(),
+                    steps as f64 / wall,
+                    files.len(),
+                    out.display()
+                );
+                for p in &peaks {
+                    println!(
+                        "  peak {:?} at {:.0} rpm: F(rms) {:.1} N/mm; {}×f_m = {:.0} Hz ≈ {:?} mode at {:.0} Hz ({:.1} %)",
+                        p.direction,
+                        p.speed_rpm,
+                        p.rms_n_per_mm,
+                        p.harmonic,
+                        f64::from(p.harmonic) * p.mesh_frequency,
+                        p.family,
+                        p.natural_frequency,
+                        100.0 * p.mismatch
+                    );
+                }
+            }
+        }
         Command::Modes { scene, json } => {
             let (name, lumped) = match load_any(&scene)? {
                 AnyScene::Gear(s) => {
@@ -178,6 +327,60 @@ fn run(cli: Cli) -> Result<()> {
         }
     }
     Ok(())
+}
+
+fn speed_grid(from: f64, to: f64, step: f64) -> Result<Vec<f64>> {
+    if !(from.is_finite() && to.is_finite() && from > 0.0 && to > 0.0) {
+        bail!("--from/--to: speeds must be finite and positive (got {from} and {to} rpm)");
+    }
+    if !(step.is_finite() && step > 0.0) {
+        bail!("--step: must be a finite positive speed step (got {step} rpm)");
+    }
+    let (lo, hi) = (from.min(to), from.max(to));
+    let n = ((hi - lo) / step + 1e-9).floor() as usize + 1;
+    if n > 100_000 {
+        bail!("--step: {n} speeds is more than 100000; use a larger step");
+    }
+    Ok((0..n).map(|i| lo + step * i as f64).collect())
+}
+
+fn progress_bar(len: u64) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} speeds, {elapsed} elapsed, eta {eta}")
+    {
+        bar.set_style(style);
+    }
+    bar
+}
+
+fn print_steady_state(ss: &SteadyState, width_mm: f64) {
+    println!(
+        "steady state at {:.1} rpm (mesh frequency {:.1} Hz, {} mesh cycles; {} steps, {} Newton iterations)",
+        ss.input_speed_rpm, ss.mesh_frequency, ss.cycles, ss.stats.steps, ss.stats.newton_iterations
+    );
+    println!(
+        "  {:<16} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7}",
+        "mesh", "mean", "F1", "F2", "F3", "F4", "F5", "F6", "rms", "sep"
+    );
+    for m in &ss.meshes {
+        let h = &m.harmonics;
+        print!(
+            "  planet {} {:<7} {:>9.2}",
+            m.planet,
+            format!("{:?}", m.mesh).replace("Planet", ""),
+            h.mean / width_mm
+        );
+        for a in &h.amplitude {
+            print!(" {:>9.2}", a / width_mm);
+        }
+        println!(" {:>9.2} {:>7.3}", h.rms / width_mm, m.separation);
+    }
+    println!("  (forces in N/mm of face width)");
 }
 
 fn report_modes(name: &str, set: &LumpedSet, json: bool) -> Result<()> {

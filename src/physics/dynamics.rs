@@ -94,8 +94,10 @@ struct SpeedDrive {
     damping: f64,
     /// Source speed on u [m/s].
     speed: f64,
-    /// Source position on u at t = 0 [m] (pretension carrying the mean torque).
+    /// Source position on u at t = 0 [m].
     offset: f64,
+    /// Mean generalised input force the shaft carries [N].
+    preload: f64,
 }
 
 /// Errors of the dynamic model.
@@ -308,7 +310,13 @@ impl PlanetaryDynamics {
                 // input body on the shaft.
                 let k = set.dynamics.shaft_stiffness / (input_lever * input_lever);
                 let c = 2.0 * 0.05 * (k * mass[input_index]).sqrt();
-                Some(SpeedDrive { stiffness: k, damping: c, speed: 0.0, offset: f_ext[input_index] / k })
+                Some(SpeedDrive {
+                    stiffness: k,
+                    damping: c,
+                    speed: 0.0,
+                    offset: f_ext[input_index] / k,
+                    preload: f_ext[input_index],
+                })
             }
         };
         if speed_drive.is_some() {
@@ -334,6 +342,25 @@ impl PlanetaryDynamics {
             slots,
             events_scratch: Vec::new(),
         })
+    }
+
+    /// The constant external generalised forces: the input torque (or the
+    /// mean torque the speed drive's shaft carries) and the output's
+    /// balancing torque.
+    pub fn external_force(&self, f: &mut [f64]) {
+        f.copy_from_slice(&self.f_ext);
+        if let Some(d) = self.speed_drive {
+            f[self.input_index] += d.preload;
+        }
+    }
+
+    /// Places the speed drive's source so that at t = 0 the shaft's wind-up
+    /// carries the mean input torque for coordinates `q`.
+    pub fn rebase_drive(&mut self, q: &[f64]) {
+        let i = self.input_index;
+        if let Some(d) = &mut self.speed_drive {
+            d.offset = q[i] + d.preload / d.stiffness;
+        }
     }
 
     /// Number of meshes (2 per planet).

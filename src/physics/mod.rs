@@ -11,6 +11,7 @@ pub mod lumped;
 pub mod mesh;
 pub mod modes;
 pub mod profile;
+pub mod response;
 pub mod separation;
 pub mod spectrum;
 pub mod stiffness;

@@ -4,5 +4,6 @@
 
 pub mod ltca;
 pub mod plot;
+pub mod sweep;
 
 pub use plot::write_atomic;

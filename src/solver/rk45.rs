@@ -1,0 +1,987 @@
+//! The adaptive explicit Runge–Kutta 5(4) pair of Dormand & Prince with dense output and event
+//! location.
+//!
+//! # Scheme
+//!
+//! The second-order system is integrated in first-order form y = [q, v], y' = F(t, y) = [v, M⁻¹ f].
+//! One step of size h from (t_n, y_n) uses the seven stages of J. R. Dormand & P. J. Prince,
+//! "A family of embedded Runge–Kutta formulae", J. Comput. Appl. Math. 6:19–26 (1980):
+//!
+//! ```text
+//! k_i     = F(t_n + c_i h, y_n + h Σ_{j<i} a_ij k_j),   i = 1 … 7,
+//! y_{n+1} = y_n + h Σ_i b_i k_i                (fifth order; b_i = a_7i, so k_7 = F(t_{n+1}, y_{n+1}))
+//! err     = h Σ_i e_i k_i                      (e = b − b̂, difference to the embedded fourth order)
+//! ```
+//!
+//! The last stage of a step is the first of the next (FSAL), so an accepted step costs six force
+//! evaluations. The error is measured as
+//! `‖err‖ = (Σ_i (err_i / sk_i)² / 2n)^{1/2}`, `sk_i = atol_i + rtol · max(|y_{n,i}|, |y_{n+1,i}|)`,
+//! with `atol_i` = `atol_q` for displacements and `atol_v` for velocities. A step is accepted when
+//! ‖err‖ ≤ 1. The next step is h·fac with fac clamped to [`min_ratio`, `max_ratio`] (and to at
+//! most 1 right after a rejection), where
+//!
+//! ```text
+//! standard controller:  fac = safety · ‖err‖^{−1/5}
+//! PI controller:        fac = safety · ‖err_n‖^{−(1/5 − 3β/4)} · ‖err_{n−1}‖^{β}
+//! ```
+//!
+//! (Hairer, Nørsett & Wanner, *Solving Ordinary Differential Equations I*, 2nd ed., Springer 1993,
+//! §II.4 and the code DOPRI5; β = 0.04 there). The initial step follows the same book's algorithm
+//! (§II.4, "Starting step size") unless it is given.
+//!
+//! # Dense output
+//!
+//! Within the last accepted step, y(t_n + θh), θ ∈ [0, 1], is the fourth-order continuous extension
+//! of Dormand & Prince in the form of Hairer, Nørsett & Wanner §II.6 (code DOPRI5):
+//!
+//! ```text
+//! y(θ) = r1 + θ (r2 + (1 − θ)(r3 + θ (r4 + (1 − θ) r5))),
+//! r1 = y_n,  r2 = y_{n+1} − y_n,  r3 = h k_1 − r2,  r4 = r2 − h k_7 − r3,
+//! r5 = h (d1 k1 + d3 k3 + d4 k4 + d5 k5 + d6 k6 + d7 k7).
+//! ```
+//!
+//! # Events
+//!
+//! After each step that passes the error test, the event functions g(t, q, v) of
+//! [`SecondOrderSystem::events`] are evaluated at its end. For each function whose side changed
+//! (negative versus non-negative) the first crossing is located on the dense output with the
+//! Illinois variant of regula falsi (falling back to bisection after 50 iterations) to a time
+//! tolerance `event_tolerance · max(|t_n|, |t_{n+1}|, h)`. The step is then discarded and retaken
+//! with h = t_event − t_n, so that the jump in the force's derivative falls on a step boundary; the
+//! time t_event is the end of the final bracket on the far side of the crossing. Crossings that
+//! coincide within the tolerance (for example in-phase planets) are handled together, and each
+//! crossing counts once in [`Stats::events_located`]. When a step fails the error test and an
+//! event function changed sign over it, the switch is the likely cause, so the next attempt is aimed
+//! at the crossing located roughly (to 10⁻³ of the step) on the rejected step's dense output; if
+//! that attempt fails as well, the controller's reduction applies. Two crossings of the same function within
+//! one step (a contact shorter than a step) leave no sign change at the step end and are not
+//! seen; bound `max_step` by the shortest contact duration if that matters.
+
+use super::{check_dim, check_range, check_system, first_non_finite, SecondOrderSystem, SolverError, Stats};
+
+// Dormand–Prince 5(4) coefficients (Hairer, Nørsett & Wanner, Table II.5.2, and DOPRI5).
+const C2: f64 = 1.0 / 5.0;
+const C3: f64 = 3.0 / 10.0;
+const C4: f64 = 4.0 / 5.0;
+const C5: f64 = 8.0 / 9.0;
+const A21: f64 = 1.0 / 5.0;
+const A31: f64 = 3.0 / 40.0;
+const A32: f64 = 9.0 / 40.0;
+const A41: f64 = 44.0 / 45.0;
+const A42: f64 = -56.0 / 15.0;
+const A43: f64 = 32.0 / 9.0;
+const A51: f64 = 19372.0 / 6561.0;
+const A52: f64 = -25360.0 / 2187.0;
+const A53: f64 = 64448.0 / 6561.0;
+const A54: f64 = -212.0 / 729.0;
+const A61: f64 = 9017.0 / 3168.0;
+const A62: f64 = -355.0 / 33.0;
+const A63: f64 = 46732.0 / 5247.0;
+const A64: f64 = 49.0 / 176.0;
+const A65: f64 = -5103.0 / 18656.0;
+const A71: f64 = 35.0 / 384.0;
+const A73: f64 = 500.0 / 1113.0;
+const A74: f64 = 125.0 / 192.0;
+const A75: f64 = -2187.0 / 6784.0;
+const A76: f64 = 11.0 / 84.0;
+const E1: f64 = 71.0 / 57600.0;
+const E3: f64 = -71.0 / 16695.0;
+const E4: f64 = 71.0 / 1920.0;
+const E5: f64 = -17253.0 / 339200.0;
+const E6: f64 = 22.0 / 525.0;
+const E7: f64 = -1.0 / 40.0;
+const D1: f64 = -12715105075.0 / 11282082432.0;
+const D3: f64 = 87487479700.0 / 32700410799.0;
+const D4: f64 = -10690763975.0 / 1880347072.0;
+const D5: f64 = 701980252875.0 / 199316789632.0;
+const D6: f64 = -1453857185.0 / 822651844.0;
+const D7: f64 = 69997945.0 / 29380423.0;
+
+/// Iterations of the Illinois method before it switches to bisection.
+const ILLINOIS_ITERATIONS: u32 = 50;
+/// Total iteration cap of the event root finder (enough for bisection to reach 2⁻⁵³).
+const ROOT_ITERATIONS: u32 = 160;
+
+/// Step-size controller of [`Rk45`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StepController {
+    /// fac = safety · ‖err‖^{−1/5}.
+    Standard,
+    /// Proportional–integral controller fac = safety · ‖err_n‖^{−(1/5 − 3β/4)} · ‖err_{n−1}‖^β.
+    PI {
+        /// Integral gain β in [0, 0.1]: 0.04 in DOPRI5, 0 gives the standard controller, and the
+        /// controller is stable only for β < 1/5 − 3β/4, i.e. β < 0.114 [1].
+        beta: f64,
+    },
+}
+
+/// Settings of the [`Rk45`] integrator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rk45Settings {
+    /// Relative tolerance of the local error; in (0, 1) [1].
+    pub rtol: f64,
+    /// Absolute tolerance of the displacement components; non-negative [m or rad].
+    pub atol_q: f64,
+    /// Absolute tolerance of the velocity components; non-negative [m/s or rad/s].
+    pub atol_v: f64,
+    /// Safety factor of the step-size prediction; in (0, 1] [1].
+    pub safety: f64,
+    /// Smallest ratio between consecutive step sizes; in (0, 1) [1].
+    pub min_ratio: f64,
+    /// Largest ratio between consecutive step sizes; above 1 [1].
+    pub max_ratio: f64,
+    /// Step-size controller.
+    pub controller: StepController,
+    /// First step size; `None` selects it automatically [s].
+    pub initial_step: Option<f64>,
+    /// Largest step size; positive, may be infinite [s].
+    pub max_step: f64,
+    /// Smallest step size below which the integration stops with an error; the step that lands on
+    /// `t_end` or on an event may be shorter [s].
+    pub min_step: f64,
+    /// Largest number of step attempts (accepted, rejected and event retakes) in one
+    /// [`Rk45::advance_to`] call.
+    pub max_steps: u64,
+    /// Relative time tolerance of event location, applied as
+    /// `event_tolerance · max(|t_n|, |t_{n+1}|, h)`; in [1e-15, 0.1] [1].
+    pub event_tolerance: f64,
+    /// Whether located events are stored for [`Rk45::located_events`]; they are always counted.
+    pub record_events: bool,
+}
+
+impl Default for Rk45Settings {
+    /// rtol = 1e-8, atol_q = 1e-12, atol_v = 1e-10, safety 0.9, step ratios [0.2, 10], the PI
+    /// controller with β = 0.04, automatic initial step, no maximum step, no minimum step,
+    /// 10⁶ attempts per call, event tolerance 1e-12, events not recorded.
+    fn default() -> Self {
+        Self {
+            rtol: 1e-8,
+            atol_q: 1e-12,
+            atol_v: 1e-10,
+            safety: 0.9,
+            min_ratio: 0.2,
+            max_ratio: 10.0,
+            controller: StepController::PI { beta: 0.04 },
+            initial_step: None,
+            max_step: f64::INFINITY,
+            min_step: 0.0,
+            max_steps: 1_000_000,
+            event_tolerance: 1e-12,
+            record_events: false,
+        }
+    }
+}
+
+impl Rk45Settings {
+    /// Checks every setting.
+    pub fn validate(&self) -> Result<(), SolverError> {
+        let inv = |name: &'static str, value: f64, reason: &'static str| {
+            Err(SolverError::InvalidSetting { name, value, reason })
+        };
+        if !(self.rtol.is_finite() && self.rtol > 0.0 && self.rtol < 1.0) {
+            return inv("rtol", self.rtol, "rtol must lie in (0, 1)");
+        }
+        check_range("atol_q", self.atol_q, 0.0, f64::MAX, "atol_q must be finite and non-negative")?;
+        check_range("atol_v", self.atol_v, 0.0, f64::MAX, "atol_v must be finite and non-negative")?;
+        if !(self.safety > 0.0 && self.safety <= 1.0) {
+            return inv("safety", self.safety, "safety must lie in (0, 1]");
+        }
+        if !(self.min_ratio > 0.0 && self.min_ratio < 1.0) {
+            return inv("min_ratio", self.min_ratio, "min_ratio must lie in (0, 1)");
+        }
+        if !(self.max_ratio.is_finite() && self.max_ratio > 1.0) {
+            return inv("max_ratio", self.max_ratio, "max_ratio must be finite and above 1");
+        }
+        if let StepController::PI { beta } = self.controller {
+            check_range("beta", beta, 0.0, 0.1, "the PI gain beta must lie in [0, 0.1]")?;
+        }
+        if let Some(h) = self.initial_step {
+            if !(h.is_finite() && h > 0.0) {
+                return inv("initial_step", h, "initial_step must be positive and finite");
+            }
+        }
+        if self.max_step.is_nan() || self.max_step <= 0.0 {
+            return inv("max_step", self.max_step, "max_step must be positive");
+        }
+        check_range("min_step", self.min_step, 0.0, f64::MAX, "min_step must be finite and non-negative")?;
+        if self.min_step > self.max_step {
+            return inv("min_step", self.min_step, "min_step must not exceed max_step");
+        }
+        if self.max_steps == 0 {
+            return inv("max_steps", 0.0, "max_steps must be at least 1");
+        }
+        if !(self.event_tolerance >= 1e-15 && self.event_tolerance <= 0.1) {
+            return inv("event_tolerance", self.event_tolerance, "event_tolerance must lie in [1e-15, 0.1]");
+        }
+        Ok(())
+    }
+}
+
+/// One located zero crossing of an event function.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocatedEvent {
+    /// Time of the crossing [s].
+    pub t: f64,
+    /// Index of the event function.
+    pub index: usize,
+    /// Whether the function went from negative to non-negative (`true`) or back (`false`).
+    pub rising: bool,
+}
+
+/// Failure of a stage evaluation.
+#[derive(Debug, Clone, Copy)]
+enum StageFailure {
+    State { t: f64, index: usize },
+    Force { t: f64, index: usize },
+}
+
+impl StageFailure {
+    fn into_error(self) -> SolverError {
+        match self {
+            StageFailure::State { t, index } => SolverError::NonFiniteState { t, index },
+            StageFailure::Force { t, index } => SolverError::NonFiniteForce { t, index },
+        }
+    }
+}
+
+/// An event located inside a step; the step is being retaken to end at `t_event`.
+#[derive(Debug, Clone)]
+struct Pending {
+    t_event: f64,
+    /// (index, located time, value on the far side of the crossing).
+    components: Vec<(usize, f64, f64)>,
+    h_after: f64,
+}
+
+/// The Dormand–Prince 5(4) integrator (see the module documentation for the equations).
+///
+/// Typical use: [`Rk45::new`], [`Rk45::init`], then repeated [`Rk45::advance_to`] calls, reading
+/// [`Rk45::q`] and [`Rk45::v`] in between and [`Rk45::dense_at`] for times inside the last step.
+#[derive(Debug, Clone)]
+pub struct Rk45 {
+    settings: Rk45Settings,
+    initialized: bool,
+    n: usize,
+    t: f64,
+    y: Vec<f64>,
+    y_new: Vec<f64>,
+    y_stage: Vec<f64>,
+    k1: Vec<f64>,
+    k2: Vec<f64>,
+    k3: Vec<f64>,
+    k4: Vec<f64>,
+    k5: Vec<f64>,
+    k6: Vec<f64>,
+    k7: Vec<f64>,
+    fbuf: Vec<f64>,
+    mass: Vec<f64>,
+    h_next: f64,
+    err_old: f64,
+    rejected_last: bool,
+    n_events: usize,
+    g_ref: Vec<f64>,
+    g_new: Vec<f64>,
+    g_tmp: Vec<f64>,
+    dense: [Vec<f64>; 5],
+    dense_t0: f64,
+    dense_h: f64,
+    dense_valid: bool,
+    located: Vec<LocatedEvent>,
+    stats: Stats,
+}
+
+/// Evaluates y' = [v, M⁻¹ f(t, q, v)] into `out`.
+#[allow(clippy::too_many_arguments)]
+fn deriv<S: SecondOrderSystem + ?Sized>(
+    sys: &mut S,
+    mass: &[f64],
+    n: usize,
+    t: f64,
+    y: &[f64],
+    out: &mut [f64],
+    fbuf: &mut [f64],
+    stats: &mut Stats,
+) -> Result<(), StageFailure> {
+    if let Some(index) = first_non_finite(y) {
+        return Err(StageFailure::State { t, index });
+    }
+    let (q, v) = y.split_at(n);
+    sys.force(t, q, v, fbuf);
+    stats.rhs_evaluations += 1;
+    if let Some(index) = first_non_finite(fbuf) {
+        return Err(StageFailure::Force { t, index });
+    }
+    out[..n].copy_from_slice(v);
+    for i in 0..n {
+        out[n + i] = fbuf[i] / mass[i];
+    }
+    Ok(())
+}
+
+/// Evaluates the event functions at (t, y) into `out` and checks their number and finiteness.
+fn eval_events<S: SecondOrderSystem + ?Sized>(
+    sys: &mut S,
+    n: usize,
+    expected: Option<usize>,
+    t: f64,
+    y: &[f64],
+    out: &mut Vec<f64>,
+) -> Result<(), SolverError> {
+    out.clear();
+    let (q, v) = y.split_at(n);
+    sys.events(t, q, v, out);
+    if let Some(expected) = expected {
+        if out.len() != expected {
+            return Err(SolverError::EventCountChanged { t, expected, found: out.len() });
+        }
+    }
+    if let Some(index) = first_non_finite(out) {
+        return Err(SolverError::NonFiniteEvent { t, index });
+    }
+    Ok(())
+}
+
+/// The dense-output polynomial at θ.
+fn dense_eval(dense: &[Vec<f64>; 5], theta: f64, out: &mut [f64]) {
+    let th1 = 1.0 - theta;
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = dense[0][i]
+            + theta * (dense[1][i] + th1 * (dense[2][i] + theta * (dense[3][i] + th1 * dense[4][i])));
+    }
+}
+
+/// Side of an event-function value: `true` for negative.
+fn negative(g: f64) -> bool {
+    g < 0.0
+}
+
+impl Rk45 {
+    /// Creates an integrator after checking the settings; call [`Rk45::init`] next.
+    pub fn new(settings: Rk45Settings) -> Result<Self, SolverError> {
+        settings.validate()?;
+        Ok(Self {
+            settings,
+            initialized: false,
+            n: 0,
+            t: 0.0,
+            y: Vec::new(),
+            y_new: Vec::new(),
+            y_stage: Vec::new(),
+            k1: Vec::new(),
+            k2: Vec::new(),
+            k3: Vec::new(),
+            k4: Vec::new(),
+            k5: Vec::new(),
+            k6: Vec::new(),
+            k7: Vec::new(),
+            fbuf: Vec::new(),
+            mass: Vec::new(),
+            h_next: 0.0,
+            err_old: 1e-4,
+            rejected_last: false,
+            n_events: 0,
+            g_ref: Vec::new(),
+            g_new: Vec::new(),
+            g_tmp: Vec::new(),
+            dense: Default::default(),
+            dense_t0: 0.0,
+            dense_h: 0.0,
+            dense_valid: false,
+            located: Vec::new(),
+            stats: Stats::default(),
+        })
+    }
+
+    /// Sets the initial time `t0` [s], displacements `q0` [m or rad] and velocities `v0`
+    /// [m/s or rad/s], evaluates the force and the event functions there and chooses the first
+    /// step. The counters and the event record are kept.
+    pub fn init<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t0: f64,
+        q0: &[f64],
+        v0: &[f64],
+    ) -> Result<(), SolverError> {
+        let n = check_system(sys, q0, v0)?;
+        if !t0.is_finite() {
+            return Err(SolverError::InvalidArgument {
+                name: "t0",
+                value: t0,
+                reason: "time must be finite",
+            });
+        }
+        let mut y = Vec::with_capacity(2 * n);
+        y.extend_from_slice(q0);
+        y.extend_from_slice(v0);
+        if let Some(index) = first_non_finite(&y) {
+            return Err(SolverError::NonFiniteState { t: t0, index });
+        }
+        self.initialized = false;
+        self.n = n;
+        self.t = t0;
+        self.mass = sys.mass().to_vec();
+        self.fbuf = vec![0.0; n];
+        for buf in [
+            &mut self.y_new,
+            &mut self.y_stage,
+            &mut self.k1,
+            &mut self.k2,
+            &mut self.k3,
+            &mut self.k4,
+            &mut self.k5,
+            &mut self.k6,
+            &mut self.k7,
+        ] {
+            *buf = vec![0.0; 2 * n];
+        }
+        for buf in self.dense.iter_mut() {
+            *buf = vec![0.0; 2 * n];
+        }
+        self.y = y;
+        deriv(sys, &self.mass, n, t0, &self.y, &mut self.k1, &mut self.fbuf, &mut self.stats)
+            .map_err(StageFailure::into_error)?;
+        let mut g = Vec::new();
+        eval_events(sys, n, None, t0, &self.y, &mut g)?;
+        self.n_events = g.len();
+        self.g_new = vec![0.0; g.len()];
+        self.g_tmp = Vec::with_capacity(g.len());
+        self.g_ref = g;
+        self.h_next = match self.settings.initial_step {
+            Some(h) => h.min(self.settings.max_step),
+            None => self.initial_step_size(sys),
+        };
+        self.err_old = 1e-4;
+        self.rejected_last = false;
+        self.dense_valid = false;
+        self.initialized = true;
+        Ok(())
+    }
+
+    /// Restarts from time `t` [s], displacements `q` [m or rad] and velocities `v`
+    /// [m/s or rad/s]. Same as [`Rk45::init`].
+    pub fn set_state<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), SolverError> {
+        self.init(sys, t, q, v)
+    }
+
+    /// Absolute tolerance of component `i` of y = [q, v].
+    fn atol(&self, i: usize) -> f64 {
+        if i < self.n {
+            self.settings.atol_q
+        } else {
+            self.settings.atol_v
+        }
+    }
+
+    /// Starting step size of Hairer, Nørsett & Wanner §II.4 (DOPRI5's HINIT).
+    fn initial_step_size<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S) -> f64 {
+        let rtol = self.settings.rtol;
+        let max_step = self.settings.max_step;
+        let (mut dnf, mut dny) = (0.0, 0.0);
+        for i in 0..2 * self.n {
+            let sk = self.atol(i) + rtol * self.y[i].abs();
+            dnf += (self.k1[i] / sk).powi(2);
+            dny += (self.y[i] / sk).powi(2);
+        }
+        let mut h = if dnf <= 1e-10 || dny <= 1e-10 { 1e-6 } else { (dny / dnf).sqrt() * 0.01 };
+        h = h.min(max_step);
+        for i in 0..2 * self.n {
+            self.y_stage[i] = self.y[i] + h * self.k1[i];
+        }
+        let ok = deriv(
+            sys,
+            &self.mass,
+            self.n,
+            self.t + h,
+            &self.y_stage,
+            &mut self.k2,
+            &mut self.fbuf,
+            &mut self.stats,
+        )
+        .is_ok();
+        if !ok || !dnf.is_finite() || !dny.is_finite() {
+            return (1e-3 * h).max(f64::MIN_POSITIVE);
+        }
+        let mut der2 = 0.0;
+        for i in 0..2 * self.n {
+            let sk = self.atol(i) + rtol * self.y[i].abs();
+            der2 += ((self.k2[i] - self.k1[i]) / sk).powi(2);
+        }
+        let der2 = der2.sqrt() / h;
+        let der12 = der2.max(dnf.sqrt());
+        let h1 = if der12 <= 1e-15 { (h * 1e-3).max(1e-6) } else { (0.01 / der12).powf(0.2) };
+        let h = (100.0 * h).min(h1).min(max_step);
+        if h.is_finite() && h > 0.0 {
+            h
+        } else {
+            1e-6_f64.min(max_step)
+        }
+    }
+
+    /// Computes the stages of one step of size `h` ending at `t_new`; returns the error norm.
+    fn attempt<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        h: f64,
+        t_new: f64,
+    ) -> Result<f64, StageFailure> {
+        let (n, t) = (self.n, self.t);
+        let m = 2 * n;
+        let Self { y, y_new, y_stage, k1, k2, k3, k4, k5, k6, k7, fbuf, mass, stats, .. } = self;
+        for i in 0..m {
+            y_stage[i] = y[i] + h * A21 * k1[i];
+        }
+        deriv(sys, mass, n, t + C2 * h, y_stage, k2, fbuf, stats)?;
+        for i in 0..m {
+            y_stage[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i]);
+        }
+        deriv(sys, mass, n, t + C3 * h, y_stage, k3, fbuf, stats)?;
+        for i in 0..m {
+            y_stage[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
+        }
+        deriv(sys, mass, n, t + C4 * h, y_stage, k4, fbuf, stats)?;
+        for i in 0..m {
+            y_stage[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
+        }
+        deriv(sys, mass, n, t + C5 * h, y_stage, k5, fbuf, stats)?;
+        for i in 0..m {
+            y_stage[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
+        }
+        deriv(sys, mass, n, t_new, y_stage, k6, fbuf, stats)?;
+        for i in 0..m {
+            y_new[i] = y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
+        }
+        deriv(sys, mass, n, t_new, y_new, k7, fbuf, stats)?;
+        let rtol = self.settings.rtol;
+        let mut sum = 0.0;
+        for i in 0..m {
+            let atol = if i < n { self.settings.atol_q } else { self.settings.atol_v };
+            let sk = atol + rtol * self.y[i].abs().max(self.y_new[i].abs());
+            let e = h
+                * (E1 * self.k1[i]
+                    + E3 * self.k3[i]
+                    + E4 * self.k4[i]
+                    + E5 * self.k5[i]
+                    + E6 * self.k6[i]
+                    + E7 * self.k7[i]);
+            sum += (e / sk).powi(2);
+        }
+        let err = (sum / m.max(1) as f64).sqrt();
+        Ok(if err.is_nan() { f64::INFINITY } else { err })
+    }
+
+    /// Fills the dense-output coefficients of the step (t, h) just computed by `attempt`.
+    fn prepare_dense(&mut self, h: f64) {
+        let [r1, r2, r3, r4, r5] = &mut self.dense;
+        for i in 0..2 * self.n {
+            let dy = self.y_new[i] - self.y[i];
+            let bspl = h * self.k1[i] - dy;
+            r1[i] = self.y[i];
+            r2[i] = dy;
+            r3[i] = bspl;
+            r4[i] = dy - h * self.k7[i] - bspl;
+            r5[i] = h
+                * (D1 * self.k1[i]
+                    + D3 * self.k3[i]
+                    + D4 * self.k4[i]
+                    + D5 * self.k5[i]
+                    + D6 * self.k6[i]
+                    + D7 * self.k7[i]);
+        }
+        self.dense_t0 = self.t;
+        self.dense_h = h;
+    }
+
+    /// Accepts the step to `t_new` (dense output must already be prepared).
+    fn commit(&mut self, t_new: f64, err: f64) {
+        std::mem::swap(&mut self.y, &mut self.y_new);
+        std::mem::swap(&mut self.k1, &mut self.k7);
+        self.t = t_new;
+        self.dense_valid = true;
+        self.stats.steps += 1;
+        self.err_old = err.max(1e-4);
+        self.rejected_last = false;
+    }
+
+    /// Counts (and possibly records) one located crossing.
+    fn record(&mut self, t: f64, index: usize, post: f64) {
+        self.stats.events_located += 1;
+        if self.settings.record_events {
+            self.located.push(LocatedEvent { t, index, rising: !negative(post) });
+        }
+    }
+
+    /// Locates the crossing of event function `index` inside the step whose dense output is
+    /// prepared, between the values `fa` at its start and `fb` at its end, to the tolerance `tol`
+    /// in θ; returns the time on the far side of the final bracket.
+    fn locate<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        index: usize,
+        mut fa: f64,
+        mut fb: f64,
+        t_new: f64,
+        tol: f64,
+    ) -> Result<f64, SolverError> {
+        let (t0, h) = (self.dense_t0, self.dense_h);
+        let (mut a, mut b) = (0.0_f64, 1.0_f64);
+        let mut last_side = 0i8;
+        let mut g = std::mem::take(&mut self.g_tmp);
+        let mut result = Ok(());
+        for iteration in 0..ROOT_ITERATIONS {
+            if b - a <= tol {
+                break;
+            }
+            let mut c = if iteration < ILLINOIS_ITERATIONS && fb != fa {
+                b - fb * (b - a) / (fb - fa)
+            } else {
+                f64::NAN
+            };
+            if !(c > a && c < b) {
+                c = 0.5 * (a + b);
+            }
+            if !(c > a && c < b) {
+                break;
+            }
+            dense_eval(&self.dense, c, &mut self.y_stage);
+            let tc = t0 + c * h;
+            if let Err(e) = eval_events(sys, self.n, Some(self.n_events), tc, &self.y_stage, &mut g) {
+                result = Err(e);
+                break;
+            }
+            let fc = g[index];
+            if negative(fc) == negative(fb) {
+                b = c;
+                fb = fc;
+                if last_side == -1 {
+                    fa *= 0.5;
+                }
+                last_side = -1;
+            } else {
+                a = c;
+                fa = fc;
+                if last_side == 1 {
+                    fb *= 0.5;
+                }
+                last_side = 1;
+            }
+        }
+        self.g_tmp = g;
+        result?;
+        Ok(if b >= 1.0 { t_new } else { t0 + b * h })
+    }
+
+    /// Earliest sign change of an event function over a step that failed the error test, located
+    /// roughly (to 1e-3 of the step) on that step's dense output; `None` if no function changed
+    /// sign or the step's end state is unusable.
+    fn rough_crossing<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        h: f64,
+        t_new: f64,
+    ) -> Result<Option<f64>, SolverError> {
+        if first_non_finite(&self.y_new).is_some() {
+            return Ok(None);
+        }
+        let mut g_new = std::mem::take(&mut self.g_new);
+        let ev = eval_events(sys, self.n, Some(self.n_events), t_new, &self.y_new, &mut g_new);
+        self.g_new = g_new;
+        ev?;
+        if !(0..self.n_events).any(|i| negative(self.g_ref[i]) != negative(self.g_new[i])) {
+            return Ok(None);
+        }
+        self.prepare_dense(h);
+        let mut earliest: Option<f64> = None;
+        for i in 0..self.n_events {
+            let (fa, fb) = (self.g_ref[i], self.g_new[i]);
+            if negative(fa) != negative(fb) {
+                let te = self.locate(sys, i, fa, fb, t_new, 1e-3)?;
+                earliest = Some(earliest.map_or(te, |e: f64| e.min(te)));
+            }
+        }
+        Ok(earliest)
+    }
+
+    /// Integrates from the current time to `t_end` [s] with adaptive steps, landing exactly on
+    /// `t_end` and on every located event in between.
+    ///
+    /// On error the integrator keeps the last accepted state.
+    pub fn advance_to<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t_end: f64,
+    ) -> Result<(), SolverError> {
+        if !self.initialized {
+            return Err(SolverError::NotInitialized);
+        }
+        check_dim(sys, self.n)?;
+        if !t_end.is_finite() || t_end < self.t {
+            return Err(SolverError::InvalidArgument {
+                name: "t_end",
+                value: t_end,
+                reason: "t_end must be finite and not before the current time",
+            });
+        }
+        let s = self.settings;
+        let mut attempts: u64 = 0;
+        let mut pending: Option<Pending> = None;
+        let mut aimed = false;
+        while self.t < t_end {
+            if attempts >= s.max_steps {
+                return Err(SolverError::TooManySteps { t: self.t, max_steps: s.max_steps });
+            }
+            attempts += 1;
+            let t = self.t;
+            let (t_new, h_proposed) = match &pending {
+                Some(p) => (p.t_event, p.h_after),
+                None => {
+                    let h = self.h_next.min(s.max_step);
+                    if t + 1.01 * h >= t_end {
+                        (t_end, h)
+                    } else {
+                        (t + h, h)
+                    }
+                }
+            };
+            let h = t_new - t;
+            let tiny = 4.0 * f64::EPSILON * t.abs();
+            if h.is_nan() || h <= tiny || (pending.is_none() && t_new < t_end && h < s.min_step) {
+                return Err(SolverError::StepTooSmall { t, h });
+            }
+            let err = match self.attempt(sys, h, t_new) {
+                Err(failure) => {
+                    self.stats.rejected_steps += 1;
+                    pending = None;
+                    aimed = false;
+                    self.rejected_last = true;
+                    self.h_next = h * s.min_ratio;
+                    if self.h_next < s.min_step.max(tiny) {
+                        return Err(failure.into_error());
+                    }
+                    continue;
+                }
+                Ok(err) if err > 1.0 => {
+                    self.stats.rejected_steps += 1;
+                    pending = None;
+                    self.rejected_last = true;
+                    self.h_next = h * (s.safety * err.powf(-0.2)).max(s.min_ratio);
+                    if self.n_events > 0 && !aimed {
+                        // A switch inside the step (a kink in the force) is the likely cause of the
+                        // rejection: aim the next attempt at the crossing, roughly located on the
+                        // rejected step; if that attempt fails too, the controller takes over.
+                        if let Some(tc) = self.rough_crossing(sys, h, t_new)? {
+                            if tc - t > tiny {
+                                self.h_next = tc - t;
+                                aimed = true;
+                            }
+                        }
+                    } else {
+                        aimed = false;
+                    }
+                    if self.h_next < s.min_step.max(tiny) {
+                        return Err(SolverError::StepTooSmall { t, h: self.h_next });
+                    }
+                    continue;
+                }
+                Ok(err) => err,
+            };
+            // The step passes the error test: propose the next step size.
+            aimed = false;
+            let mut fac = if err == 0.0 {
+                s.max_ratio
+            } else {
+                match s.controller {
+                    StepController::Standard => s.safety * err.powf(-0.2),
+                    StepController::PI { beta } => {
+                        s.safety * err.powf(-(0.2 - 0.75 * beta)) * self.err_old.powf(beta)
+                    }
+                }
+            };
+            fac = fac.clamp(s.min_ratio, s.max_ratio);
+            if self.rejected_last {
+                fac = fac.min(1.0);
+            }
+            let mut h_next = h * fac;
+            if t_new == t_end && h < h_proposed {
+                h_next = h_next.max(h_proposed);
+            }
+            self.prepare_dense(h);
+            if self.n_events == 0 {
+                self.commit(t_new, err);
+                self.h_next = h_next;
+                continue;
+            }
+            let mut g_new = std::mem::take(&mut self.g_new);
+            let ev = eval_events(sys, self.n, Some(self.n_events), t_new, &self.y_new, &mut g_new);
+            self.g_new = g_new;
+            ev?;
+            if let Some(p) = pending.take() {
+                // Landing on a located event.
+                self.commit(t_new, err);
+                self.h_next = p.h_after;
+                for i in 0..self.n_events {
+                    if let Some(&(_, te, post)) = p.components.iter().find(|c| c.0 == i) {
+                        self.record(te, i, post);
+                        self.g_ref[i] = post;
+                    } else {
+                        let gi = self.g_new[i];
+                        if negative(gi) != negative(self.g_ref[i]) {
+                            self.record(t_new, i, gi);
+                        }
+                        self.g_ref[i] = gi;
+                    }
+                }
+                continue;
+            }
+            let tol_theta = s.event_tolerance * t.abs().max(t_new.abs()).max(h) / h;
+            let mut crossings: Vec<(usize, f64)> = Vec::new();
+            for i in 0..self.n_events {
+                let (fa, fb) = (self.g_ref[i], self.g_new[i]);
+                if negative(fa) != negative(fb) {
+                    let te = self.locate(sys, i, fa, fb, t_new, tol_theta)?;
+                    crossings.push((i, te));
+                }
+            }
+            let tol_t = s.event_tolerance * t.abs().max(t_new.abs()).max(h);
+            let mut interior: Option<Pending> = None;
+            while !crossings.is_empty() {
+                let t_star = crossings.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
+                if t_star <= t + tol_t {
+                    // Crossings at the start of the step: nothing to retake for them.
+                    let mut k = 0;
+                    while k < crossings.len() {
+                        let (i, te) = crossings[k];
+                        if te <= t + tol_t {
+                            let post = self.g_new[i];
+                            self.record(te, i, post);
+                            self.g_ref[i] = post;
+                            crossings.swap_remove(k);
+                        } else {
+                            k += 1;
+                        }
+                    }
+                } else if t_star >= t_new - tol_t {
+                    // Crossings at the end of the step: the step already ends there.
+                    for &(i, te) in &crossings {
+                        self.record(te, i, self.g_new[i]);
+                    }
+                    break;
+                } else {
+                    let components = crossings
+                        .iter()
+                        .filter(|c| c.1 <= t_star + tol_t)
+                        .map(|&(i, te)| (i, te, self.g_new[i]))
+                        .collect();
+                    interior = Some(Pending { t_event: t_star, components, h_after: h_next });
+                    break;
+                }
+            }
+            if interior.is_some() {
+                // Retake the step so that it ends on the event.
+                pending = interior;
+                continue;
+            }
+            self.commit(t_new, err);
+            self.h_next = h_next;
+            self.g_ref.copy_from_slice(&self.g_new);
+        }
+        Ok(())
+    }
+
+    /// Writes the dense-output displacements [m or rad] and velocities [m/s or rad/s] at time
+    /// `t` [s] inside the last accepted step into `q` and `v`. Before the first step only the
+    /// current time is available.
+    pub fn dense_at(&self, t: f64, q: &mut [f64], v: &mut [f64]) -> Result<(), SolverError> {
+        if !self.initialized {
+            return Err(SolverError::NotInitialized);
+        }
+        let n = self.n;
+        if q.len() != n {
+            return Err(SolverError::DimensionMismatch { name: "q", expected: n, found: q.len() });
+        }
+        if v.len() != n {
+            return Err(SolverError::DimensionMismatch { name: "v", expected: n, found: v.len() });
+        }
+        if t == self.t {
+            q.copy_from_slice(&self.y[..n]);
+            v.copy_from_slice(&self.y[n..]);
+            return Ok(());
+        }
+        let start = if self.dense_valid { self.dense_t0 } else { self.t };
+        if !(t >= start && t <= self.t) {
+            return Err(SolverError::TimeOutOfRange { t, start, end: self.t });
+        }
+        let theta = (t - self.dense_t0) / self.dense_h;
+        let th1 = 1.0 - theta;
+        let d = &self.dense;
+        for i in 0..2 * n {
+            let yi = d[0][i] + theta * (d[1][i] + th1 * (d[2][i] + theta * (d[3][i] + th1 * d[4][i])));
+            if i < n {
+                q[i] = yi;
+            } else {
+                v[i - n] = yi;
+            }
+        }
+        Ok(())
+    }
+
+    /// Current time [s].
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// Current displacements [m or rad, per coordinate].
+    pub fn q(&self) -> &[f64] {
+        &self.y[..self.n]
+    }
+
+    /// Current velocities [m/s or rad/s, per coordinate].
+    pub fn v(&self) -> &[f64] {
+        &self.y[self.n..]
+    }
+
+    /// Current acceleration M⁻¹ f(t, q, v) [m/s² or rad/s², per coordinate].
+    pub fn a(&self) -> &[f64] {
+        &self.k1[self.n..]
+    }
+
+    /// Size of the next step the controller proposes [s].
+    pub fn next_step(&self) -> f64 {
+        self.h_next
+    }
+
+    /// Start and end of the last accepted step, if a step has been taken since `init` [s].
+    pub fn last_step(&self) -> Option<(f64, f64)> {
+        self.dense_valid.then_some((self.dense_t0, self.t))
+    }
+
+    /// Events located so far, in order, if [`Rk45Settings::record_events`] is set.
+    pub fn located_events(&self) -> &[LocatedEvent] {
+        &self.located
+    }
+
+    /// Removes and returns the recorded events.
+    pub fn take_located_events(&mut self) -> Vec<LocatedEvent> {
+        std::mem::take(&mut self.located)
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &Rk45Settings {
+        &self.settings
+    }
+
+    /// The work counters.
+    pub fn stats(&self) -> &Stats {
+        &self.stats
+    }
+
+    /// Sets every work counter back to zero.
+    pub fn reset_stats(&mut self) {
+        self.stats.reset();
+    }
+}
