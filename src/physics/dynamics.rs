@@ -363,6 +363,39 @@ impl PlanetaryDynamics {
         }
     }
 
+    /// Energy bookkeeping at a state: kinetic energy, elastic energy of the
+    /// supports (and the speed drive's shaft), elastic energy of the tooth
+    /// contacts [J], and the work rate of the time-varying mesh stiffness and
+    /// separation, Σ ∂V/∂s · ṡ [W].
+    pub fn energy(&self, t: f64, q: &[f64], v: &[f64]) -> (f64, f64, f64, f64) {
+        let kinetic: f64 = 0.5 * self.mass.iter().zip(v).map(|(m, v)| m * v * v).sum::<f64>();
+        let mut support = 0.0;
+        for (i, qi) in q.iter().enumerate() {
+            for (j, qj) in q.iter().enumerate() {
+                support += 0.5 * qi * self.k_support[(i, j)] * qj;
+            }
+        }
+        if let Some(d) = self.speed_drive {
+            let w = d.offset + d.speed * t - q[self.input_index];
+            support += 0.5 * d.stiffness * w * w;
+        }
+        let (mut contact, mut power) = (0.0, 0.0);
+        for link in &self.links {
+            let delta: f64 = link.b_nz.iter().map(|(j, b)| b * q[*j]).sum();
+            let s: f64 = link.p_nz.iter().map(|(j, p)| p * q[*j]).sum::<f64>() + link.s0;
+            let s_rate: f64 = link.p_nz.iter().map(|(j, p)| p * v[*j]).sum();
+            let (e, de) = self.model(link.kind).contact_energy(s, delta);
+            contact += e;
+            power += de * s_rate;
+        }
+        (kinetic, support, contact, power)
+    }
+
+    /// Work rate of the constant external forces at velocities `v` [W].
+    pub fn external_power(&self, v: &[f64]) -> f64 {
+        self.f_ext.iter().zip(v).map(|(f, v)| f * v).sum()
+    }
+
     /// Number of meshes (2 per planet).
     pub fn mesh_count(&self) -> usize {
         self.links.len()

@@ -206,6 +206,43 @@ impl MeshModel {
         (f, kd, ks)
     }
 
+    /// Elastic energy stored in the mesh's pairs, V = Σ ½k(s_k)(δ − g(s_k))²
+    /// [J], and its partial derivative ∂V/∂s at fixed δ [N]: the power
+    /// ∂V/∂s · ṡ is the work rate of the time-varying stiffness and
+    /// separation that an energy balance must account for.
+    pub fn contact_energy(&self, s: f64, delta: f64) -> (f64, f64) {
+        let pb = self.path().base_pitch;
+        let fraction = 1.0 / self.slices.len() as f64;
+        let (mut v, mut dv) = (0.0, 0.0);
+        for index in self.pair_range(s) {
+            let pos = s + f64::from(index) * pb;
+            for slice in &self.slices {
+                let gd = slice.drive.at(pos);
+                let gb = slice.back.at(pos);
+                let (x, k, dk, dg) = if gd < NO_CONTACT && delta > gd {
+                    (
+                        delta - gd,
+                        fraction * self.lookup(&self.drive_k, pos),
+                        fraction * self.slope(&self.drive_k, pos),
+                        slice.drive.slope_at(pos),
+                    )
+                } else if gb < NO_CONTACT && -delta > gb {
+                    (
+                        -delta - gb,
+                        fraction * self.lookup(&self.back_k, pos),
+                        fraction * self.slope(&self.back_k, pos),
+                        slice.back.slope_at(pos),
+                    )
+                } else {
+                    continue;
+                };
+                v += 0.5 * k * x * x;
+                dv += 0.5 * dk * x * x - k * x * dg;
+            }
+        }
+        (v, dv)
+    }
+
     /// Event slots a mesh needs: more than the pairs its tables can hold.
     pub fn event_slots(&self) -> usize {
         let t = &self.separation.drive;

@@ -1,0 +1,196 @@
+//! The nonlinear dynamic model: laws, phasing, the softening jump, energy,
+//! integrator agreement and determinism.
+
+use planetwear::physics::dynamics::PlanetaryDynamics;
+use planetwear::physics::gear::{GearSet, MeshKind};
+use planetwear::physics::ltca::SetModel;
+use planetwear::physics::response::{static_state, steady_state, sweep, Direction};
+use planetwear::physics::spectrum::mesh_harmonics;
+use planetwear::scene::{Fidelity, IntegratorKind, Scene};
+use planetwear::solver::{GeneralizedAlpha, GeneralizedAlphaSettings, SecondOrderSystem};
+
+const RPM: f64 = std::f64::consts::PI / 30.0;
+
+fn build(scene: &Scene) -> (GearSet, PlanetaryDynamics) {
+    let set = scene.validate().unwrap_or_else(|e| panic!("{e}"));
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+    (set, model)
+}
+
+/// The torsional example with light mesh damping: it separates near its
+/// first rotational resonance (2×f_m ≈ 14.3 kHz).
+fn separating() -> Scene {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = Fidelity::Torsional;
+    s.dynamics.mesh_damping_ratio = 0.02;
+    s
+}
+
+#[test]
+fn mean_mesh_force_balances_the_input_torque() {
+    let (set, mut model) = build(&Scene::example_2004());
+    let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
+    let f0 = set.mesh_load_per_planet();
+    for m in &r.meshes {
+        assert!((m.harmonics.mean / f0 - 1.0).abs() < 1e-3, "{:?} mean {} vs {f0}", m.mesh, m.harmonics.mean);
+    }
+}
+
+#[test]
+fn planet_phasing_follows_from_the_tooth_positions() {
+    // Z_sun = 34, Z_ring = 70, four planets: harmonic l is in phase across the
+    // planets iff 34·l/4 (70·l/4) is an integer, i.e. for even l. The sum of
+    // the four sun (ring) mesh forces therefore holds only even harmonics, at
+    // four times one mesh's amplitude; the odd ones cancel.
+    let (set, mut model) = build(&Scene::example_2004());
+    let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
+    for kind in [MeshKind::SunPlanet, MeshKind::RingPlanet] {
+        let idx: Vec<usize> = (0..model.mesh_count()).filter(|i| model.mesh_identity(*i).1 == kind).collect();
+        let one = mesh_harmonics(&r.mesh_force[idx[0]], r.cycles, 6).unwrap();
+        let total: Vec<f64> =
+            (0..r.time.len()).map(|k| idx.iter().map(|i| r.mesh_force[*i][k]).sum()).collect();
+        let sum = mesh_harmonics(&total, r.cycles, 6).unwrap();
+        for l in 0..6 {
+            let (a1, a4) = (one.amplitude[l], sum.amplitude[l]);
+            if (l + 1) % 2 == 1 {
+                // Cancellation to 1e-3 of one mesh's amplitude (the measured
+                // residue, 5e-5, is the decaying start transient).
+                assert!(
+                    a4 < 1e-3 * a1.max(1.0),
+                    "{kind:?} odd harmonic {}: sum {a4} vs one mesh {a1}",
+                    l + 1
+                );
+            } else {
+                assert!(
+                    (a4 / (4.0 * a1) - 1.0).abs() < 1e-3,
+                    "{kind:?} even harmonic {}: {a4} vs 4×{a1}",
+                    l + 1
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_separating_set_shows_a_softening_jump_and_two_branches() {
+    let (set, model) = build(&separating());
+    let speeds: Vec<f64> = (0..=14).map(|i| 9000.0 + 250.0 * f64::from(i)).collect();
+    let run = |d: Direction, grid: &[f64]| {
+        let mut m = model.clone();
+        sweep(&set, &mut m, d, grid, &[], |_| {}).unwrap()
+    };
+    let up = run(Direction::Up, &speeds);
+    let mut rev = speeds.clone();
+    rev.reverse();
+    let down = run(Direction::Down, &rev);
+    let rms = |sw: &planetwear::physics::response::Sweep, rpm: f64| {
+        sw.points.iter().find(|p| (p.input_speed_rpm - rpm).abs() < 1e-9).unwrap().meshes[0].harmonics.rms
+    };
+    let sep = |sw: &planetwear::physics::response::Sweep| {
+        sw.points.iter().map(|p| p.meshes[0].separation).fold(0.0, f64::max)
+    };
+    assert!(sep(&up) > 0.1 && sep(&down) > 0.1, "separation up {} down {}", sep(&up), sep(&down));
+    // Two branches: somewhere below the up-sweep's jump the down sweep stays
+    // on the separated high branch.
+    let gap = speeds.iter().map(|s| rms(&down, *s) / rms(&up, *s)).fold(0.0, f64::max);
+    assert!(gap > 1.5, "down/up F(rms) ratio at most {gap}");
+    // The up sweep jumps: one step of 250 rpm raises F(rms) by more than 50 %.
+    let jump = speeds.windows(2).map(|w| rms(&up, w[1]) / rms(&up, w[0])).fold(0.0, f64::max);
+    assert!(jump > 1.5, "largest up-sweep ratio between neighbours {jump}");
+    // Above the resonance both sweeps meet on one branch.
+    assert!((rms(&up, 12500.0) / rms(&down, 12500.0) - 1.0).abs() < 1e-3);
+}
+
+#[test]
+fn both_integrators_agree_on_a_steady_state_with_separation() {
+    let mut a = separating();
+    a.dynamics.steps_per_mesh_cycle = 960;
+    let (set_a, mut model_a) = build(&a);
+    let ra = steady_state(&mut model_a, &set_a, 12000.0 * RPM, None).unwrap();
+    let mut b = separating();
+    b.dynamics.integrator = IntegratorKind::Rk45;
+    b.dynamics.relative_tolerance = 1e-9;
+    let (set_b, mut model_b) = build(&b);
+    let rb = steady_state(&mut model_b, &set_b, 12000.0 * RPM, None).unwrap();
+    assert!(ra.meshes[0].separation > 0.1, "the case separates: {}", ra.meshes[0].separation);
+    for (x, y) in ra.meshes.iter().zip(&rb.meshes) {
+        let d = (x.harmonics.rms / y.harmonics.rms - 1.0).abs();
+        assert!(
+            d < 5e-3,
+            "{:?} planet {}: F(rms) {} vs {}",
+            x.mesh,
+            x.planet,
+            x.harmonics.rms,
+            y.harmonics.rms
+        );
+        assert!((x.separation - y.separation).abs() < 0.02);
+    }
+    assert!(rb.stats.events_located > 0);
+}
+
+#[test]
+fn undamped_energy_balance_includes_the_work_of_the_time_varying_stiffness() {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = Fidelity::Torsional;
+    s.dynamics.mesh_damping_ratio = 0.0;
+    s.supports.bearing_damping_ratio = 0.0;
+    let (set, mut model) = build(&s);
+    let omega = 3000.0 * RPM;
+    let start = static_state(&model, omega);
+    let fm = model.mesh_frequency_per_input_speed * omega;
+    let mut settings = GeneralizedAlphaSettings::chung_hulbert(1.0).unwrap();
+    settings.rtol = 1e-14;
+    settings.atol = 1e-15;
+    let mut ga = GeneralizedAlpha::new(settings).unwrap();
+    ga.init(&mut model, 0.0, &start.q, &start.v).unwrap();
+    // Measured balance errors relative to the contact energy: 6.1e-4, 2.3e-4,
+    // 2.2e-4, 1.3e-4 at 1000, 2000, 4000, 8000 steps per mesh cycle.
+    let steps_per_cycle = 4000u64;
+    let cycles = 5u64;
+    let h = 1.0 / fm / steps_per_cycle as f64;
+    let energy = |m: &PlanetaryDynamics, t: f64, q: &[f64], v: &[f64]| {
+        let (k, s, c, p) = m.energy(t, q, v);
+        (k + s + c, p + m.external_power(v), c)
+    };
+    let (e0, mut p_prev, _) = energy(&model, 0.0, ga.q(), ga.v());
+    let mut work = 0.0;
+    let mut worst: f64 = 0.0;
+    let mut contact_scale: f64 = 0.0;
+    for k in 1..=steps_per_cycle * cycles {
+        let t = k as f64 * h;
+        ga.advance(&mut model, t, 1).unwrap();
+        let (e, p, c) = energy(&model, t, ga.q(), ga.v());
+        work += 0.5 * h * (p + p_prev);
+        p_prev = p;
+        contact_scale = contact_scale.max(c);
+        worst = worst.max((e - e0 - work).abs());
+    }
+    // Against the elastic energy of the meshes (the energy that cycles
+    // through the contacts): the balance closes to 1e-3 of it.
+    eprintln!("energy balance error {worst:e} J, contact energy {contact_scale:e} J");
+    assert!(worst < 1e-3 * contact_scale, "balance error {worst} vs contact energy {contact_scale}");
+    let _ = set;
+}
+
+#[test]
+fn runs_are_deterministic() {
+    let (set, model) = build(&separating());
+    let mut m1 = model.clone();
+    let mut m2 = model.clone();
+    let a = steady_state(&mut m1, &set, 11500.0 * RPM, None).unwrap();
+    let b = steady_state(&mut m2, &set, 11500.0 * RPM, None).unwrap();
+    assert_eq!(a.mesh_force, b.mesh_force);
+    assert_eq!(a.end, b.end);
+}
+
+#[test]
+fn the_integrator_work_is_pinned() {
+    // Solver statistics of a reference run; a silent cost regression fails here.
+    let (set, mut model) = build(&Scene::example_2004());
+    let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
+    let cycles = (set.dynamics.run_in_revolutions * 34.0).ceil() as u64 + 68;
+    assert_eq!(r.stats.steps, cycles * set.dynamics.steps_per_mesh_cycle as u64);
+    let per_step = r.stats.newton_iterations as f64 / r.stats.steps as f64;
+    assert!(per_step < 1.1, "Newton iterations per step {per_step}");
+    let _ = model.dim();
+}
