@@ -29,9 +29,7 @@ use crate::solver::SecondOrderSystem;
 struct Link {
     planet: usize,
     kind: MeshKind,
-    /// Reduced mesh vector b (δ = bᵀq).
-    b: Vec<f64>,
-    /// Nonzero entries of b.
+    /// Nonzero entries of the reduced mesh vector b (δ = bᵀq).
     b_nz: Vec<(usize, f64)>,
     /// Position s = Σ p_i q_i + s0.
     p_nz: Vec<(usize, f64)>,
@@ -69,6 +67,8 @@ pub struct PlanetaryDynamics {
     mass: Vec<f64>,
     k_support: DMatrix<f64>,
     c_support: DMatrix<f64>,
+    /// Nonzero entries (i, j, k_ij, c_ij) of the support matrices.
+    support_nz: Vec<(usize, usize, f64, f64)>,
     links: Vec<Link>,
     f_ext: Vec<f64>,
     speed_drive: Option<SpeedDrive>,
@@ -84,6 +84,9 @@ pub struct PlanetaryDynamics {
     pub meshes: Vec<MeshState>,
     slots: Vec<usize>,
     events_scratch: Vec<f64>,
+    /// The state of the last mesh evaluation (with or without events), so a
+    /// Jacobian or an output request at the state just evaluated costs nothing.
+    cache: Option<(Vec<f64>, Vec<f64>, bool)>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -240,7 +243,6 @@ impl PlanetaryDynamics {
                 planet: p,
                 kind: MeshKind::SunPlanet,
                 b_nz: nz(&bs),
-                b: bs,
                 p_nz: ps,
                 s0: -rbs * psi,
                 damping: c_sp,
@@ -249,7 +251,6 @@ impl PlanetaryDynamics {
                 planet: p,
                 kind: MeshKind::RingPlanet,
                 b_nz: nz(&br),
-                b: br,
                 p_nz: pr,
                 s0: -rbs * psi + contact.ring_shift,
                 damping: c_rp,
@@ -323,6 +324,15 @@ impl PlanetaryDynamics {
             f_ext[input_index] = 0.0;
         }
         let slots = vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()];
+        let mut support_nz = Vec::new();
+        for i in 0..dim {
+            for j in 0..dim {
+                let (k, c) = (k_support[(i, j)], c_support[(i, j)]);
+                if k != 0.0 || c != 0.0 {
+                    support_nz.push((i, j, k, c));
+                }
+            }
+        }
         let meshes = vec![MeshState::default(); links.len()];
         Ok(Self {
             contact,
@@ -331,6 +341,7 @@ impl PlanetaryDynamics {
             mass,
             k_support,
             c_support,
+            support_nz,
             links,
             f_ext,
             speed_drive,
@@ -341,6 +352,7 @@ impl PlanetaryDynamics {
             meshes,
             slots,
             events_scratch: Vec::new(),
+            cache: None,
         })
     }
 
@@ -428,6 +440,21 @@ impl PlanetaryDynamics {
     }
 
     fn evaluate_meshes(&mut self, q: &[f64], v: &[f64], with_events: bool) {
+        if let Some((cq, cv, ce)) = &self.cache {
+            if cq.as_slice() == q && cv.as_slice() == v && (*ce || !with_events) {
+                return;
+            }
+        }
+        match &mut self.cache {
+            Some((cq, cv, ce)) => {
+                cq.clear();
+                cq.extend_from_slice(q);
+                cv.clear();
+                cv.extend_from_slice(v);
+                *ce = with_events;
+            }
+            None => self.cache = Some((q.to_vec(), v.to_vec(), with_events)),
+        }
         let mut events = std::mem::take(&mut self.events_scratch);
         events.clear();
         for (i, link) in self.links.iter().enumerate() {
@@ -467,12 +494,8 @@ impl SecondOrderSystem for PlanetaryDynamics {
     fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
         self.evaluate_meshes(q, v, false);
         f.copy_from_slice(&self.f_ext);
-        for (i, fi) in f.iter_mut().enumerate() {
-            let mut acc = 0.0;
-            for (j, (qj, vj)) in q.iter().zip(v).enumerate() {
-                acc += self.k_support[(i, j)] * qj + self.c_support[(i, j)] * vj;
-            }
-            *fi -= acc;
+        for &(i, j, k, c) in &self.support_nz {
+            f[i] -= k * q[j] + c * v[j];
         }
         for (link, state) in self.links.iter().zip(&self.meshes) {
             let total = state.force + state.damping_force;
@@ -494,8 +517,12 @@ impl SecondOrderSystem for PlanetaryDynamics {
             if state.stiffness == 0.0 {
                 continue;
             }
-            add_outer(k, &link.b, state.stiffness);
-            add_outer(c, &link.b, link.damping);
+            for &(i, bi) in &link.b_nz {
+                for &(j, bj) in &link.b_nz {
+                    k[(i, j)] += state.stiffness * bi * bj;
+                    c[(i, j)] += link.damping * bi * bj;
+                }
+            }
             // ∂F/∂s · ∂s/∂q: a rank-one, non-symmetric term.
             for (i, b) in &link.b_nz {
                 for (j, p) in &link.p_nz {

@@ -174,28 +174,37 @@ impl MeshModel {
         for e in events.iter_mut() {
             *e = -NO_CONTACT;
         }
+        // Every table shares one grid: locate each pair's cell once.
+        let grid = &self.separation.drive;
+        let inv_step = 1.0 / grid.step;
+        let last = grid.values.len() - 1;
         let (mut f, mut kd, mut ks) = (0.0, 0.0, 0.0);
         for index in self.pair_range(s) {
             let pos = s + f64::from(index) * pb;
+            let x = ((pos - grid.start) * inv_step).clamp(0.0, last as f64);
+            let i = (x as usize).min(last - 1);
+            let t = x - i as f64;
+            let lerp = |v: &[f64]| v[i] + t * (v[i + 1] - v[i]);
+            let slope = |v: &[f64]| (v[i + 1] - v[i]) * inv_step;
             let slot = 2 * (i64::from(index).rem_euclid(slots as i64) as usize);
             let (mut ed, mut eb) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
             for slice in &self.slices {
-                let gd = slice.drive.at(pos);
-                let gb = slice.back.at(pos);
+                let gd = lerp(&slice.drive.values);
+                let gb = lerp(&slice.back.values);
                 ed = ed.max(delta - gd);
                 eb = eb.max(-delta - gb);
                 if gd < NO_CONTACT && delta > gd {
-                    let k = fraction * self.lookup(&self.drive_k, pos);
-                    let dk = fraction * self.slope(&self.drive_k, pos);
+                    let k = fraction * lerp(&self.drive_k);
+                    let dk = fraction * slope(&self.drive_k);
                     f += k * (delta - gd);
                     kd += k;
-                    ks += dk * (delta - gd) - k * slice.drive.slope_at(pos);
+                    ks += dk * (delta - gd) - k * slope(&slice.drive.values);
                 } else if gb < NO_CONTACT && -delta > gb {
-                    let k = fraction * self.lookup(&self.back_k, pos);
-                    let dk = fraction * self.slope(&self.back_k, pos);
+                    let k = fraction * lerp(&self.back_k);
+                    let dk = fraction * slope(&self.back_k);
                     f -= k * (-delta - gb);
                     kd += k;
-                    ks -= dk * (-delta - gb) - k * slice.back.slope_at(pos);
+                    ks -= dk * (-delta - gb) - k * slope(&slice.back.values);
                 }
             }
             if slot + 1 < events.len() {
