@@ -14,4 +14,13 @@ start=$(date +%s%N)
 "$bin" ltca --scene example-2004 --out out/ltca.json --plots out/plots
 end=$(date +%s%N)
 echo "LTCA took $(( (end - start) / 1000000 )) ms"
-echo "== done: see out/ltca.json and out/plots/*.png"
+echo "== natural modes (out/modes.json)"
+"$bin" modes --scene example-2004 | tee out/modes.txt
+"$bin" modes --scene example-2004 --json > out/modes.json.tmp && mv out/modes.json.tmp out/modes.json
+echo "== speed sweep up and down, 500-15000 rpm in 250 rpm steps (out/sweep/)"
+start=$(date +%s%N)
+"$bin" sweep --scene example-2004 --from 500 --to 15000 --step 250 --direction both \
+    --histories 3000,5000 --out out/sweep
+end=$(date +%s%N)
+echo "sweep took $(( (end - start) / 1000000 )) ms"
+echo "== done: see out/ltca.json, out/modes.txt, out/sweep/ and out/plots/*.png"

@@ -270,8 +270,9 @@ fn run(cli: Cli) -> Result<()> {
                 );
                 for p in &peaks {
                     println!(
-                        "  peak {:?} at {:.0} rpm: F(rms) {:.1} N/mm; {}×f_m = {:.0} Hz ≈ {:?} mode at {:.0} Hz ({:.1} %)",
+                        "  peak {:?} {} at {:.0} rpm: F(rms) {:.1} N/mm; {}×f_m = {:.0} Hz ≈ {:?} mode at {:.0} Hz ({:.1} %)",
                         p.direction,
+                        p.mesh.name(),
                         p.speed_rpm,
                         p.rms_n_per_mm,
                         p.harmonic,

@@ -92,3 +92,74 @@ fn bad_input_gets_a_clear_error() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--torque"));
 }
+
+#[test]
+fn modes_of_the_example_have_lin_parker_structure() {
+    let out = planetwear(&["modes", "--scene", "example-2004", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let modes = doc["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 20);
+    let count = |c: &str| modes.iter().filter(|m| m["class"] == c).count();
+    assert_eq!(count("rigid_body"), 1);
+    assert_eq!(count("rotational"), 4);
+    assert_eq!(count("translational"), 12);
+    assert_eq!(count("planet"), 3);
+    let out = planetwear(&["modes", "--scene", "lumped-benchmark"]);
+    assert!(out.status.success());
+}
+
+#[test]
+fn a_small_sweep_writes_its_tables_plots_and_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let out = planetwear(&[
+        "sweep",
+        "--scene",
+        "example-2004",
+        "--from",
+        "4900",
+        "--to",
+        "5100",
+        "--step",
+        "100",
+        "--out",
+        d,
+        "--histories",
+        "5000",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in [
+        "sweep_up.csv",
+        "sweep_down.csv",
+        "sweep.json",
+        "forced_response_sun_planet.png",
+        "time_history_5000rpm.svg",
+    ] {
+        assert!(dir.path().join(f).exists(), "{f}");
+    }
+    let csv = std::fs::read_to_string(dir.path().join("sweep_up.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 4, "{csv}");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("sweep.json")).unwrap()).unwrap();
+    // The peak at 5000 rpm: the second harmonic meets the first rotational mode.
+    let peaks = summary["peaks"].as_array().unwrap();
+    assert!(peaks
+        .iter()
+        .any(|p| p["speed_rpm"] == 5000.0 && p["harmonic"] == 2 && p["family"] == "rotational"));
+    let bad = planetwear(&[
+        "sweep",
+        "--scene",
+        "example-2004",
+        "--from",
+        "500",
+        "--to",
+        "600",
+        "--step",
+        "0",
+        "--out",
+        d,
+    ]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--step"));
+}

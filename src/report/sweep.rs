@@ -34,6 +34,8 @@ pub fn excited_family(harmonic: u32, sun_teeth: u32, planets: usize) -> ModeClas
 pub struct Peak {
     /// Direction of the sweep.
     pub direction: Direction,
+    /// The mesh (of planet 0) whose curve peaks.
+    pub mesh: MeshKind,
     /// Input speed of the peak [rpm].
     pub speed_rpm: f64,
     /// Mesh frequency there [Hz].
@@ -76,6 +78,7 @@ pub fn find_peaks(
                 if best.as_ref().map_or(true, |b| mismatch < b.mismatch) {
                     best = Some(Peak {
                         direction: sweep.direction,
+                        mesh: pts[i].meshes[mesh_index].mesh,
                         speed_rpm: pts[i].input_speed_rpm,
                         mesh_frequency: fm,
                         rms_n_per_mm: y[i],
@@ -171,7 +174,12 @@ pub fn write_forced_response(
         for m in modes.iter().filter(|m| m.class == family) {
             let rpm = m.frequency / (f64::from(l) * fm_per_rpm);
             if rpm >= lo && rpm <= hi && !vlines.iter().any(|(x, _): &(f64, String)| (x - rpm).abs() < 1e-6) {
-                vlines.push((rpm, format!("{l}×f_m = {:.0} Hz ({:?})", m.frequency, family).to_lowercase()));
+                let name = match family {
+                    ModeClass::Rotational => "rotational",
+                    ModeClass::Translational => "translational",
+                    _ => "planet",
+                };
+                vlines.push((rpm, format!("{l}×f_m = {:.0} Hz ({name})", m.frequency)));
             }
         }
     }
