@@ -194,3 +194,28 @@ fn the_integrator_work_is_pinned() {
     assert!(per_step < 1.1, "Newton iterations per step {per_step}");
     let _ = model.dim();
 }
+
+#[test]
+fn the_speed_drive_holds_the_set_speed_and_carries_the_torque() {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = Fidelity::Torsional;
+    s.dynamics.drive = planetwear::scene::Drive::Speed;
+    let (set, mut model) = build(&s);
+    // Start 5 % below the set speed (the state claims the set speed, so the
+    // continuation does not rescale it): the shaft pulls the train up to it.
+    let omega = 3000.0 * RPM;
+    let mut start = static_state(&model, omega * 0.95);
+    start.input_speed = omega;
+    let r = steady_state(&mut model, &set, omega, Some(&start)).unwrap();
+    let mean = r.mean_input_speed;
+    // The start transient decays over the run-in (about 8 time constants of
+    // the train on its shaft): 1e-4 of the speed.
+    assert!((mean / omega - 1.0).abs() < 1e-4, "mean input speed {mean} vs {omega}");
+    for m in &r.meshes {
+        assert!((m.harmonics.mean / set.mesh_load_per_planet() - 1.0).abs() < 1e-3);
+    }
+    // With a torque drive the speed is whatever it was given.
+    let (set_t, mut model_t) = build(&Scene::example_2004());
+    let r = steady_state(&mut model_t, &set_t, omega, None).unwrap();
+    assert!((r.mean_input_speed / omega - 1.0).abs() < 1e-6);
+}

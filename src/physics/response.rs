@@ -114,6 +114,8 @@ pub struct SteadyState {
     pub input_speed_rpm: f64,
     /// Mesh frequency [Hz].
     pub mesh_frequency: f64,
+    /// Mean speed of the input member over the window, from its rotation [rad/s].
+    pub mean_input_speed: f64,
     /// Mesh cycles in the window.
     pub cycles: usize,
     /// Sample times in the window [s].
@@ -256,6 +258,7 @@ pub fn steady_state(
     let mut time = Vec::with_capacity(total);
     let mut force = vec![Vec::with_capacity(total); n_mesh];
     let mut scratch = vec![0.0; model.dim()];
+    let input_start = stepper.state().0[model.input_index];
     for k in 0..total {
         let t = t_run + (k as f64) * period / samples as f64;
         if k > 0 {
@@ -277,6 +280,7 @@ pub fn steady_state(
     stepper.advance(model, t_end, steps_per_sample).map_err(err)?;
     let (q, v) = stepper.state();
     let end = State { input_speed: omega, q: q.to_vec(), v: v.to_vec() };
+    let mean_input_speed = (end.q[model.input_index] - input_start) / (t_end - t_run) / model.input_lever;
     let mut meshes = Vec::with_capacity(n_mesh);
     for (m, f) in force.iter().enumerate() {
         let (planet, mesh) = model.mesh_identity(m);
@@ -293,6 +297,7 @@ pub fn steady_state(
     Ok(SteadyState {
         input_speed_rpm: rpm,
         mesh_frequency: fm,
+        mean_input_speed,
         cycles,
         time,
         mesh_force: force,
