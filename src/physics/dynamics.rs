@@ -45,6 +45,8 @@ pub struct MeshState {
     pub position: f64,
     /// Approach along the line of action [m].
     pub approach: f64,
+    /// Rate of the approach [m/s].
+    pub approach_rate: f64,
     /// Elastic mesh force (sum of the tooth forces) [N].
     pub force: f64,
     /// Tangent stiffness ∂F/∂δ [N/m].
@@ -472,6 +474,7 @@ impl PlanetaryDynamics {
             self.meshes[i] = MeshState {
                 position: s,
                 approach: delta,
+                approach_rate: rate,
                 force: f,
                 stiffness: kd,
                 position_derivative: ks,

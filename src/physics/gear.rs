@@ -377,8 +377,11 @@ pub struct DynamicsSettings {
     pub steps_per_mesh_cycle: usize,
     /// Adaptive method's relative tolerance [-].
     pub relative_tolerance: f64,
-    /// Run-in [input revolutions].
+    /// Longest run-in [input revolutions].
     pub run_in_revolutions: f64,
+    /// The run-in ends early once two successive mesh cycles agree to this
+    /// fraction of the mean tooth force (0: always run the whole run-in).
+    pub steady_tolerance: f64,
     /// Measured window [input revolutions].
     pub measured_revolutions: f64,
     /// Output samples per mesh cycle.

@@ -135,8 +135,11 @@ pub struct DynamicsSpec {
     pub steps_per_mesh_cycle: u32,
     /// Relative tolerance of the adaptive method.
     pub relative_tolerance: f64,
-    /// Run-in before measuring, in input revolutions.
+    /// Longest run-in before measuring, in input revolutions.
     pub run_in_revolutions: f64,
+    /// The run-in ends early once two successive mesh cycles agree to this
+    /// fraction of the mean tooth force; 0 runs the whole run-in.
+    pub steady_tolerance: f64,
     /// Measured window, in input revolutions (rounded to whole mesh cycles).
     pub measured_revolutions: f64,
     /// Samples per mesh cycle of the recorded outputs.
@@ -156,6 +159,7 @@ impl Default for DynamicsSpec {
             steps_per_mesh_cycle: 120,
             relative_tolerance: 1e-6,
             run_in_revolutions: 1.0,
+            steady_tolerance: 1e-5,
             measured_revolutions: 2.0,
             samples_per_mesh_cycle: 60,
         }

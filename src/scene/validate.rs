@@ -380,6 +380,9 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         c.fail("dynamics.run_in_revolutions", d.run_in_revolutions, "must be zero or more");
     }
     c.positive("dynamics.measured_revolutions", d.measured_revolutions);
+    if !(d.steady_tolerance.is_finite() && (0.0..1.0).contains(&d.steady_tolerance)) {
+        c.fail("dynamics.steady_tolerance", d.steady_tolerance, "must be at least 0 and below 1");
+    }
     if !(8..=100_000).contains(&d.samples_per_mesh_cycle) {
         c.fail("dynamics.samples_per_mesh_cycle", d.samples_per_mesh_cycle, "must be between 8 and 100000");
     }
@@ -466,6 +469,7 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
             steps_per_mesh_cycle: d.steps_per_mesh_cycle as usize,
             relative_tolerance: d.relative_tolerance,
             run_in_revolutions: d.run_in_revolutions,
+            steady_tolerance: d.steady_tolerance,
             measured_revolutions: d.measured_revolutions,
             samples_per_mesh_cycle: d.samples_per_mesh_cycle as usize,
         },
