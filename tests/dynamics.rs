@@ -134,6 +134,7 @@ fn undamped_energy_balance_includes_the_work_of_the_time_varying_stiffness() {
     s.dynamics.fidelity = Fidelity::Torsional;
     s.dynamics.mesh_damping_ratio = 0.0;
     s.supports.bearing_damping_ratio = 0.0;
+    assert!(s.supports.planet_damping_ratio.is_none());
     let (set, mut model) = build(&s);
     let omega = 3000.0 * RPM;
     let start = static_state(&model, omega);
@@ -218,4 +219,37 @@ fn the_speed_drive_holds_the_set_speed_and_carries_the_torque() {
     let (set_t, mut model_t) = build(&Scene::example_2004());
     let r = steady_state(&mut model_t, &set_t, omega, None).unwrap();
     assert!((r.mean_input_speed / omega - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn per_planet_bearings_and_per_member_damping_take_effect() {
+    // A stiffer bearing on planet 0 breaks the cyclic symmetry: the degenerate
+    // translational pairs and the planet mode split into single modes.
+    let mut s = Scene::example_2004();
+    s.supports.planet_bearings_n_per_m = Some(vec![6e8, 3e8, 3e8, 3e8]);
+    let (_, model) = build(&s);
+    let modes = planetwear::physics::modes::natural_modes(&model.lumped);
+    assert!(
+        modes.iter().all(|m| m.multiplicity == 1),
+        "{:?}",
+        modes.iter().map(|m| m.multiplicity).collect::<Vec<_>>()
+    );
+    // Less damping on the planet bearings raises the resonant response at
+    // 5000 rpm (2×f_m on the first rotational mode, which moves the planets).
+    let response = |zeta: f64| {
+        let mut s = Scene::example_2004();
+        s.supports.planet_damping_ratio = Some(zeta);
+        let (set, mut model) = build(&s);
+        steady_state(&mut model, &set, 5000.0 * RPM, None).unwrap().meshes[0].harmonics.rms
+    };
+    let (low, high) = (response(0.0), response(0.1));
+    assert!(low > high * 1.02, "F(rms) with ζ_planet = 0: {low}, with 0.1: {high}");
+    // A list of the wrong length is refused with the parameter's name.
+    let mut s = Scene::example_2004();
+    s.supports.planet_bearings_n_per_m = Some(vec![3e8; 3]);
+    let err = s.validate().unwrap_err().to_string();
+    assert!(
+        err.contains("supports.planet_bearings_n_per_m") && err.contains("one stiffness per planet"),
+        "{err}"
+    );
 }

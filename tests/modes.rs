@@ -15,6 +15,7 @@ fn set(n: usize, fidelity: Fidelity, held: Option<Member>) -> LumpedSet {
         central_bearing: [1e8, 1e8, 1e8],
         central_torsional: [0.0, 1e9, 0.0],
         planet_bearing: 1e8,
+        planet_bearings: Vec::new(),
         sun_mesh: 5e8,
         ring_mesh: 5e8,
         sun_pressure_angle: 24.6f64.to_radians(),

@@ -178,6 +178,7 @@ impl PlanetaryDynamics {
             central_bearing: [set.supports.carrier_radial, set.supports.ring_radial, set.supports.sun_radial],
             central_torsional: [0.0; 3],
             planet_bearing: set.supports.planet_bearing,
+            planet_bearings: set.supports.planet_bearings.clone(),
             sun_mesh: k_sp,
             ring_mesh: k_rp,
             sun_pressure_angle: alpha_s,
@@ -190,27 +191,24 @@ impl PlanetaryDynamics {
         let mass = lumped.mass();
         let dim = reduction.dim();
         let k_support = lumped.support_stiffness();
-        // Bearing damping: each support's stiffness matrix scaled by 2ζ/ω of
-        // its body on that support (c = 2ζ√(k m)).
+        // Bearing damping: c = 2ζ√(k m) of each body on its own bearing, with
+        // the damping ratio of that member (carrier, ring, sun, planets).
         let mut c_support = DMatrix::zeros(dim, dim);
-        let zeta_b = set.supports.bearing_damping_ratio;
-        if zeta_b > 0.0 {
-            let members = [Member::Carrier, Member::Ring, Member::Sun];
-            for (j, m) in members.iter().enumerate() {
-                let k = lumped.central_bearing[j];
-                let c = 2.0 * zeta_b * (k * lumped.central_mass[j]).sqrt();
-                for coord in [Coordinate::X(*m), Coordinate::Y(*m)] {
-                    if let Some(i) = reduction.position(coord) {
-                        c_support[(i, i)] += c;
-                    }
+        let zeta = set.supports.damping_ratios;
+        let members = [Member::Carrier, Member::Ring, Member::Sun];
+        for (j, m) in members.iter().enumerate() {
+            let c = 2.0 * zeta[j] * (lumped.central_bearing[j] * lumped.central_mass[j]).sqrt();
+            for coord in [Coordinate::X(*m), Coordinate::Y(*m)] {
+                if let Some(i) = reduction.position(coord) {
+                    c_support[(i, i)] += c;
                 }
             }
-            let cp = 2.0 * zeta_b * (lumped.planet_bearing * lumped.planet_mass).sqrt();
-            let n = set.planet_angles.len();
-            for (p, psi) in set.planet_angles.iter().enumerate() {
-                for bv in super::lumped::planet_bearing_vectors(n, p, *psi) {
-                    add_outer(&mut c_support, &reduction.reduce_vector(&bv), cp);
-                }
+        }
+        let n = set.planet_angles.len();
+        for (p, psi) in set.planet_angles.iter().enumerate() {
+            let cp = 2.0 * zeta[3] * (lumped.planet_bearing_of(p) * lumped.planet_mass).sqrt();
+            for bv in super::lumped::planet_bearing_vectors(n, p, *psi) {
+                add_outer(&mut c_support, &reduction.reduce_vector(&bv), cp);
             }
         }
         let u = |m: Member| reduction.position(Coordinate::U(m));

@@ -298,7 +298,7 @@ pub struct GearSet {
 }
 
 /// Bearing stiffnesses and damping.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Supports {
     /// Sun bearing, per direction [N/m].
     pub sun_radial: f64,
@@ -308,8 +308,10 @@ pub struct Supports {
     pub carrier_radial: f64,
     /// Planet bearing, radial and tangential [N/m].
     pub planet_bearing: f64,
-    /// Damping ratio of every bearing [-].
-    pub bearing_damping_ratio: f64,
+    /// Bearing stiffness of each planet [N/m] (one per planet).
+    pub planet_bearings: Vec<f64>,
+    /// Bearing damping ratios of carrier, ring, sun and planets [-].
+    pub damping_ratios: [f64; 4],
 }
 
 /// Mass and polar moment of inertia of a body.

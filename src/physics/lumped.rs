@@ -52,6 +52,9 @@ pub struct LumpedSet {
     pub central_torsional: [f64; 3],
     /// Planet bearing stiffness, radial and tangential [N/m].
     pub planet_bearing: f64,
+    /// Per-planet bearing stiffnesses [N/m]; empty means `planet_bearing` for all.
+    #[serde(default)]
+    pub planet_bearings: Vec<f64>,
     /// Sun–planet mesh stiffness (mean) [N/m].
     pub sun_mesh: f64,
     /// Ring–planet mesh stiffness (mean) [N/m].
@@ -249,6 +252,11 @@ impl LumpedSet {
         Reduction::new(self.planet_angles.len(), self.fidelity, self.held)
     }
 
+    /// Bearing stiffness of planet `p` [N/m].
+    pub fn planet_bearing_of(&self, p: usize) -> f64 {
+        self.planet_bearings.get(p).copied().unwrap_or(self.planet_bearing)
+    }
+
     /// Diagonal of the full mass matrix.
     pub fn full_mass(&self) -> Vec<f64> {
         let n = self.planet_angles.len();
@@ -290,7 +298,7 @@ impl LumpedSet {
         }
         for (p, psi) in self.planet_angles.iter().enumerate() {
             for b in planet_bearing_vectors(n, p, *psi) {
-                add_outer(&mut k, &red.reduce_vector(&b), self.planet_bearing);
+                add_outer(&mut k, &red.reduce_vector(&b), self.planet_bearing_of(p));
             }
         }
         k

@@ -203,6 +203,7 @@ impl LumpedScene {
                 l.sun.torsional_n_per_m,
             ],
             planet_bearing: l.planet.bearing_n_per_m,
+            planet_bearings: Vec::new(),
             sun_mesh: l.sun_mesh_n_per_m,
             ring_mesh: l.ring_mesh_n_per_m,
             sun_pressure_angle: l.sun_pressure_angle_deg.to_radians(),

@@ -56,7 +56,7 @@ pub struct Scene {
 }
 
 /// Bearing supports of the members.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SupportSpec {
     /// Radial bearing stiffness of the sun, per direction [N/m].
@@ -69,6 +69,22 @@ pub struct SupportSpec {
     pub planet_bearing_n_per_m: f64,
     /// Damping ratio of every bearing (on the mode of the supported body on its bearing).
     pub bearing_damping_ratio: f64,
+    /// Per-planet bearing stiffnesses [N/m], overriding `planet_bearing_n_per_m`
+    /// (one value per planet).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub planet_bearings_n_per_m: Option<Vec<f64>>,
+    /// Damping ratio of the sun bearing, overriding `bearing_damping_ratio`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sun_damping_ratio: Option<f64>,
+    /// Damping ratio of the ring bearing, overriding `bearing_damping_ratio`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ring_damping_ratio: Option<f64>,
+    /// Damping ratio of the carrier bearing, overriding `bearing_damping_ratio`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub carrier_damping_ratio: Option<f64>,
+    /// Damping ratio of the planet bearings, overriding `bearing_damping_ratio`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub planet_damping_ratio: Option<f64>,
 }
 
 impl Default for SupportSpec {
@@ -79,6 +95,11 @@ impl Default for SupportSpec {
             carrier_radial_n_per_m: 1.0e9,
             planet_bearing_n_per_m: 3.0e8,
             bearing_damping_ratio: 0.02,
+            planet_bearings_n_per_m: None,
+            sun_damping_ratio: None,
+            ring_damping_ratio: None,
+            carrier_damping_ratio: None,
+            planet_damping_ratio: None,
         }
     }
 }

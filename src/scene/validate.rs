@@ -337,8 +337,30 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     ] {
         c.positive(name, v);
     }
-    if !(sp.bearing_damping_ratio.is_finite() && (0.0..1.0).contains(&sp.bearing_damping_ratio)) {
-        c.fail("supports.bearing_damping_ratio", sp.bearing_damping_ratio, "must be at least 0 and below 1");
+    for (name, v) in [
+        ("supports.bearing_damping_ratio", Some(sp.bearing_damping_ratio)),
+        ("supports.sun_damping_ratio", sp.sun_damping_ratio),
+        ("supports.ring_damping_ratio", sp.ring_damping_ratio),
+        ("supports.carrier_damping_ratio", sp.carrier_damping_ratio),
+        ("supports.planet_damping_ratio", sp.planet_damping_ratio),
+    ] {
+        if let Some(v) = v {
+            if !(v.is_finite() && (0.0..1.0).contains(&v)) {
+                c.fail(name, v, "must be at least 0 and below 1");
+            }
+        }
+    }
+    if let Some(list) = &sp.planet_bearings_n_per_m {
+        if list.len() != scene.planets.count as usize {
+            c.fail(
+                "supports.planet_bearings_n_per_m",
+                format!("{list:?}"),
+                format!("must list one stiffness per planet (planets.count = {})", scene.planets.count),
+            );
+        }
+        for (i, v) in list.iter().enumerate() {
+            c.positive(&format!("supports.planet_bearings_n_per_m[{i}]"), *v);
+        }
     }
     let inertia = &scene.inertia;
     for (name, v) in [
@@ -429,6 +451,7 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         return Err(SceneError::Invalid { problems: c.problems });
     }
 
+    let angles_len = angles.len();
     let set = GearSet {
         name: scene.name.clone(),
         sun,
@@ -450,7 +473,16 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
             ring_radial: sp.ring_radial_n_per_m,
             carrier_radial: sp.carrier_radial_n_per_m,
             planet_bearing: sp.planet_bearing_n_per_m,
-            bearing_damping_ratio: sp.bearing_damping_ratio,
+            planet_bearings: sp
+                .planet_bearings_n_per_m
+                .clone()
+                .unwrap_or_else(|| vec![sp.planet_bearing_n_per_m; angles_len]),
+            damping_ratios: [
+                sp.carrier_damping_ratio.unwrap_or(sp.bearing_damping_ratio),
+                sp.ring_damping_ratio.unwrap_or(sp.bearing_damping_ratio),
+                sp.sun_damping_ratio.unwrap_or(sp.bearing_damping_ratio),
+                sp.planet_damping_ratio.unwrap_or(sp.bearing_damping_ratio),
+            ],
         },
         bodies: Bodies {
             sun: Body { mass: 0.0, inertia: 0.0 },
