@@ -59,6 +59,19 @@ pub struct PairContact {
     pub max_line_load: f64,
 }
 
+/// The contact law of one tooth pair at one instant, summed over face slices.
+#[derive(Clone, Copy, Debug, Default)]
+struct PairLaw {
+    force: f64,
+    stiffness: f64,
+    position_derivative: f64,
+    energy: f64,
+    energy_derivative: f64,
+    max_line_load: f64,
+    event_drive: f64,
+    event_back: f64,
+}
+
 /// Samples per base pitch of the contact tables.
 pub const TABLE_SAMPLES_PER_PITCH: usize = 400;
 
@@ -104,13 +117,6 @@ impl MeshModel {
         &self.separation.path
     }
 
-    fn lookup(&self, table: &[f64], s: f64) -> f64 {
-        let t = &self.separation.drive;
-        let x = ((s - t.start) / t.step).clamp(0.0, (table.len() - 1) as f64);
-        let i = (x.floor() as usize).min(table.len() - 2);
-        table[i] + (x - i as f64) * (table[i + 1] - table[i])
-    }
-
     /// Range of pair indices k whose position s + k·p_b lies in the tables.
     fn pair_range(&self, s: f64) -> std::ops::RangeInclusive<i32> {
         let t = &self.separation.drive;
@@ -118,6 +124,49 @@ impl MeshModel {
         let k_lo = ((t.start - s) / pb).ceil() as i32;
         let k_hi = ((t.end() - s) / pb).floor() as i32;
         k_lo..=k_hi
+    }
+
+    /// Everything the contact law says about the pair at position `pos` [m]
+    /// under approach `delta` [m], summed over the face slices: one table
+    /// cell lookup serves every table (they share one grid).
+    #[inline(always)]
+    fn pair(&self, pos: f64, delta: f64) -> PairLaw {
+        let grid = &self.separation.drive;
+        let inv_step = 1.0 / grid.step;
+        let last = grid.values.len() - 1;
+        let x = ((pos - grid.start) * inv_step).clamp(0.0, last as f64);
+        let i = (x as usize).min(last - 1);
+        let t = x - i as f64;
+        let lerp = |v: &[f64]| v[i] + t * (v[i + 1] - v[i]);
+        let slope = |v: &[f64]| (v[i + 1] - v[i]) * inv_step;
+        let fraction = 1.0 / self.slices.len() as f64;
+        let inv_slice_width = 1.0 / (self.face_width * fraction);
+        let mut law =
+            PairLaw { event_drive: f64::NEG_INFINITY, event_back: f64::NEG_INFINITY, ..PairLaw::default() };
+        for slice in &self.slices {
+            let gd = lerp(&slice.drive.values);
+            let gb = lerp(&slice.back.values);
+            law.event_drive = law.event_drive.max(delta - gd);
+            law.event_back = law.event_back.max(-delta - gb);
+            // (sign of the force, penetration, its table, separation table)
+            let (sign, x, k_table, g_table) = if gd < NO_CONTACT && delta > gd {
+                (1.0, delta - gd, &self.drive_k, &slice.drive.values)
+            } else if gb < NO_CONTACT && -delta > gb {
+                (-1.0, -delta - gb, &self.back_k, &slice.back.values)
+            } else {
+                continue;
+            };
+            let k = fraction * lerp(k_table);
+            let dk = fraction * slope(k_table);
+            let dg = slope(g_table);
+            law.force += sign * k * x;
+            law.stiffness += k;
+            law.position_derivative += sign * (dk * x - k * dg);
+            law.energy += 0.5 * k * x * x;
+            law.energy_derivative += 0.5 * dk * x * x - k * x * dg;
+            law.max_line_load = law.max_line_load.max(k * x * inv_slice_width);
+        }
+        law
     }
 
     /// Mesh force [N] and tangent stiffness [N/m] at approach `delta` [m],
@@ -128,32 +177,20 @@ impl MeshModel {
             p.clear();
         }
         let pb = self.path().base_pitch;
-        let fraction = 1.0 / self.slices.len() as f64;
-        let slice_width = self.face_width * fraction;
         let (mut f, mut k) = (0.0, 0.0);
         for index in self.pair_range(s) {
             let pos = s + f64::from(index) * pb;
-            let (mut fp, mut kp, mut line) = (0.0, 0.0, 0.0_f64);
-            for slice in &self.slices {
-                let gd = slice.drive.at(pos);
-                let gb = slice.back.at(pos);
-                let (fs, ks) = if gd < NO_CONTACT && delta > gd {
-                    let kj = fraction * self.lookup(&self.drive_k, pos);
-                    (kj * (delta - gd), kj)
-                } else if gb < NO_CONTACT && -delta > gb {
-                    let kj = fraction * self.lookup(&self.back_k, pos);
-                    (-kj * (-delta - gb), kj)
-                } else {
-                    (0.0, 0.0)
-                };
-                fp += fs;
-                kp += ks;
-                line = line.max(fs.abs() / slice_width);
-            }
-            f += fp;
-            k += kp;
+            let law = self.pair(pos, delta);
+            f += law.force;
+            k += law.stiffness;
             if let Some(p) = pairs.as_deref_mut() {
-                p.push(PairContact { index, position: pos, force: fp, stiffness: kp, max_line_load: line });
+                p.push(PairContact {
+                    index,
+                    position: pos,
+                    force: law.force,
+                    stiffness: law.stiffness,
+                    max_line_load: law.max_line_load,
+                });
             }
         }
         (f, k)
@@ -169,47 +206,20 @@ impl MeshModel {
     /// enter and leave the tables out of contact.
     pub fn force_with_derivatives(&self, s: f64, delta: f64, events: &mut [f64]) -> (f64, f64, f64) {
         let pb = self.path().base_pitch;
-        let fraction = 1.0 / self.slices.len() as f64;
         let slots = events.len() / 2;
         for e in events.iter_mut() {
             *e = -NO_CONTACT;
         }
-        // Every table shares one grid: locate each pair's cell once.
-        let grid = &self.separation.drive;
-        let inv_step = 1.0 / grid.step;
-        let last = grid.values.len() - 1;
         let (mut f, mut kd, mut ks) = (0.0, 0.0, 0.0);
         for index in self.pair_range(s) {
-            let pos = s + f64::from(index) * pb;
-            let x = ((pos - grid.start) * inv_step).clamp(0.0, last as f64);
-            let i = (x as usize).min(last - 1);
-            let t = x - i as f64;
-            let lerp = |v: &[f64]| v[i] + t * (v[i + 1] - v[i]);
-            let slope = |v: &[f64]| (v[i + 1] - v[i]) * inv_step;
+            let law = self.pair(s + f64::from(index) * pb, delta);
+            f += law.force;
+            kd += law.stiffness;
+            ks += law.position_derivative;
             let slot = 2 * (i64::from(index).rem_euclid(slots as i64) as usize);
-            let (mut ed, mut eb) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-            for slice in &self.slices {
-                let gd = lerp(&slice.drive.values);
-                let gb = lerp(&slice.back.values);
-                ed = ed.max(delta - gd);
-                eb = eb.max(-delta - gb);
-                if gd < NO_CONTACT && delta > gd {
-                    let k = fraction * lerp(&self.drive_k);
-                    let dk = fraction * slope(&self.drive_k);
-                    f += k * (delta - gd);
-                    kd += k;
-                    ks += dk * (delta - gd) - k * slope(&slice.drive.values);
-                } else if gb < NO_CONTACT && -delta > gb {
-                    let k = fraction * lerp(&self.back_k);
-                    let dk = fraction * slope(&self.back_k);
-                    f -= k * (-delta - gb);
-                    kd += k;
-                    ks -= dk * (-delta - gb) - k * slope(&slice.back.values);
-                }
-            }
             if slot + 1 < events.len() {
-                events[slot] = ed;
-                events[slot + 1] = eb;
+                events[slot] = law.event_drive;
+                events[slot + 1] = law.event_back;
             }
         }
         (f, kd, ks)
@@ -221,51 +231,15 @@ impl MeshModel {
     /// separation that an energy balance must account for.
     pub fn contact_energy(&self, s: f64, delta: f64) -> (f64, f64) {
         let pb = self.path().base_pitch;
-        let fraction = 1.0 / self.slices.len() as f64;
-        let (mut v, mut dv) = (0.0, 0.0);
-        for index in self.pair_range(s) {
-            let pos = s + f64::from(index) * pb;
-            for slice in &self.slices {
-                let gd = slice.drive.at(pos);
-                let gb = slice.back.at(pos);
-                let (x, k, dk, dg) = if gd < NO_CONTACT && delta > gd {
-                    (
-                        delta - gd,
-                        fraction * self.lookup(&self.drive_k, pos),
-                        fraction * self.slope(&self.drive_k, pos),
-                        slice.drive.slope_at(pos),
-                    )
-                } else if gb < NO_CONTACT && -delta > gb {
-                    (
-                        -delta - gb,
-                        fraction * self.lookup(&self.back_k, pos),
-                        fraction * self.slope(&self.back_k, pos),
-                        slice.back.slope_at(pos),
-                    )
-                } else {
-                    continue;
-                };
-                v += 0.5 * k * x * x;
-                dv += 0.5 * dk * x * x - k * x * dg;
-            }
-        }
-        (v, dv)
+        self.pair_range(s)
+            .map(|index| self.pair(s + f64::from(index) * pb, delta))
+            .fold((0.0, 0.0), |(v, dv), law| (v + law.energy, dv + law.energy_derivative))
     }
 
     /// Event slots a mesh needs: more than the pairs its tables can hold.
     pub fn event_slots(&self) -> usize {
         let t = &self.separation.drive;
         ((t.end() - t.start) / self.path().base_pitch).ceil() as usize + 2
-    }
-
-    fn slope(&self, table: &[f64], s: f64) -> f64 {
-        let t = &self.separation.drive;
-        let x = (s - t.start) / t.step;
-        if x < 0.0 || x > (table.len() - 1) as f64 {
-            return 0.0;
-        }
-        let i = (x.floor() as usize).min(table.len() - 2);
-        (table[i + 1] - table[i]) / t.step
     }
 
     /// Sum of the pair stiffnesses of the pairs on the nominal (sharp-tip)
