@@ -34,6 +34,11 @@ enum Command {
         #[command(subcommand)]
         action: SceneAction,
     },
+    /// The FMU's generated files.
+    Fmu {
+        #[command(subcommand)]
+        action: FmuAction,
+    },
     /// Natural frequencies and mode shapes of the mean-stiffness linear model.
     Modes {
         /// A built-in scene (example-2004, lumped-benchmark) or a scene file.
@@ -105,6 +110,16 @@ enum Command {
         /// Write SVG and PNG plots into this directory.
         #[arg(long)]
         plots: Option<PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
+enum FmuAction {
+    /// modelDescription.xml, generated from modelDescription/variables.toml.
+    Xml {
+        /// Write it to this file (atomically) instead of standard output.
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -282,6 +297,13 @@ fn run(cli: Cli) -> Result<()> {
                         100.0 * p.mismatch
                     );
                 }
+            }
+        }
+        Command::Fmu { action: FmuAction::Xml { out } } => {
+            let xml = planetwear::fmi::variables::MODEL_DESCRIPTION_XML;
+            match out {
+                Some(path) => write_atomic(&path, xml.as_bytes())?,
+                None => print!("{xml}"),
             }
         }
         Command::Modes { scene, json } => {

@@ -1,0 +1,323 @@
+//! Generates, from `modelDescription/variables.toml` (the single source of
+//! truth for the FMU's variables), the Rust value-reference table
+//! (`$OUT_DIR/fmi_variables.rs`) and `modelDescription.xml`
+//! (`$OUT_DIR/modelDescription.xml`). The GUID is a 128-bit FNV-1a hash of the
+//! variable interface: names, value references, types, causality,
+//! variability and units — it changes exactly when the interface does.
+//! The table is checked here: a broken table fails the build with a message
+//! naming the variable.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use serde::Deserialize;
+
+#[path = "src/fmi/guid.rs"]
+mod guid;
+
+#[derive(Deserialize)]
+struct Table {
+    model: Model,
+    variable: Vec<Var>,
+}
+
+/// A unit: name, exponents of kg, m, s, rad, and display units (name, factor).
+type UnitRow = (String, i32, i32, i32, i32, Vec<(String, f64)>);
+
+#[derive(Deserialize)]
+struct Model {
+    model_name: String,
+    model_identifier: String,
+    description: String,
+    author: String,
+    license: String,
+    log_categories: Vec<(String, String)>,
+    units: Vec<UnitRow>,
+}
+
+#[derive(Deserialize)]
+struct Var {
+    vr: u32,
+    name: String,
+    #[serde(rename = "type")]
+    ty: String,
+    causality: String,
+    variability: String,
+    initial: Option<String>,
+    unit: Option<String>,
+    display: Option<String>,
+    start: Option<toml::Value>,
+    description: String,
+}
+
+fn fail(msg: String) -> ! {
+    panic!("modelDescription/variables.toml: {msg}");
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+fn const_name(name: &str) -> String {
+    let mut out = String::new();
+    let mut prev_lower = false;
+    for c in name.chars() {
+        if c.is_ascii_uppercase() && prev_lower {
+            out.push('_');
+        }
+        if c.is_ascii_alphanumeric() {
+            out.push(c.to_ascii_uppercase());
+            prev_lower = c.is_ascii_lowercase() || c.is_ascii_digit();
+        } else {
+            if !out.ends_with('_') && !out.is_empty() {
+                out.push('_');
+            }
+            prev_lower = false;
+        }
+    }
+    out.trim_end_matches('_').to_string()
+}
+
+fn real_text(v: f64) -> String {
+    let s = format!("{v:?}");
+    s.replace("e-0", "e-").replace("e0", "e")
+}
+
+fn main() {
+    let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it"));
+    let source = manifest.join("modelDescription/variables.toml");
+    println!("cargo:rerun-if-changed={}", source.display());
+    println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed=src/fmi/guid.rs");
+    let text = std::fs::read_to_string(&source).unwrap_or_else(|e| fail(format!("cannot read: {e}")));
+    let table: Table = toml::from_str(&text).unwrap_or_else(|e| fail(format!("{e}")));
+
+    // Checks.
+    let units: BTreeSet<&str> = table.model.units.iter().map(|u| u.0.as_str()).collect();
+    let mut names = BTreeSet::new();
+    let mut refs: BTreeMap<(&str, u32), &str> = BTreeMap::new();
+    for v in &table.variable {
+        if !names.insert(v.name.as_str()) {
+            fail(format!("variable name {} is used twice", v.name));
+        }
+        if let Some(other) = refs.insert((v.ty.as_str(), v.vr), &v.name) {
+            fail(format!("value reference {} of type {} is used by {} and {}", v.vr, v.ty, other, v.name));
+        }
+        if !["Real", "Integer", "Boolean", "String"].contains(&v.ty.as_str()) {
+            fail(format!("{}: type {} is not Real, Integer, Boolean or String", v.name, v.ty));
+        }
+        if let Some(u) = &v.unit {
+            if !units.contains(u.as_str()) {
+                fail(format!("{}: unit {u} is not in [model] units", v.name));
+            }
+            if v.ty != "Real" {
+                fail(format!("{}: only Real variables carry a unit", v.name));
+            }
+        }
+        if let (Some(d), Some(u)) = (&v.display, &v.unit) {
+            let unit = table.model.units.iter().find(|x| &x.0 == u).expect("checked");
+            if !unit.5.iter().any(|x| &x.0 == d) {
+                fail(format!("{}: display unit {d} is not defined for {u}", v.name));
+            }
+        }
+        match v.causality.as_str() {
+            "parameter" => {
+                if v.start.is_none() || v.initial.as_deref() != Some("exact") {
+                    fail(format!("{}: a parameter needs a start value and initial = \"exact\"", v.name));
+                }
+                if !["fixed", "tunable"].contains(&v.variability.as_str()) {
+                    fail(format!("{}: a parameter is fixed or tunable", v.name));
+                }
+            }
+            "input" => {
+                if v.start.is_none() || v.initial.is_some() {
+                    fail(format!("{}: an input needs a start value and no initial", v.name));
+                }
+            }
+            "output" => {
+                if v.start.is_some() || v.initial.as_deref() != Some("calculated") {
+                    fail(format!("{}: an output here is initial = \"calculated\" with no start", v.name));
+                }
+            }
+            other => fail(format!("{}: causality {other} is not used by this FMU", v.name)),
+        }
+        if v.ty != "Real" && v.variability == "continuous" {
+            fail(format!("{}: only Real variables may be continuous", v.name));
+        }
+    }
+
+    // GUID from the interface.
+    let guid = guid::interface_guid(
+        &table.model.model_name,
+        &table.model.model_identifier,
+        table.variable.iter().map(|v| {
+            (
+                v.name.as_str(),
+                v.vr,
+                v.ty.as_str(),
+                v.causality.as_str(),
+                v.variability.as_str(),
+                v.unit.as_deref().unwrap_or(""),
+            )
+        }),
+    );
+
+    // modelDescription.xml
+    let m = &table.model;
+    let mut x = String::new();
+    let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
+    let _ = writeln!(
+        x,
+        r#"<fmiModelDescription fmiVersion="2.0" modelName="{}" guid="{guid}" description="{}" author="{}" version="{}" license="{}" generationTool="planetwear build.rs" variableNamingConvention="structured" numberOfEventIndicators="0">"#,
+        xml_escape(&m.model_name),
+        xml_escape(&m.description),
+        xml_escape(&m.author),
+        env!("CARGO_PKG_VERSION"),
+        xml_escape(&m.license)
+    );
+    let _ = writeln!(
+        x,
+        r#"  <CoSimulation modelIdentifier="{}" needsExecutionTool="false" canHandleVariableCommunicationStepSize="true" canInterpolateInputs="false" maxOutputDerivativeOrder="0" canRunAsynchronuously="false" canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="true" canGetAndSetFMUstate="true" canSerializeFMUstate="true" providesDirectionalDerivative="false"/>"#,
+        xml_escape(&m.model_identifier)
+    );
+    x.push_str("  <UnitDefinitions>\n");
+    for (name, kg, mm, s, rad, displays) in &m.units {
+        let mut base = String::new();
+        for (k, e) in [("kg", kg), ("m", mm), ("s", s), ("rad", rad)] {
+            if *e != 0 {
+                let _ = write!(base, r#" {k}="{e}""#);
+            }
+        }
+        let _ = writeln!(x, r#"    <Unit name="{}">"#, xml_escape(name));
+        if !base.is_empty() {
+            let _ = writeln!(x, "      <BaseUnit{base}/>");
+        }
+        for (d, f) in displays {
+            let _ =
+                writeln!(x, r#"      <DisplayUnit name="{}" factor="{}"/>"#, xml_escape(d), real_text(*f));
+        }
+        x.push_str("    </Unit>\n");
+    }
+    x.push_str("  </UnitDefinitions>\n  <LogCategories>\n");
+    for (name, desc) in &m.log_categories {
+        let _ =
+            writeln!(x, r#"    <Category name="{}" description="{}"/>"#, xml_escape(name), xml_escape(desc));
+    }
+    x.push_str("  </LogCategories>\n");
+    x.push_str("  <DefaultExperiment startTime=\"0.0\" stopTime=\"0.05\" stepSize=\"0.0001\"/>\n");
+    x.push_str("  <ModelVariables>\n");
+    let mut outputs = Vec::new();
+    let mut initial_unknowns = Vec::new();
+    for (i, v) in table.variable.iter().enumerate() {
+        let index = i + 1;
+        let _ = write!(
+            x,
+            r#"    <ScalarVariable name="{}" valueReference="{}" description="{}" causality="{}" variability="{}""#,
+            xml_escape(&v.name),
+            v.vr,
+            xml_escape(&v.description),
+            v.causality,
+            v.variability
+        );
+        if let Some(init) = &v.initial {
+            let _ = write!(x, r#" initial="{init}""#);
+        }
+        x.push_str(">\n");
+        let mut attrs = String::new();
+        if let Some(u) = &v.unit {
+            let _ = write!(attrs, r#" unit="{}""#, xml_escape(u));
+        }
+        if let Some(d) = &v.display {
+            let _ = write!(attrs, r#" displayUnit="{}""#, xml_escape(d));
+        }
+        if let Some(s) = &v.start {
+            let value = match (v.ty.as_str(), s) {
+                ("Real", toml::Value::Float(f)) => real_text(*f),
+                ("Real", toml::Value::Integer(n)) => real_text(*n as f64),
+                ("Integer", toml::Value::Integer(n)) => n.to_string(),
+                ("Boolean", toml::Value::Boolean(b)) => b.to_string(),
+                ("String", toml::Value::String(s)) => xml_escape(s),
+                _ => fail(format!("{}: start value {s} does not fit type {}", v.name, v.ty)),
+            };
+            let _ = write!(attrs, r#" start="{value}""#);
+        }
+        let _ = writeln!(x, "      <{}{attrs}/>", v.ty);
+        x.push_str("    </ScalarVariable>\n");
+        if v.causality == "output" {
+            outputs.push(index);
+            initial_unknowns.push(index);
+        }
+    }
+    x.push_str("  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n");
+    for i in &outputs {
+        let _ = writeln!(x, r#"      <Unknown index="{i}"/>"#);
+    }
+    x.push_str("    </Outputs>\n    <InitialUnknowns>\n");
+    for i in &initial_unknowns {
+        let _ = writeln!(x, r#"      <Unknown index="{i}"/>"#);
+    }
+    x.push_str("    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
+
+    // The Rust table.
+    let mut r = String::new();
+    let _ = writeln!(r, "// Generated by build.rs from modelDescription/variables.toml. Do not edit.");
+    let _ = writeln!(r, "/// GUID of this variable interface.\npub const GUID: &str = \"{guid}\";");
+    let _ = writeln!(
+        r,
+        "/// The FMU's model identifier.\npub const MODEL_IDENTIFIER: &str = \"{}\";",
+        m.model_identifier
+    );
+    let _ = writeln!(
+        r,
+        "/// Log categories (name, description).\npub const LOG_CATEGORIES: &[(&str, &str)] = &["
+    );
+    for (n, d) in &m.log_categories {
+        let _ = writeln!(r, "    ({n:?}, {d:?}),");
+    }
+    r.push_str(
+        "];\n/// Every variable, in modelDescription.xml order.\npub const VARIABLES: &[VariableInfo] = &[\n",
+    );
+    for v in &table.variable {
+        let start = match (v.ty.as_str(), &v.start) {
+            (_, None) => "Start::None".to_string(),
+            ("Real", Some(toml::Value::Float(f))) => format!("Start::Real({f:?})"),
+            ("Real", Some(toml::Value::Integer(n))) => format!("Start::Real({:?})", *n as f64),
+            ("Integer", Some(toml::Value::Integer(n))) => format!("Start::Integer({n})"),
+            ("Boolean", Some(toml::Value::Boolean(b))) => format!("Start::Boolean({b})"),
+            ("String", Some(toml::Value::String(s))) => format!("Start::String({s:?})"),
+            _ => fail(format!("{}: start value does not fit", v.name)),
+        };
+        let cap = |s: &str| {
+            let mut c = s.chars();
+            c.next().map(|f| f.to_ascii_uppercase().to_string() + c.as_str()).unwrap_or_default()
+        };
+        let _ = writeln!(
+            r,
+            "    VariableInfo {{ name: {:?}, vr: {}, kind: Kind::{}, causality: Causality::{}, variability: Variability::{}, unit: {:?}, start: {start}, description: {:?} }},",
+            v.name,
+            v.vr,
+            v.ty,
+            cap(&v.causality),
+            cap(&v.variability),
+            v.unit.as_deref().unwrap_or(""),
+            v.description
+        );
+    }
+    r.push_str("];\n/// Value references by name.\npub mod vr {\n");
+    for v in &table.variable {
+        let _ = writeln!(
+            r,
+            "    /// `{}`: {}\n    pub const {}: u32 = {};",
+            v.name,
+            v.description.replace('\n', " "),
+            const_name(&v.name),
+            v.vr
+        );
+    }
+    r.push_str("}\n");
+
+    let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it"));
+    std::fs::write(out.join("modelDescription.xml"), x).unwrap_or_else(|e| fail(format!("writing XML: {e}")));
+    std::fs::write(out.join("fmi_variables.rs"), r).unwrap_or_else(|e| fail(format!("writing table: {e}")));
+}
