@@ -2,6 +2,10 @@
 //! (the single source of truth) by build.rs, together with
 //! [`MODEL_DESCRIPTION_XML`].
 
+// Start values are the table's decimal literals (45° as 0.785398163397448 rad,
+// for instance), not approximations of named constants.
+#![allow(clippy::approx_constant)]
+
 /// FMI base type of a variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
