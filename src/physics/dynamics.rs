@@ -82,6 +82,9 @@ pub struct PlanetaryDynamics {
     pub rigid_velocity: Vec<f64>,
     /// Mesh frequency per rad/s of input speed [Hz·s/rad].
     pub mesh_frequency_per_input_speed: f64,
+    /// Index of the rotation u of carrier, ring, sun among the reduced
+    /// coordinates (None when held) and its lever, u = lever·θ [m].
+    pub rotations: [(Option<usize>, f64); 3],
     /// State of every mesh after the last force evaluation (planet-major: sun, ring).
     pub meshes: Vec<MeshState>,
     slots: Vec<usize>,
@@ -304,6 +307,7 @@ impl PlanetaryDynamics {
         }
         let mesh_frequency_per_input_speed =
             ((ws - wc) * f64::from(set.sun.teeth) / (2.0 * std::f64::consts::PI)).abs();
+        let rotations = [(u(Member::Carrier), a), (u(Member::Ring), rbr), (u(Member::Sun), rbs)];
         let speed_drive = match set.dynamics.drive {
             Drive::Torque => None,
             Drive::Speed => {
@@ -349,6 +353,7 @@ impl PlanetaryDynamics {
             input_lever,
             rigid_velocity: rigid,
             mesh_frequency_per_input_speed,
+            rotations,
             meshes,
             slots,
             events_scratch: Vec::new(),
@@ -406,6 +411,24 @@ impl PlanetaryDynamics {
     /// Work rate of the constant external forces at velocities `v` [W].
     pub fn external_power(&self, v: &[f64]) -> f64 {
         self.f_ext.iter().zip(v).map(|(f, v)| f * v).sum()
+    }
+
+    /// Sets the external torques on sun, ring and carrier [N·m],
+    /// counter-clockwise positive; a held member's torque is its reaction and
+    /// is ignored, and so is the input member's under the speed drive (its
+    /// shaft carries the torque). The generalised force on u = lever·θ is
+    /// T/lever.
+    pub fn set_torques(&mut self, sun: f64, ring: f64, carrier: f64) {
+        self.f_ext.iter_mut().for_each(|f| *f = 0.0);
+        for ((index, lever), torque) in self.rotations.iter().zip([carrier, ring, sun]) {
+            if let Some(i) = index {
+                if self.speed_drive.is_some() && *i == self.input_index {
+                    continue;
+                }
+                self.f_ext[*i] = torque / lever;
+            }
+        }
+        self.cache = None;
     }
 
     /// Number of meshes (2 per planet).

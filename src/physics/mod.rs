@@ -13,5 +13,6 @@ pub mod modes;
 pub mod profile;
 pub mod response;
 pub mod separation;
+pub mod simulation;
 pub mod spectrum;
 pub mod stiffness;

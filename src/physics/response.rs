@@ -130,13 +130,14 @@ pub struct SteadyState {
     pub end: State,
 }
 
-enum Stepper {
+#[derive(Clone)]
+pub(crate) enum Stepper {
     Alpha(Box<GeneralizedAlpha>),
     Rk(Box<Rk45>),
 }
 
 impl Stepper {
-    fn new(set: &GearSet, mesh_period: f64) -> Result<Self, SolverError> {
+    pub(crate) fn new(set: &GearSet, mesh_period: f64) -> Result<Self, SolverError> {
         let d = &set.dynamics;
         Ok(match d.integrator {
             IntegratorKind::GeneralizedAlpha => {
@@ -162,28 +163,63 @@ impl Stepper {
         })
     }
 
-    fn init(&mut self, sys: &mut PlanetaryDynamics, t: f64, q: &[f64], v: &[f64]) -> Result<(), SolverError> {
+    pub(crate) fn init(
+        &mut self,
+        sys: &mut PlanetaryDynamics,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), SolverError> {
         match self {
             Stepper::Alpha(a) => a.init(sys, t, q, v),
             Stepper::Rk(r) => r.init(sys, t, q, v),
         }
     }
 
-    fn advance(&mut self, sys: &mut PlanetaryDynamics, t_end: f64, steps: u64) -> Result<(), SolverError> {
+    pub(crate) fn advance(
+        &mut self,
+        sys: &mut PlanetaryDynamics,
+        t_end: f64,
+        steps: u64,
+    ) -> Result<(), SolverError> {
         match self {
             Stepper::Alpha(a) => a.advance(sys, t_end, steps),
             Stepper::Rk(r) => r.advance_to(sys, t_end),
         }
     }
 
-    fn state(&self) -> (&[f64], &[f64]) {
+    /// The integrator's own extra state: generalized-α's algorithmic
+    /// acceleration; empty for the adaptive method.
+    pub(crate) fn internal(&self) -> Vec<f64> {
+        match self {
+            Stepper::Alpha(a) => a.a().to_vec(),
+            Stepper::Rk(_) => Vec::new(),
+        }
+    }
+
+    /// Restores a state with the integrator's extra state (see `internal`).
+    pub(crate) fn restore(
+        &mut self,
+        sys: &mut PlanetaryDynamics,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        internal: &[f64],
+    ) -> Result<(), SolverError> {
+        match self {
+            Stepper::Alpha(a) if internal.len() == q.len() => a.restore(sys, t, q, v, internal),
+            _ => self.init(sys, t, q, v),
+        }
+    }
+
+    pub(crate) fn state(&self) -> (&[f64], &[f64]) {
         match self {
             Stepper::Alpha(a) => (a.q(), a.v()),
             Stepper::Rk(r) => (r.q(), r.v()),
         }
     }
 
-    fn stats(&self) -> Work {
+    pub(crate) fn stats(&self) -> Work {
         match self {
             Stepper::Alpha(a) => Work::from(*a.stats()),
             Stepper::Rk(r) => Work::from(*r.stats()),

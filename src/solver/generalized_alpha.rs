@@ -387,6 +387,33 @@ impl GeneralizedAlpha {
         self.init(sys, t, q, v)
     }
 
+    /// Restores a state saved with [`GeneralizedAlpha::time`], [`GeneralizedAlpha::q`],
+    /// [`GeneralizedAlpha::v`] and [`GeneralizedAlpha::a`]: the algorithmic acceleration is
+    /// taken as given (it differs from M⁻¹f unless α_m = α_f), so the continuation is
+    /// bit-identical to the run the state was saved from.
+    pub fn restore<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+    ) -> Result<(), SolverError> {
+        self.init(sys, t, q, v)?;
+        if a.len() != self.n {
+            return Err(SolverError::DimensionMismatch {
+                name: "acceleration",
+                expected: self.n,
+                found: a.len(),
+            });
+        }
+        if let Some(index) = first_non_finite(a) {
+            return Err(SolverError::NonFiniteState { t, index: 2 * self.n + index });
+        }
+        self.a.copy_from_slice(a);
+        Ok(())
+    }
+
     /// Takes exactly `steps` equal steps from the current time to `t_end` [s]. The end of step k
     /// is t0 + (t_end − t0)·k/steps (with t0 the time at the call), and the last step ends at
     /// `t_end` exactly, so the time never drifts by accumulation. A step whose Newton iteration
