@@ -15,4 +15,5 @@ pub mod response;
 pub mod separation;
 pub mod simulation;
 pub mod spectrum;
+pub mod state_format;
 pub mod stiffness;

@@ -1,0 +1,109 @@
+//! The serialized state: versioned, self-checking, pointer-free, bit-identical.
+
+use planetwear::physics::dynamics::PlanetaryDynamics;
+use planetwear::physics::gear::MeshKind;
+use planetwear::physics::ltca::SetModel;
+use planetwear::physics::simulation::{Simulation, Snapshot};
+use planetwear::physics::state_format::{decode, encode, StateFormatError};
+use planetwear::scene::{Fidelity, Scene};
+use proptest::prelude::*;
+
+const FP: &str = "{20162229-bf0e-39e4-7185-1218fde35b69}|example-2004";
+
+fn bits(v: &[f64]) -> Vec<u64> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+fn snapshot(values: Vec<f64>, n: usize) -> Snapshot {
+    let take = |k: usize| values.iter().cycle().skip(k).take(n).cloned().collect::<Vec<f64>>();
+    Snapshot {
+        time: values.first().copied().unwrap_or(0.0),
+        q: take(1),
+        v: take(2),
+        integrator: take(3),
+        torques: [1.5, -0.0, f64::MIN_POSITIVE],
+        speed_reference: 314.159,
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    #[test]
+    fn round_trips_bit_identically(values in prop::collection::vec(any::<f64>().prop_filter("finite", |x| x.is_finite()), 1..40), n in 0usize..30) {
+        let s = snapshot(values, n);
+        let back = decode(&encode(&s, FP), FP).unwrap();
+        prop_assert_eq!(back.time.to_bits(), s.time.to_bits());
+        prop_assert_eq!(bits(&back.q), bits(&s.q));
+        prop_assert_eq!(bits(&back.v), bits(&s.v));
+        prop_assert_eq!(bits(&back.integrator), bits(&s.integrator));
+        prop_assert_eq!(bits(&back.torques), bits(&s.torques));
+    }
+
+    #[test]
+    fn any_flipped_byte_is_refused(pos in any::<prop::sample::Index>(), bit in 0u8..8) {
+        let blob = encode(&snapshot(vec![1.0, 2.0, 3.0], 5), FP);
+        let mut bad = blob.clone();
+        let i = pos.index(bad.len());
+        bad[i] ^= 1 << bit;
+        prop_assert!(decode(&bad, FP).is_err(), "flip at byte {} accepted", i);
+    }
+}
+
+#[test]
+fn every_truncation_and_extension_is_refused() {
+    let blob = encode(&snapshot(vec![1.0, 2.0], 4), FP);
+    for len in 0..blob.len() {
+        assert!(decode(&blob[..len], FP).is_err(), "truncated to {len} accepted");
+    }
+    let mut longer = blob.clone();
+    longer.push(0);
+    assert!(matches!(decode(&longer, FP), Err(StateFormatError::Length { .. })));
+}
+
+#[test]
+fn foreign_and_future_states_are_refused_by_name() {
+    let blob = encode(&snapshot(vec![1.0], 3), FP);
+    match decode(&blob, "{other-guid}|other-scene") {
+        Err(StateFormatError::Foreign { found, expected }) => {
+            assert_eq!(found, FP);
+            assert_eq!(expected, "{other-guid}|other-scene");
+        }
+        other => panic!("{other:?}"),
+    }
+    let mut future = blob.clone();
+    future[8] = 9;
+    assert_eq!(decode(&future, FP), Err(StateFormatError::Version { found: 9 }));
+    assert_eq!(decode(b"not a state at all", FP), Err(StateFormatError::NotAState));
+    let msg = StateFormatError::Checksum.to_string();
+    assert!(msg.contains("altered"), "{msg}");
+}
+
+#[test]
+fn a_simulation_continues_bit_identically_from_a_state_file() {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = Fidelity::Torsional;
+    let set = s.validate().unwrap();
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+    let mut sim = Simulation::new(&set, model.clone(), 0.0, 314.159).unwrap();
+    for _ in 0..30 {
+        sim.do_step(sim.time(), 3e-5).unwrap();
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("state.bin");
+    std::fs::write(&path, encode(&sim.snapshot(), FP)).unwrap();
+    for _ in 0..30 {
+        sim.do_step(sim.time(), 3e-5).unwrap();
+    }
+    // A fresh simulation (as after a process restart) restores from the file.
+    let mut other = Simulation::new(&set, model, 0.0, 314.159).unwrap();
+    other.restore(&decode(&std::fs::read(&path).unwrap(), FP).unwrap()).unwrap();
+    for _ in 0..30 {
+        other.do_step(other.time(), 3e-5).unwrap();
+    }
+    assert_eq!(other.snapshot(), sim.snapshot());
+    assert_eq!(
+        other.mesh_force(1, MeshKind::SunPlanet).to_bits(),
+        sim.mesh_force(1, MeshKind::SunPlanet).to_bits()
+    );
+}
