@@ -135,3 +135,89 @@ fn an_unbalanced_torque_accelerates_the_train_at_the_rigid_body_rate() {
     let expected = extra / j_eff;
     assert!((accel / expected - 1.0).abs() < 0.01, "ω̇ {accel} vs ΔT/J_eff {expected}");
 }
+
+mod outputs {
+    use super::*;
+    use planetwear::physics::response::steady_state;
+    use planetwear::physics::simulation::Bearing;
+
+    fn run_cycles(
+        sim: &mut Simulation,
+        fm: f64,
+        cycles: usize,
+        per_cycle: usize,
+        mut each: impl FnMut(&Simulation),
+    ) {
+        for _ in 0..cycles * per_cycle {
+            sim.do_step(sim.time(), 1.0 / fm / per_cycle as f64).unwrap();
+            each(sim);
+        }
+    }
+
+    #[test]
+    fn the_windowed_harmonics_match_the_steady_state_analysis() {
+        let (set, model) = setup(Fidelity::TransverseTorsional);
+        let fm = model.mesh_frequency_per_input_speed * OMEGA;
+        let reference = steady_state(&mut model.clone(), &set, OMEGA, None).unwrap();
+        let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+        sim.set_window(34, 60).unwrap();
+        // Communication steps of 2.5 mesh cycles: longer than a cycle.
+        for _ in 0..60 {
+            sim.do_step(sim.time(), 2.5 / fm).unwrap();
+        }
+        assert_eq!(sim.window_cycles(), 34);
+        for (mesh, index) in [(MeshKind::SunPlanet, 0), (MeshKind::RingPlanet, 1)] {
+            let (h, sep) = sim.window_harmonics(mesh).unwrap();
+            let r = &reference.meshes[index].harmonics;
+            assert!((h.rms / r.rms - 1.0).abs() < 0.01, "{mesh:?} F(rms) {} vs {}", h.rms, r.rms);
+            assert!((h.mean / r.mean - 1.0).abs() < 1e-3);
+            assert_eq!(sep, 0.0);
+        }
+    }
+
+    #[test]
+    fn the_tracked_pair_meshes_once_per_sun_revolution_for_the_loaded_contact_ratio() {
+        let (set, model) = setup(Fidelity::TransverseTorsional);
+        let fm = model.mesh_frequency_per_input_speed * OMEGA;
+        let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+        let (mut loaded, mut total, mut peak) = (0usize, 0usize, 0.0f64);
+        run_cycles(&mut sim, fm, 34, 60, |s| {
+            let f = s.tracked_pair_force(MeshKind::SunPlanet);
+            total += 1;
+            if f > 0.0 {
+                loaded += 1;
+                peak = peak.max(f);
+            }
+            let n = s.pairs_in_contact(0, MeshKind::SunPlanet);
+            assert!((1..=2).contains(&n), "pairs in contact {n}");
+        });
+        // One revolution of the sun relative to the carrier is 34 mesh cycles;
+        // the pair is loaded for the loaded contact ratio (≈1.47) of them.
+        let duty = loaded as f64 / total as f64;
+        assert!((duty * 34.0 - 1.47).abs() < 0.15, "tracked pair loaded for {:.3} mesh cycles", duty * 34.0);
+        let f0 = set.mesh_load_per_planet();
+        assert!(peak > 0.8 * f0 && peak < 1.6 * f0, "peak {peak} vs F0 {f0}");
+    }
+
+    #[test]
+    fn static_te_and_bearing_forces_agree_with_the_quasi_static_analysis() {
+        let (set, model) = setup(Fidelity::TransverseTorsional);
+        let fm = model.mesh_frequency_per_input_speed * OMEGA;
+        let alpha = set.operating_pressure_angle(MeshKind::SunPlanet);
+        let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+        run_cycles(&mut sim, fm, 20, 10, |_| {});
+        let (mut te, mut bearing, mut n) = (0.0, 0.0, 0.0);
+        run_cycles(&mut sim, fm, 4, 60, |s| {
+            te += s.static_transmission_error(0, MeshKind::SunPlanet);
+            bearing += s.bearing_force(Bearing::Planet(0));
+            n += 1.0;
+        });
+        // The LTCA's mean static TE of the sun–planet mesh: 17.601 µm.
+        assert!((te / n * 1e6 / 17.601 - 1.0).abs() < 0.01, "mean static TE {} µm", te / n * 1e6);
+        // A planet's bearing carries its two mesh forces: tangential parts
+        // add (2·F0·cos α_w), radial parts nearly cancel.
+        let expected = 2.0 * set.mesh_load_per_planet() * alpha.cos();
+        assert!((bearing / n / expected - 1.0).abs() < 0.03, "planet bearing {} vs {expected}", bearing / n);
+        assert_eq!(sim.bearing_force(Bearing::Planet(7)), 0.0);
+    }
+}

@@ -23,6 +23,9 @@ fn snapshot(values: Vec<f64>, n: usize) -> Snapshot {
         integrator: take(3),
         torques: [1.5, -0.0, f64::MIN_POSITIVE],
         speed_reference: 314.159,
+        window_sun: take(4),
+        window_ring: take(5),
+        window_last: take(6).into_iter().take(3).collect(),
     }
 }
 
@@ -38,6 +41,9 @@ proptest! {
         prop_assert_eq!(bits(&back.v), bits(&s.v));
         prop_assert_eq!(bits(&back.integrator), bits(&s.integrator));
         prop_assert_eq!(bits(&back.torques), bits(&s.torques));
+        prop_assert_eq!(bits(&back.window_sun), bits(&s.window_sun));
+        prop_assert_eq!(bits(&back.window_ring), bits(&s.window_ring));
+        prop_assert_eq!(bits(&back.window_last), bits(&s.window_last));
     }
 
     #[test]

@@ -455,6 +455,22 @@ impl PlanetaryDynamics {
         self.rigid_velocity.iter().map(|v| v * omega).collect()
     }
 
+    /// The contact model of a mesh.
+    pub fn mesh_model(&self, kind: MeshKind) -> &super::ltca::MeshModel {
+        self.model(kind)
+    }
+
+    /// Full Lin–Parker coordinates of a reduced coordinate vector.
+    pub fn full_coordinates(&self, q: &[f64]) -> Vec<f64> {
+        let mut full = vec![0.0; self.reduction.full];
+        for (row, entries) in self.reduction.t.iter().enumerate() {
+            for (col, f) in entries {
+                full[row] += f * q[*col];
+            }
+        }
+        full
+    }
+
     fn model(&self, kind: MeshKind) -> &super::ltca::MeshModel {
         match kind {
             MeshKind::SunPlanet => &self.contact.sun_planet,

@@ -169,6 +169,16 @@ impl MeshModel {
         law
     }
 
+    /// Force [N] of the single tooth pair at position `pos` [m] under
+    /// approach `delta` [m] (zero outside the tables).
+    pub fn pair_force(&self, pos: f64, delta: f64) -> f64 {
+        let t = &self.separation.drive;
+        if pos < t.start || pos > t.end() {
+            return 0.0;
+        }
+        self.pair(pos, delta).force
+    }
+
     /// Mesh force [N] and tangent stiffness [N/m] at approach `delta` [m],
     /// with the reference pair at position `s` [m]; pairs are filled into
     /// `pairs` when given.

@@ -212,6 +212,14 @@ impl Stepper {
         }
     }
 
+    /// Time of the last accepted step [s].
+    pub(crate) fn time(&self) -> f64 {
+        match self {
+            Stepper::Alpha(a) => a.time(),
+            Stepper::Rk(r) => r.time(),
+        }
+    }
+
     pub(crate) fn state(&self) -> (&[f64], &[f64]) {
         match self {
             Stepper::Alpha(a) => (a.q(), a.v()),

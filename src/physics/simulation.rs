@@ -10,9 +10,13 @@
 
 use serde::{Deserialize, Serialize};
 
+use std::collections::VecDeque;
+
 use super::dynamics::PlanetaryDynamics;
 use super::gear::{GearSet, Member, MeshKind};
+use super::lumped::{full_index, planet_bearing_vectors, Coordinate, Fidelity};
 use super::response::{static_state, Stepper};
+use super::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
 use crate::solver::{SecondOrderSystem, SolverError};
 
 /// Why a simulation step or setting was refused.
@@ -54,6 +58,71 @@ pub struct Snapshot {
     pub torques: [f64; 3],
     /// Speed reference of the speed drive [rad/s].
     pub speed_reference: f64,
+    /// Harmonic window: planet 1's sun and ring mesh-force samples, oldest first [N].
+    pub window_sun: Vec<f64>,
+    /// See `window_sun`.
+    pub window_ring: Vec<f64>,
+    /// The window's last (travel [m], sun force [N], ring force [N]), if any.
+    pub window_last: Vec<f64>,
+}
+
+/// Order-tracked samples of planet 1's two mesh forces over the last mesh
+/// cycles: a sample each time the sun mesh's travel crosses a multiple of
+/// p_b / S (interpolated linearly between internal steps), so the window
+/// holds whole mesh cycles whatever the speed and the communication step.
+#[derive(Clone, Debug)]
+struct Window {
+    cycles: usize,
+    samples_per_cycle: usize,
+    spacing: f64,
+    last: Option<(f64, f64, f64)>,
+    sun: VecDeque<f64>,
+    ring: VecDeque<f64>,
+    collected: u64,
+}
+
+impl Window {
+    fn push(&mut self, s: f64, fs: f64, fr: f64) {
+        if let Some((s0, fs0, fr0)) = self.last {
+            let d = self.spacing;
+            let mut add = |g: f64| {
+                let w = if s != s0 { (g - s0) / (s - s0) } else { 1.0 };
+                self.sun.push_back(fs0 + w * (fs - fs0));
+                self.ring.push_back(fr0 + w * (fr - fr0));
+                self.collected += 1;
+            };
+            if s > s0 {
+                let (a, b) = ((s0 / d).floor() as i64 + 1, (s / d).floor() as i64);
+                for m in a..=b {
+                    add(m as f64 * d);
+                }
+            } else if s < s0 {
+                let (a, b) = ((s0 / d).ceil() as i64 - 1, (s / d).ceil() as i64);
+                for m in (b..=a).rev() {
+                    add(m as f64 * d);
+                }
+            }
+            let cap = self.cycles * self.samples_per_cycle;
+            while self.sun.len() > cap {
+                self.sun.pop_front();
+                self.ring.pop_front();
+            }
+        }
+        self.last = Some((s, fs, fr));
+    }
+
+    fn full(&self) -> bool {
+        self.sun.len() == self.cycles * self.samples_per_cycle
+    }
+}
+
+/// Where a bearing force acts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Bearing {
+    /// The bearing of a central member.
+    Member(Member),
+    /// The bearing of planet `p` (0-based).
+    Planet(usize),
 }
 
 /// A running simulation.
@@ -66,6 +135,7 @@ pub struct Simulation {
     nominal_step: f64,
     torques: [f64; 3],
     speed_reference: f64,
+    window: Window,
 }
 
 const TIME_TOLERANCE: f64 = 1e-9;
@@ -110,7 +180,42 @@ impl Simulation {
             nominal_step,
             torques,
             speed_reference: input_speed,
+            window: Window {
+                cycles: 34,
+                samples_per_cycle: set.dynamics.samples_per_mesh_cycle,
+                spacing: set.sun.base_pitch() / set.dynamics.samples_per_mesh_cycle as f64,
+                last: None,
+                sun: VecDeque::new(),
+                ring: VecDeque::new(),
+                collected: 0,
+            },
         })
+    }
+
+    /// Sets the window of the harmonic outputs: `cycles` mesh cycles of
+    /// `samples_per_cycle` samples (the window restarts).
+    pub fn set_window(&mut self, cycles: usize, samples_per_cycle: usize) -> Result<(), SimulationError> {
+        if !(1..=10_000).contains(&cycles) {
+            return Err(SimulationError::InvalidInput {
+                name: "harmonicWindowCycles".into(),
+                value: cycles.to_string(),
+                reason: "must be between 1 and 10000".into(),
+            });
+        }
+        if !(16..=10_000).contains(&samples_per_cycle) {
+            return Err(SimulationError::InvalidInput {
+                name: "samplesPerMeshCycle".into(),
+                value: samples_per_cycle.to_string(),
+                reason: "must be between 16 and 10000 (harmonic 6 needs more than 12)".into(),
+            });
+        }
+        self.window.cycles = cycles;
+        self.window.samples_per_cycle = samples_per_cycle;
+        self.window.spacing = self.set.sun.base_pitch() / samples_per_cycle as f64;
+        self.window.sun.clear();
+        self.window.ring.clear();
+        self.window.collected = 0;
+        Ok(())
     }
 
     /// Current time [s].
@@ -165,17 +270,121 @@ impl Simulation {
             });
         }
         let steps = ((h / self.nominal_step) - 1e-9).ceil().max(1.0) as u64;
-        let end = self.time + h;
-        self.stepper
-            .advance(&mut self.model, end, steps)
-            .map_err(|source| SimulationError::Integration { t: self.time, source })?;
+        let start = self.time;
+        let end = start + h;
+        let mut f = vec![0.0; self.model.dim()];
+        for k in 1..=steps {
+            // Internal step ends from integer counts; the last is exactly t + h.
+            let tk = if k == steps { end } else { start + h * (k as f64) / (steps as f64) };
+            if let Err(source) = self.stepper.advance(&mut self.model, tk, 1) {
+                // Keep the last good state's time and mesh outputs.
+                self.time = self.stepper_time();
+                self.refresh(&mut f);
+                return Err(SimulationError::Integration { t: self.time, source });
+            }
+            self.refresh(&mut f);
+            let m = &self.model.meshes;
+            if m.len() >= 2 {
+                self.window.push(m[0].position, m[0].force, m[1].force);
+            }
+        }
         self.time = end;
-        // Refresh the mesh states at the accepted state for the outputs.
+        Ok(())
+    }
+
+    fn stepper_time(&self) -> f64 {
+        self.stepper.time()
+    }
+
+    /// Re-evaluates the meshes at the accepted state (a cache hit when the
+    /// integrator's last evaluation was that state).
+    fn refresh(&mut self, f: &mut [f64]) {
         let (q, v) = self.stepper.state();
         let (q, v) = (q.to_vec(), v.to_vec());
-        let mut f = vec![0.0; q.len()];
-        self.model.force(end, &q, &v, &mut f);
-        Ok(())
+        self.model.force(self.time, &q, &v, f);
+    }
+
+    /// Tooth pairs carrying load in a mesh of planet `p`.
+    pub fn pairs_in_contact(&self, p: usize, mesh: MeshKind) -> u32 {
+        let Some(state) = self.mesh_state(p, mesh) else { return 0 };
+        let mut pairs = Vec::new();
+        self.model.mesh_model(mesh).force(state.position, state.approach, Some(&mut pairs));
+        pairs.iter().filter(|c| c.force != 0.0).count() as u32
+    }
+
+    /// Force [N] of the tracked tooth pair of planet 1's mesh: the pair of
+    /// gear 1's tooth 0 (sun tooth 0, or planet tooth 0 in the ring mesh),
+    /// which comes round once per revolution of that gear relative to the
+    /// carrier.
+    pub fn tracked_pair_force(&self, mesh: MeshKind) -> f64 {
+        let Some(state) = self.mesh_state(0, mesh) else { return 0.0 };
+        let model = self.model.mesh_model(mesh);
+        let teeth = match mesh {
+            MeshKind::SunPlanet => self.set.sun.teeth,
+            MeshKind::RingPlanet => self.set.planet.teeth,
+        };
+        let period = f64::from(teeth) * model.path().base_pitch;
+        let start = model.separation.drive.start;
+        let pos = start + (state.position - start).rem_euclid(period);
+        model.pair_force(pos, state.approach)
+    }
+
+    /// Static transmission error [m]: the approach of a mesh of planet `p` at
+    /// its current position under the scene's mean tooth force.
+    pub fn static_transmission_error(&self, p: usize, mesh: MeshKind) -> f64 {
+        let Some(state) = self.mesh_state(p, mesh) else { return 0.0 };
+        self.model.mesh_model(mesh).approach_for(state.position, self.set.mesh_load_per_planet())
+    }
+
+    /// Magnitude of a bearing's elastic force [N] (central members: 0 in the
+    /// torsional model, where they have no translations).
+    pub fn bearing_force(&self, bearing: Bearing) -> f64 {
+        let (q, _) = self.stepper.state();
+        let full = self.model.full_coordinates(q);
+        let lumped = &self.model.lumped;
+        match bearing {
+            Bearing::Member(m) => {
+                if lumped.fidelity == Fidelity::Torsional {
+                    return 0.0;
+                }
+                let j = match m {
+                    Member::Carrier => 0,
+                    Member::Ring => 1,
+                    Member::Sun => 2,
+                };
+                let (x, y) = (full[full_index(Coordinate::X(m))], full[full_index(Coordinate::Y(m))]);
+                lumped.central_bearing[j] * x.hypot(y)
+            }
+            Bearing::Planet(p) if p < lumped.planet_angles.len() => {
+                if lumped.fidelity == Fidelity::Torsional {
+                    return 0.0;
+                }
+                let n = lumped.planet_angles.len();
+                let [radial, tangential] = planet_bearing_vectors(n, p, lumped.planet_angles[p]);
+                let dot = |b: &[f64]| b.iter().zip(&full).map(|(a, c)| a * c).sum::<f64>();
+                lumped.planet_bearing_of(p) * dot(&radial).hypot(dot(&tangential))
+            }
+            Bearing::Planet(_) => 0.0,
+        }
+    }
+
+    /// Whole mesh cycles in the harmonic window so far (at most its length).
+    pub fn window_cycles(&self) -> usize {
+        self.window.sun.len() / self.window.samples_per_cycle
+    }
+
+    /// Harmonics 1..6 and separation fraction of planet 1's mesh force over
+    /// the window, once the window is full.
+    pub fn window_harmonics(&self, mesh: MeshKind) -> Option<(Harmonics, f64)> {
+        if !self.window.full() {
+            return None;
+        }
+        let data: Vec<f64> = match mesh {
+            MeshKind::SunPlanet => self.window.sun.iter().copied().collect(),
+            MeshKind::RingPlanet => self.window.ring.iter().copied().collect(),
+        };
+        let h = mesh_harmonics(&data, self.window.cycles, 6).ok()?;
+        Some((h, separation_fraction(&data)))
     }
 
     fn rotation(&self, m: Member, rate: bool) -> f64 {
@@ -224,6 +433,9 @@ impl Simulation {
             integrator: self.stepper.internal(),
             torques: self.torques,
             speed_reference: self.speed_reference,
+            window_sun: self.window.sun.iter().copied().collect(),
+            window_ring: self.window.ring.iter().copied().collect(),
+            window_last: self.window.last.map_or(Vec::new(), |(a, b, c)| vec![a, b, c]),
         }
     }
 
@@ -245,6 +457,19 @@ impl Simulation {
         self.time = s.time;
         let mut f = vec![0.0; n];
         self.model.force(s.time, &s.q, &s.v, &mut f);
+        let cap = self.window.cycles * self.window.samples_per_cycle;
+        if s.window_sun.len() == s.window_ring.len() && s.window_sun.len() <= cap {
+            self.window.sun = s.window_sun.iter().copied().collect();
+            self.window.ring = s.window_ring.iter().copied().collect();
+            self.window.last = match s.window_last.as_slice() {
+                [a, b, c] => Some((*a, *b, *c)),
+                _ => None,
+            };
+        } else {
+            self.window.sun.clear();
+            self.window.ring.clear();
+            self.window.last = None;
+        }
         Ok(())
     }
 

@@ -10,8 +10,8 @@
 //! | 4 | length L of the interface fingerprint (u32) |
 //! | L | fingerprint: the FMU GUID and the gear set it belongs to |
 //! | 8 | time (f64) |
-//! | 4+4+4 | lengths of q, v and the integrator state (u32) |
-//! | 8·n | q, v, integrator state (f64) |
+//! | 4·6 | lengths of q, v, the integrator state, the two harmonic-window sample arrays and the window's last point (u32) |
+//! | 8·n | those six arrays (f64) |
 //! | 8·4 | torques on sun, ring, carrier, speed reference (f64) |
 //! | 8 | FNV-1a 64 checksum of everything before it |
 //!
@@ -75,10 +75,18 @@ pub fn encode(snapshot: &Snapshot, fingerprint: &str) -> Vec<u8> {
     out.extend_from_slice(&(fingerprint.len() as u32).to_le_bytes());
     out.extend_from_slice(fingerprint.as_bytes());
     out.extend_from_slice(&snapshot.time.to_le_bytes());
-    for v in [&snapshot.q, &snapshot.v, &snapshot.integrator] {
+    let arrays = [
+        &snapshot.q,
+        &snapshot.v,
+        &snapshot.integrator,
+        &snapshot.window_sun,
+        &snapshot.window_ring,
+        &snapshot.window_last,
+    ];
+    for v in arrays {
         out.extend_from_slice(&(v.len() as u32).to_le_bytes());
     }
-    for v in [&snapshot.q, &snapshot.v, &snapshot.integrator] {
+    for v in arrays {
         for x in v.iter() {
             out.extend_from_slice(&x.to_le_bytes());
         }
@@ -130,12 +138,12 @@ pub fn decode(data: &[u8], fingerprint: &str) -> Result<Snapshot, StateFormatErr
     let found = r.take(flen).ok_or(short(16 + flen))?;
     let found = String::from_utf8_lossy(found).into_owned();
     let time = r.f64();
-    let lens = [r.u32(), r.u32(), r.u32()];
-    let header = 16 + flen + 8 + 12;
-    let (Some(time), [Some(nq), Some(nv), Some(ni)]) = (time, lens) else {
+    let lens: Vec<Option<u32>> = (0..6).map(|_| r.u32()).collect();
+    let header = 16 + flen + 8 + 24;
+    let (Some(time), Some(lens)) = (time, lens.into_iter().collect::<Option<Vec<u32>>>()) else {
         return Err(short(header + 8));
     };
-    let count = (nq as usize).checked_add(nv as usize).and_then(|x| x.checked_add(ni as usize));
+    let count = lens.iter().try_fold(0usize, |acc, n| acc.checked_add(*n as usize));
     let expected = count
         .and_then(|c| c.checked_add(4))
         .and_then(|c| c.checked_mul(8))
@@ -154,9 +162,22 @@ pub fn decode(data: &[u8], fingerprint: &str) -> Result<Snapshot, StateFormatErr
         return Err(StateFormatError::Foreign { found, expected: fingerprint.into() });
     }
     let mut read = |n: u32| -> Vec<f64> { (0..n).filter_map(|_| r.f64()).collect() };
-    let q = read(nq);
-    let v = read(nv);
-    let integrator = read(ni);
+    let q = read(lens[0]);
+    let v = read(lens[1]);
+    let integrator = read(lens[2]);
+    let window_sun = read(lens[3]);
+    let window_ring = read(lens[4]);
+    let window_last = read(lens[5]);
     let rest = read(4);
-    Ok(Snapshot { time, q, v, integrator, torques: [rest[0], rest[1], rest[2]], speed_reference: rest[3] })
+    Ok(Snapshot {
+        time,
+        q,
+        v,
+        integrator,
+        torques: [rest[0], rest[1], rest[2]],
+        speed_reference: rest[3],
+        window_sun,
+        window_ring,
+        window_last,
+    })
 }
