@@ -318,6 +318,12 @@ fn main() {
     r.push_str("}\n");
 
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it"));
+    // The FMU's shared library exports the fmi2* functions and nothing else.
+    let map = out.join("exports.map");
+    std::fs::write(&map, "{\n  global: fmi2*;\n  local: *;\n};\n").unwrap_or_else(|e| fail(format!("writing {}: {e}", map.display())));
+    if std::env::var("CARGO_CFG_TARGET_OS").as_deref() == Ok("linux") {
+        println!("cargo:rustc-cdylib-link-arg=-Wl,--version-script={}", map.display());
+    }
     std::fs::write(out.join("modelDescription.xml"), x).unwrap_or_else(|e| fail(format!("writing XML: {e}")));
     std::fs::write(out.join("fmi_variables.rs"), r).unwrap_or_else(|e| fail(format!("writing table: {e}")));
 }
