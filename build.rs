@@ -320,7 +320,8 @@ fn main() {
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it"));
     // The FMU's shared library exports the fmi2* functions and nothing else.
     let map = out.join("exports.map");
-    std::fs::write(&map, "{\n  global: fmi2*;\n  local: *;\n};\n").unwrap_or_else(|e| fail(format!("writing {}: {e}", map.display())));
+    std::fs::write(&map, "{\n  global: fmi2*;\n  local: *;\n};\n")
+        .unwrap_or_else(|e| fail(format!("writing {}: {e}", map.display())));
     if std::env::var("CARGO_CFG_TARGET_OS").as_deref() == Ok("linux") {
         println!("cargo:rustc-cdylib-link-arg=-Wl,--version-script={}", map.display());
     }

@@ -3,4 +3,5 @@
 //! the modelDescription.xml generated from the same table.
 
 pub mod guid;
+pub mod instance;
 pub mod variables;

@@ -431,6 +431,15 @@ impl PlanetaryDynamics {
         self.cache = None;
     }
 
+    /// Torque of the speed drive's shaft on the input member [N·m], if the
+    /// input is speed-driven.
+    pub fn shaft_torque(&self, t: f64, q: &[f64], v: &[f64]) -> Option<f64> {
+        self.speed_drive.map(|d| {
+            let i = self.input_index;
+            (d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i])) * self.input_lever
+        })
+    }
+
     /// Number of meshes (2 per planet).
     pub fn mesh_count(&self) -> usize {
         self.links.len()

@@ -186,7 +186,7 @@ fn contact_rotation(a: &[P], b: &[P], dir: f64, window: f64) -> Option<f64> {
     let mut best: Option<f64> = None;
     let mut xs = Vec::new();
     let mut consider = |d: f64| {
-        if d.abs() < window && best.map_or(true, |b| d < b) {
+        if d.abs() < window && best.is_none_or(|b| d < b) {
             best = Some(d);
         }
     };

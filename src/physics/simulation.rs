@@ -304,6 +304,20 @@ impl Simulation {
         self.model.force(self.time, &q, &v, f);
     }
 
+    /// Torque the input member receives [N·m]: from its shaft in the speed
+    /// drive, else its input torque.
+    pub fn input_torque(&self) -> f64 {
+        let (q, v) = self.stepper.state();
+        match self.model.shaft_torque(self.time, q, v) {
+            Some(t) => t,
+            None => match self.set.input {
+                Member::Sun => self.torques[0],
+                Member::Ring => self.torques[1],
+                Member::Carrier => self.torques[2],
+            },
+        }
+    }
+
     /// Tooth pairs carrying load in a mesh of planet `p`.
     pub fn pairs_in_contact(&self, p: usize, mesh: MeshKind) -> u32 {
         let Some(state) = self.mesh_state(p, mesh) else { return 0 };

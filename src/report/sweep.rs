@@ -75,7 +75,7 @@ pub fn find_peaks(
             let family = excited_family(l, set.sun.teeth, set.planet_angles.len());
             for m in modes.iter().filter(|m| m.class == family) {
                 let mismatch = (f64::from(l) * fm - m.frequency).abs() / m.frequency;
-                if best.as_ref().map_or(true, |b| mismatch < b.mismatch) {
+                if best.as_ref().is_none_or(|b| mismatch < b.mismatch) {
                     best = Some(Peak {
                         direction: sweep.direction,
                         mesh: pts[i].meshes[mesh_index].mesh,

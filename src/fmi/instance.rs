@@ -1,0 +1,675 @@
+//! One FMU instance, in safe Rust: variable values by value reference,
+//! the parameters turned into a scene and a [`Simulation`], outputs read from
+//! it, the FMI 2.0 co-simulation phases, and FMU states. The C boundary
+//! (`export.rs`) only converts arguments and reports what this returns.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::PathBuf;
+
+use super::variables::{find, vr, Causality, Kind, Start, GUID, VARIABLES};
+use crate::physics::dynamics::PlanetaryDynamics;
+use crate::physics::gear::{Drive, IntegratorKind, Member, MeshKind};
+use crate::physics::ltca::SetModel;
+use crate::physics::lumped::Fidelity;
+use crate::physics::simulation::{Bearing, Simulation, Snapshot};
+use crate::physics::state_format;
+use crate::scene::{ChamferSpec, Scene};
+
+/// FMI status of a refused or partial call.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Status {
+    /// fmi2Warning.
+    Warning,
+    /// fmi2Discard.
+    Discard,
+    /// fmi2Error.
+    Error,
+    /// fmi2Fatal.
+    Fatal,
+}
+
+/// A refusal: its status, the log category and the message.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Refusal {
+    /// Status to return.
+    pub status: Status,
+    /// Message for the logger.
+    pub message: String,
+}
+
+impl Refusal {
+    fn error(message: impl Into<String>) -> Self {
+        Self { status: Status::Error, message: message.into() }
+    }
+}
+
+/// The phases of the FMI 2.0 co-simulation state machine that this FMU
+/// can be in (it never runs asynchronous steps).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// After fmi2Instantiate or fmi2Reset.
+    Instantiated,
+    /// Between fmi2EnterInitializationMode and fmi2ExitInitializationMode.
+    InitializationMode,
+    /// Initialized; the last step (if any) completed.
+    StepComplete,
+    /// A step was discarded.
+    StepFailed,
+    /// After fmi2Terminate.
+    Terminated,
+    /// After an fmi2Error.
+    Error,
+    /// After an fmi2Fatal.
+    Fatal,
+}
+
+/// A saved FMU state (fmi2GetFMUstate).
+#[derive(Clone, Debug)]
+pub struct SavedState {
+    phase: Phase,
+    reals: BTreeMap<u32, f64>,
+    integers: BTreeMap<u32, i32>,
+    strings: BTreeMap<u32, String>,
+    snapshot: Option<Snapshot>,
+    terminated: bool,
+    last_successful_time: f64,
+}
+
+/// One instance.
+pub struct Instance {
+    /// Instance name given by the importer.
+    pub name: String,
+    /// Current phase.
+    pub phase: Phase,
+    resources: Option<PathBuf>,
+    reals: BTreeMap<u32, f64>,
+    integers: BTreeMap<u32, i32>,
+    booleans: BTreeMap<u32, bool>,
+    strings: BTreeMap<u32, String>,
+    explicitly_set: BTreeSet<u32>,
+    start_time: f64,
+    stop_time: Option<f64>,
+    sim: Option<Simulation>,
+    /// Set when a step was discarded and the simulation cannot go on.
+    pub terminated: bool,
+    /// Time of the last completed step [s].
+    pub last_successful_time: f64,
+}
+
+fn member(code: i32, name: &str) -> Result<Member, Refusal> {
+    match code {
+        0 => Ok(Member::Sun),
+        1 => Ok(Member::Ring),
+        2 => Ok(Member::Carrier),
+        other => Err(Refusal::error(format!("{name} = {other}: allowed are 0 (sun), 1 (ring), 2 (carrier)"))),
+    }
+}
+
+impl Instance {
+    /// A new instance with every variable at its start value.
+    pub fn new(name: &str, resources: Option<PathBuf>) -> Self {
+        let mut i = Self {
+            name: name.to_string(),
+            phase: Phase::Instantiated,
+            resources,
+            reals: BTreeMap::new(),
+            integers: BTreeMap::new(),
+            booleans: BTreeMap::new(),
+            strings: BTreeMap::new(),
+            explicitly_set: BTreeSet::new(),
+            start_time: 0.0,
+            stop_time: None,
+            sim: None,
+            terminated: false,
+            last_successful_time: 0.0,
+        };
+        i.reset_values();
+        i
+    }
+
+    fn reset_values(&mut self) {
+        self.reals.clear();
+        self.integers.clear();
+        self.booleans.clear();
+        self.strings.clear();
+        for v in VARIABLES {
+            match v.start {
+                Start::Real(x) => {
+                    self.reals.insert(v.vr, x);
+                }
+                Start::Integer(x) => {
+                    self.integers.insert(v.vr, x);
+                }
+                Start::Boolean(x) => {
+                    self.booleans.insert(v.vr, x);
+                }
+                Start::String(x) => {
+                    self.strings.insert(v.vr, x.to_string());
+                }
+                Start::None => {}
+            }
+        }
+        self.explicitly_set.clear();
+    }
+
+    /// fmi2Reset: back to the instantiated phase with start values.
+    pub fn reset(&mut self) {
+        self.reset_values();
+        self.sim = None;
+        self.phase = Phase::Instantiated;
+        self.terminated = false;
+        self.start_time = 0.0;
+        self.stop_time = None;
+        self.last_successful_time = 0.0;
+    }
+
+    /// fmi2SetupExperiment.
+    pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Result<(), Refusal> {
+        if !start.is_finite() {
+            return Err(Refusal::error(format!("startTime = {start}: must be finite")));
+        }
+        if let Some(s) = stop {
+            if !(s.is_finite() && s >= start) {
+                return Err(Refusal::error(format!(
+                    "stopTime = {s}: must be finite and not before startTime {start}"
+                )));
+            }
+        }
+        self.start_time = start;
+        self.stop_time = stop;
+        self.last_successful_time = start;
+        Ok(())
+    }
+
+    fn real(&self, v: u32) -> f64 {
+        self.reals.get(&v).copied().unwrap_or(0.0)
+    }
+
+    fn int(&self, v: u32) -> i32 {
+        self.integers.get(&v).copied().unwrap_or(0)
+    }
+
+    /// The scene the parameters describe: the scene file (or the built-in
+    /// example) with every parameter applied — all of them for the built-in
+    /// example, only those set by the importer for a scene file.
+    pub fn scene(&self) -> Result<Scene, Refusal> {
+        let file = self.strings.get(&vr::SCENE_FILE).cloned().unwrap_or_default();
+        let mut scene = if file.is_empty() {
+            Scene::example_2004()
+        } else {
+            let mut path = PathBuf::from(&file);
+            if !path.is_absolute() && !path.exists() {
+                if let Some(r) = &self.resources {
+                    path = r.join(&file);
+                }
+            }
+            let text = std::fs::read_to_string(&path).map_err(|e| {
+                Refusal::error(format!("sceneFile = {file}: cannot read {} ({e})", path.display()))
+            })?;
+            Scene::from_toml(&text).map_err(|e| Refusal::error(format!("sceneFile = {file}: {e}")))?
+        };
+        if !self.strings.get(&vr::WEAR_STATE_FILE).is_none_or(|s| s.is_empty()) {
+            return Err(Refusal::error(
+                "wearStateFile: worn-profile states are not read by this version of the FMU; leave it empty",
+            ));
+        }
+        let all = file.is_empty();
+        let use_it = |v: u32| all || self.explicitly_set.contains(&v);
+        let r = |v: u32| self.real(v);
+        let mm = |v: u32| self.real(v) * 1e3;
+        macro_rules! apply {
+            ($v:expr, $body:expr) => {
+                if use_it($v) {
+                    $body;
+                }
+            };
+        }
+        apply!(vr::FIDELITY, {
+            scene.dynamics.fidelity = match self.int(vr::FIDELITY) {
+                0 => Fidelity::Torsional,
+                1 => Fidelity::TransverseTorsional,
+                x => {
+                    return Err(Refusal::error(format!(
+                        "fidelity = {x}: allowed are 0 (torsional), 1 (transverse-torsional)"
+                    )))
+                }
+            }
+        });
+        apply!(vr::HELD_MEMBER, scene.operation.held = member(self.int(vr::HELD_MEMBER), "heldMember")?);
+        apply!(vr::INPUT_MEMBER, scene.operation.input = member(self.int(vr::INPUT_MEMBER), "inputMember")?);
+        apply!(vr::DRIVE_MODE, {
+            scene.dynamics.drive = match self.int(vr::DRIVE_MODE) {
+                0 => Drive::Torque,
+                1 => Drive::Speed,
+                x => {
+                    return Err(Refusal::error(format!("driveMode = {x}: allowed are 0 (torque), 1 (speed)")))
+                }
+            }
+        });
+        apply!(vr::INTEGRATOR, {
+            scene.dynamics.integrator = match self.int(vr::INTEGRATOR) {
+                0 => IntegratorKind::GeneralizedAlpha,
+                1 => IntegratorKind::Rk45,
+                x => {
+                    return Err(Refusal::error(format!(
+                        "integrator = {x}: allowed are 0 (generalized-alpha), 1 (Runge-Kutta 5(4))"
+                    )))
+                }
+            }
+        });
+        let count = |v: u32, name: &str| -> Result<u32, Refusal> {
+            u32::try_from(self.int(v))
+                .map_err(|_| Refusal::error(format!("{name} = {}: must not be negative", self.int(v))))
+        };
+        apply!(
+            vr::STEPS_PER_MESH_CYCLE,
+            scene.dynamics.steps_per_mesh_cycle = count(vr::STEPS_PER_MESH_CYCLE, "stepsPerMeshCycle")?
+        );
+        apply!(vr::RHO_INFINITY, scene.dynamics.rho_infinity = r(vr::RHO_INFINITY));
+        apply!(vr::RELATIVE_TOLERANCE, scene.dynamics.relative_tolerance = r(vr::RELATIVE_TOLERANCE));
+        apply!(
+            vr::SAMPLES_PER_MESH_CYCLE,
+            scene.dynamics.samples_per_mesh_cycle = count(vr::SAMPLES_PER_MESH_CYCLE, "samplesPerMeshCycle")?
+        );
+        apply!(
+            vr::PLANETS,
+            scene.planets =
+                crate::scene::PlanetLayoutSpec { count: count(vr::PLANETS, "planets")?, angles_deg: None }
+        );
+        apply!(vr::SUN_TEETH, scene.sun.teeth = count(vr::SUN_TEETH, "sun.teeth")?);
+        apply!(vr::PLANET_TEETH, scene.planet.teeth = count(vr::PLANET_TEETH, "planet.teeth")?);
+        apply!(vr::RING_TEETH, scene.ring.teeth = count(vr::RING_TEETH, "ring.teeth")?);
+        apply!(vr::MODULE, {
+            scene.sun.module_mm = mm(vr::MODULE);
+            scene.planet.module_mm = mm(vr::MODULE);
+            scene.ring.module_mm = mm(vr::MODULE);
+        });
+        apply!(vr::PRESSURE_ANGLE, {
+            let d = r(vr::PRESSURE_ANGLE).to_degrees();
+            scene.sun.pressure_angle_deg = d;
+            scene.planet.pressure_angle_deg = d;
+            scene.ring.pressure_angle_deg = d;
+        });
+        apply!(vr::FACE_WIDTH, {
+            scene.sun.face_width_mm = mm(vr::FACE_WIDTH);
+            scene.planet.face_width_mm = mm(vr::FACE_WIDTH);
+            scene.ring.face_width_mm = mm(vr::FACE_WIDTH);
+        });
+        apply!(vr::CENTRE_DISTANCE, scene.centre_distance_mm = mm(vr::CENTRE_DISTANCE));
+        apply!(vr::SUN_TOOTH_THICKNESS, scene.sun.tooth_thickness_mm = mm(vr::SUN_TOOTH_THICKNESS));
+        apply!(vr::PLANET_TOOTH_THICKNESS, scene.planet.tooth_thickness_mm = mm(vr::PLANET_TOOTH_THICKNESS));
+        apply!(vr::RING_TOOTH_THICKNESS, scene.ring.tooth_thickness_mm = mm(vr::RING_TOOTH_THICKNESS));
+        apply!(vr::SUN_TIP_RADIUS, scene.sun.tip_radius_mm = mm(vr::SUN_TIP_RADIUS));
+        apply!(vr::SUN_ROOT_RADIUS, scene.sun.root_radius_mm = mm(vr::SUN_ROOT_RADIUS));
+        apply!(vr::SUN_BORE_RADIUS, scene.sun.bore_radius_mm = mm(vr::SUN_BORE_RADIUS));
+        apply!(vr::PLANET_TIP_RADIUS, scene.planet.tip_radius_mm = mm(vr::PLANET_TIP_RADIUS));
+        apply!(vr::PLANET_ROOT_RADIUS, scene.planet.root_radius_mm = mm(vr::PLANET_ROOT_RADIUS));
+        apply!(vr::PLANET_BORE_RADIUS, scene.planet.bore_radius_mm = mm(vr::PLANET_BORE_RADIUS));
+        apply!(vr::RING_MINOR_RADIUS, scene.ring.minor_radius_mm = mm(vr::RING_MINOR_RADIUS));
+        apply!(vr::RING_ROOT_RADIUS, scene.ring.root_radius_mm = mm(vr::RING_ROOT_RADIUS));
+        apply!(vr::RING_RIM_RADIUS, scene.ring.rim_radius_mm = mm(vr::RING_RIM_RADIUS));
+        apply!(vr::HOB_TIP_RADIUS, {
+            scene.sun.hob_tip_radius_mm = mm(vr::HOB_TIP_RADIUS);
+            scene.planet.hob_tip_radius_mm = mm(vr::HOB_TIP_RADIUS);
+        });
+        apply!(vr::RING_FILLET_RADIUS, scene.ring.fillet_radius_mm = mm(vr::RING_FILLET_RADIUS));
+        if use_it(vr::TIP_CHAMFER_HEIGHT) || use_it(vr::TIP_CHAMFER_ANGLE) {
+            let c = ChamferSpec {
+                height_mm: mm(vr::TIP_CHAMFER_HEIGHT),
+                angle_deg: r(vr::TIP_CHAMFER_ANGLE).to_degrees(),
+            };
+            scene.sun.tip_chamfer = Some(c);
+            scene.planet.tip_chamfer = Some(c);
+        }
+        apply!(vr::YOUNGS_MODULUS, scene.material.youngs_modulus_gpa = r(vr::YOUNGS_MODULUS) * 1e-9);
+        apply!(vr::POISSON_RATIO, scene.material.poisson_ratio = r(vr::POISSON_RATIO));
+        apply!(vr::DENSITY, scene.material.density_kg_per_m3 = r(vr::DENSITY));
+        let opt = |v: u32| (self.real(v) != 0.0).then(|| self.real(v));
+        apply!(vr::SUN_INERTIA, scene.inertia.sun_inertia_kg_m2 = opt(vr::SUN_INERTIA));
+        apply!(vr::PLANET_INERTIA, scene.inertia.planet_inertia_kg_m2 = opt(vr::PLANET_INERTIA));
+        apply!(vr::RING_INERTIA, scene.inertia.ring_inertia_kg_m2 = opt(vr::RING_INERTIA));
+        apply!(vr::CARRIER_INERTIA, scene.inertia.carrier_inertia_kg_m2 = opt(vr::CARRIER_INERTIA));
+        apply!(vr::SUN_MASS, scene.inertia.sun_mass_kg = opt(vr::SUN_MASS));
+        apply!(vr::PLANET_MASS, scene.inertia.planet_mass_kg = opt(vr::PLANET_MASS));
+        apply!(vr::RING_MASS, scene.inertia.ring_mass_kg = opt(vr::RING_MASS));
+        apply!(vr::CARRIER_MASS, scene.inertia.carrier_mass_kg = opt(vr::CARRIER_MASS));
+        apply!(vr::SUN_BEARING_STIFFNESS, scene.supports.sun_radial_n_per_m = r(vr::SUN_BEARING_STIFFNESS));
+        apply!(
+            vr::RING_BEARING_STIFFNESS,
+            scene.supports.ring_radial_n_per_m = r(vr::RING_BEARING_STIFFNESS)
+        );
+        apply!(
+            vr::CARRIER_BEARING_STIFFNESS,
+            scene.supports.carrier_radial_n_per_m = r(vr::CARRIER_BEARING_STIFFNESS)
+        );
+        apply!(
+            vr::PLANET_BEARING_STIFFNESS,
+            scene.supports.planet_bearing_n_per_m = r(vr::PLANET_BEARING_STIFFNESS)
+        );
+        apply!(
+            vr::BEARING_DAMPING_RATIO,
+            scene.supports.bearing_damping_ratio = r(vr::BEARING_DAMPING_RATIO)
+        );
+        apply!(vr::MESH_DAMPING_RATIO, scene.dynamics.mesh_damping_ratio = r(vr::MESH_DAMPING_RATIO));
+        apply!(vr::SHAFT_STIFFNESS, scene.dynamics.shaft_stiffness_nm_per_rad = r(vr::SHAFT_STIFFNESS));
+        // The input torque sets the operating load of the mean-stiffness
+        // linearisation and static TE; the inputs drive the simulation.
+        let torque_vr = match scene.operation.input {
+            Member::Sun => vr::SUN_TORQUE,
+            Member::Ring => vr::RING_TORQUE,
+            Member::Carrier => vr::CARRIER_TORQUE,
+        };
+        if all || self.explicitly_set.contains(&torque_vr) {
+            scene.operation.input_torque_nm = self.real(torque_vr);
+        }
+        Ok(scene)
+    }
+
+    /// Builds the simulation from the parameters.
+    fn build(&mut self) -> Result<(), Refusal> {
+        let scene = self.scene()?;
+        let set = scene
+            .validate()
+            .map_err(|e| Refusal::error(format!("the parameters describe an invalid gear set: {e}")))?;
+        if set.planet_angles.len() > 8 {
+            return Err(Refusal::error(format!(
+                "planets = {}: this FMU has outputs for at most 8 planets",
+                set.planet_angles.len()
+            )));
+        }
+        let model =
+            PlanetaryDynamics::new(&set, SetModel::new(&set)).map_err(|e| Refusal::error(e.to_string()))?;
+        let speed = self.real(vr::INITIAL_SPEED);
+        let mut sim = Simulation::new(&set, model, self.start_time, speed)
+            .map_err(|e| Refusal::error(format!("initialSpeed: {e}")))?;
+        let cycles = usize::try_from(self.int(vr::HARMONIC_WINDOW_CYCLES)).unwrap_or(0);
+        sim.set_window(cycles, set.dynamics.samples_per_mesh_cycle)
+            .map_err(|e| Refusal::error(e.to_string()))?;
+        self.sim = Some(sim);
+        self.push_inputs()
+    }
+
+    fn push_inputs(&mut self) -> Result<(), Refusal> {
+        let (s, r, c, w) = (
+            self.real(vr::SUN_TORQUE),
+            self.real(vr::RING_TORQUE),
+            self.real(vr::CARRIER_TORQUE),
+            self.real(vr::INPUT_SPEED_REFERENCE),
+        );
+        if let Some(sim) = &mut self.sim {
+            sim.set_torques(s, r, c).map_err(|e| Refusal::error(e.to_string()))?;
+            sim.set_speed_reference(w).map_err(|e| Refusal::error(e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// fmi2EnterInitializationMode.
+    pub fn enter_initialization(&mut self) {
+        self.phase = Phase::InitializationMode;
+    }
+
+    /// fmi2ExitInitializationMode: builds the simulation.
+    pub fn exit_initialization(&mut self) -> Result<(), Refusal> {
+        if self.sim.is_none() {
+            self.build()?;
+        }
+        self.phase = Phase::StepComplete;
+        Ok(())
+    }
+
+    fn check_set(&self, kind: Kind, v: u32) -> Result<&'static super::variables::VariableInfo, Refusal> {
+        let info = find(kind, v).ok_or_else(|| {
+            Refusal::error(format!("value reference {v} is not a {kind:?} variable of this FMU"))
+        })?;
+        match (info.causality, self.phase) {
+            (Causality::Output, _) => {
+                Err(Refusal::error(format!("{} is an output and cannot be set", info.name)))
+            }
+            (Causality::Parameter, Phase::Instantiated | Phase::InitializationMode) => Ok(info),
+            (Causality::Parameter, phase) => Err(Refusal::error(format!(
+                "{} is a fixed parameter and cannot be set in phase {phase:?}",
+                info.name
+            ))),
+            (Causality::Input, _) => Ok(info),
+        }
+    }
+
+    fn changed(&mut self, v: u32) {
+        self.explicitly_set.insert(v);
+        if self.phase != Phase::StepComplete {
+            // Parameters changed before the end of initialization: rebuild then.
+            self.sim = None;
+        }
+    }
+
+    /// fmi2SetReal for one variable.
+    pub fn set_real(&mut self, v: u32, value: f64) -> Result<(), Refusal> {
+        let info = self.check_set(Kind::Real, v)?;
+        if !value.is_finite() {
+            return Err(Refusal::error(format!("{} = {value}: must be finite", info.name)));
+        }
+        self.reals.insert(v, value);
+        if info.causality == Causality::Input && self.sim.is_some() {
+            self.explicitly_set.insert(v);
+            return self.push_inputs();
+        }
+        self.changed(v);
+        Ok(())
+    }
+
+    /// fmi2SetInteger for one variable.
+    pub fn set_integer(&mut self, v: u32, value: i32) -> Result<(), Refusal> {
+        self.check_set(Kind::Integer, v)?;
+        self.integers.insert(v, value);
+        self.changed(v);
+        Ok(())
+    }
+
+    /// fmi2SetBoolean for one variable (this FMU has none).
+    pub fn set_boolean(&mut self, v: u32, _value: bool) -> Result<(), Refusal> {
+        self.check_set(Kind::Boolean, v).map(|_| ())
+    }
+
+    /// fmi2SetString for one variable.
+    pub fn set_string(&mut self, v: u32, value: &str) -> Result<(), Refusal> {
+        self.check_set(Kind::String, v)?;
+        self.strings.insert(v, value.to_string());
+        self.changed(v);
+        Ok(())
+    }
+
+    fn sim(&mut self) -> Result<&Simulation, Refusal> {
+        if self.sim.is_none() {
+            self.build()?;
+        }
+        self.sim.as_ref().ok_or_else(|| Refusal::error("no simulation"))
+    }
+
+    /// fmi2GetReal for one variable.
+    pub fn get_real(&mut self, v: u32) -> Result<f64, Refusal> {
+        let info = find(Kind::Real, v).ok_or_else(|| {
+            Refusal::error(format!("value reference {v} is not a Real variable of this FMU"))
+        })?;
+        if info.causality != Causality::Output {
+            return Ok(self.real(v));
+        }
+        let sim = self.sim()?;
+        let planet = |base: u32| ((v - base) / 2) as usize;
+        let mesh = |base: u32| if (v - base) % 2 == 0 { MeshKind::SunPlanet } else { MeshKind::RingPlanet };
+        let window = |m: MeshKind, k: usize| -> f64 {
+            sim.window_harmonics(m).map_or(0.0, |(h, sep)| match k {
+                0..=5 => h.amplitude[k],
+                6 => h.rms,
+                _ => sep,
+            })
+        };
+        Ok(match v {
+            vr::SUN_SPEED => sim.speed(Member::Sun),
+            vr::RING_SPEED => sim.speed(Member::Ring),
+            vr::CARRIER_SPEED => sim.speed(Member::Carrier),
+            vr::SUN_ANGLE => sim.angle(Member::Sun),
+            vr::RING_ANGLE => sim.angle(Member::Ring),
+            vr::CARRIER_ANGLE => sim.angle(Member::Carrier),
+            vr::INPUT_SHAFT_TORQUE => sim.input_torque(),
+            210..=225 => sim.mesh_force(planet(210), mesh(210)),
+            vr::TRACKED_PAIR_SUN_FORCE => sim.tracked_pair_force(MeshKind::SunPlanet),
+            vr::TRACKED_PAIR_RING_FORCE => sim.tracked_pair_force(MeshKind::RingPlanet),
+            vr::PLANET_1_SUN_TRANSMISSION_ERROR => sim.transmission_error(0, MeshKind::SunPlanet),
+            vr::PLANET_1_RING_TRANSMISSION_ERROR => sim.transmission_error(0, MeshKind::RingPlanet),
+            vr::PLANET_1_SUN_STATIC_TRANSMISSION_ERROR => {
+                sim.static_transmission_error(0, MeshKind::SunPlanet)
+            }
+            vr::PLANET_1_RING_STATIC_TRANSMISSION_ERROR => {
+                sim.static_transmission_error(0, MeshKind::RingPlanet)
+            }
+            vr::SUN_BEARING_FORCE => sim.bearing_force(Bearing::Member(Member::Sun)),
+            vr::RING_BEARING_FORCE => sim.bearing_force(Bearing::Member(Member::Ring)),
+            vr::CARRIER_BEARING_FORCE => sim.bearing_force(Bearing::Member(Member::Carrier)),
+            263..=270 => sim.bearing_force(Bearing::Planet((v - 263) as usize)),
+            280..=287 => window(MeshKind::SunPlanet, (v - 280) as usize),
+            290..=297 => window(MeshKind::RingPlanet, (v - 290) as usize),
+            _ => return Err(Refusal::error(format!("{} has no value in this version", info.name))),
+        })
+    }
+
+    /// fmi2GetInteger for one variable.
+    pub fn get_integer(&mut self, v: u32) -> Result<i32, Refusal> {
+        let info = find(Kind::Integer, v).ok_or_else(|| {
+            Refusal::error(format!("value reference {v} is not an Integer variable of this FMU"))
+        })?;
+        if info.causality != Causality::Output {
+            return Ok(self.int(v));
+        }
+        let sim = self.sim()?;
+        Ok(match v {
+            230..=245 => {
+                let k = v - 230;
+                let m = if k % 2 == 0 { MeshKind::SunPlanet } else { MeshKind::RingPlanet };
+                sim.pairs_in_contact((k / 2) as usize, m) as i32
+            }
+            vr::WINDOW_CYCLES => sim.window_cycles() as i32,
+            _ => return Err(Refusal::error(format!("{} has no value in this version", info.name))),
+        })
+    }
+
+    /// fmi2GetBoolean for one variable (this FMU has none).
+    pub fn get_boolean(&mut self, v: u32) -> Result<bool, Refusal> {
+        Err(Refusal::error(format!("value reference {v} is not a Boolean variable of this FMU")))
+    }
+
+    /// fmi2GetString for one variable.
+    pub fn get_string(&mut self, v: u32) -> Result<String, Refusal> {
+        find(Kind::String, v).ok_or_else(|| {
+            Refusal::error(format!("value reference {v} is not a String variable of this FMU"))
+        })?;
+        Ok(self.strings.get(&v).cloned().unwrap_or_default())
+    }
+
+    /// fmi2DoStep.
+    pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), Refusal> {
+        if let Some(stop) = self.stop_time {
+            if t + h > stop * (1.0 + 1e-12) + 1e-12 {
+                return Err(Refusal::error(format!(
+                    "communicationStepSize = {h}: the step to {} passes the stop time {stop}",
+                    t + h
+                )));
+            }
+        }
+        let sim = self
+            .sim
+            .as_mut()
+            .ok_or_else(|| Refusal::error("no simulation: exit initialization mode first"))?;
+        match sim.do_step(t, h) {
+            Ok(()) => {
+                self.last_successful_time = sim.time();
+                Ok(())
+            }
+            Err(crate::physics::simulation::SimulationError::InvalidInput { name, value, reason }) => {
+                Err(Refusal::error(format!("{name} = {value}: {reason}")))
+            }
+            Err(e) => {
+                self.last_successful_time = sim.time();
+                self.terminated = true;
+                self.phase = Phase::StepFailed;
+                Err(Refusal { status: Status::Discard, message: format!("the step was discarded: {e}") })
+            }
+        }
+    }
+
+    /// fmi2Terminate.
+    pub fn terminate(&mut self) {
+        self.phase = Phase::Terminated;
+    }
+
+    /// fmi2GetFMUstate.
+    pub fn save(&self) -> SavedState {
+        SavedState {
+            phase: self.phase,
+            reals: self.reals.clone(),
+            integers: self.integers.clone(),
+            strings: self.strings.clone(),
+            snapshot: self.sim.as_ref().map(Simulation::snapshot),
+            terminated: self.terminated,
+            last_successful_time: self.last_successful_time,
+        }
+    }
+
+    /// fmi2SetFMUstate.
+    pub fn restore(&mut self, s: &SavedState) -> Result<(), Refusal> {
+        self.reals = s.reals.clone();
+        self.integers = s.integers.clone();
+        self.strings = s.strings.clone();
+        match &s.snapshot {
+            Some(snap) => {
+                if self.sim.is_none() {
+                    self.build()?;
+                }
+                if let Some(sim) = &mut self.sim {
+                    sim.restore(snap).map_err(|e| {
+                        Refusal::error(format!("the FMU state does not fit this instance: {e}"))
+                    })?;
+                }
+            }
+            None => self.sim = None,
+        }
+        self.phase = s.phase;
+        self.terminated = s.terminated;
+        self.last_successful_time = s.last_successful_time;
+        Ok(())
+    }
+
+    /// Fingerprint of a serialized state: the GUID and every parameter value.
+    fn fingerprint(&self) -> String {
+        let mut f = GUID.to_string();
+        for v in VARIABLES.iter().filter(|v| v.causality == Causality::Parameter) {
+            let value = match v.kind {
+                Kind::Real => format!("{:?}", self.real(v.vr)),
+                Kind::Integer => self.int(v.vr).to_string(),
+                Kind::Boolean => String::new(),
+                Kind::String => self.strings.get(&v.vr).cloned().unwrap_or_default(),
+            };
+            f.push_str(&format!("|{}={value}", v.name));
+        }
+        f
+    }
+
+    /// fmi2SerializeFMUstate of a saved state.
+    pub fn serialize(&self, s: &SavedState) -> Result<Vec<u8>, Refusal> {
+        let snap = s
+            .snapshot
+            .as_ref()
+            .ok_or_else(|| Refusal::error("the FMU state holds no simulation yet: initialize first"))?;
+        Ok(state_format::encode(snap, &self.fingerprint()))
+    }
+
+    /// fmi2DeSerializeFMUstate into a saved state for this instance.
+    pub fn deserialize(&mut self, bytes: &[u8]) -> Result<SavedState, Refusal> {
+        let snap = state_format::decode(bytes, &self.fingerprint())
+            .map_err(|e| Refusal::error(format!("cannot restore the FMU state: {e}")))?;
+        let mut saved = self.save();
+        saved.phase = Phase::StepComplete;
+        saved.snapshot = Some(snap);
+        saved.terminated = false;
+        Ok(saved)
+    }
+}
