@@ -324,6 +324,9 @@ fn main() {
         .unwrap_or_else(|e| fail(format!("writing {}: {e}", map.display())));
     if std::env::var("CARGO_CFG_TARGET_OS").as_deref() == Ok("linux") {
         println!("cargo:rustc-cdylib-link-arg=-Wl,--version-script={}", map.display());
+        // fmi-sys links an importer-side C logger (callback_log) from a static
+        // archive: keep every archive's symbols local.
+        println!("cargo:rustc-cdylib-link-arg=-Wl,--exclude-libs,ALL");
     }
     std::fs::write(out.join("modelDescription.xml"), x).unwrap_or_else(|e| fail(format!("writing XML: {e}")));
     std::fs::write(out.join("fmi_variables.rs"), r).unwrap_or_else(|e| fail(format!("writing table: {e}")));
