@@ -115,6 +115,15 @@ enum Command {
 
 #[derive(Subcommand)]
 enum FmuAction {
+    /// Assemble the FMU archive (fmu/planetwear.fmu) from the release library.
+    Pack {
+        /// Output file.
+        #[arg(long, default_value = "fmu/planetwear.fmu")]
+        out: PathBuf,
+        /// The shared library; default: libplanetwear.so beside this executable.
+        #[arg(long)]
+        library: Option<PathBuf>,
+    },
     /// modelDescription.xml, generated from modelDescription/variables.toml.
     Xml {
         /// Write it to this file (atomically) instead of standard output.
@@ -298,6 +307,17 @@ fn run(cli: Cli) -> Result<()> {
                     );
                 }
             }
+        }
+        Command::Fmu { action: FmuAction::Pack { out, library } } => {
+            let library = match library {
+                Some(l) => l,
+                None => std::env::current_exe()?
+                    .parent()
+                    .map(|d| d.join("libplanetwear.so"))
+                    .context("locating the executable's directory")?,
+            };
+            planetwear::report::pack::pack(&library, &out)?;
+            println!("wrote {} (library {})", out.display(), library.display());
         }
         Command::Fmu { action: FmuAction::Xml { out } } => {
             let xml = planetwear::fmi::variables::MODEL_DESCRIPTION_XML;

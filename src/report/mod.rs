@@ -3,6 +3,7 @@
 //! person reads (plots), and writes every file atomically.
 
 pub mod ltca;
+pub mod pack;
 pub mod plot;
 pub mod sweep;
 
