@@ -10,6 +10,9 @@ echo "== cargo clippy"
 cargo clippy --release --all-targets --quiet -- -D warnings
 echo "== cargo test"
 cargo test --release
+echo "== build and pack the FMU (fmu/planetwear.fmu)"
+cargo build --release --quiet
+target/release/planetwear fmu pack --out fmu/planetwear.fmu
 echo "== pytest"
 PLANETWEAR_BIN="$PWD/target/release/planetwear" PYTHONDONTWRITEBYTECODE=1 \
     .venv/bin/python -m pytest -p no:cacheprovider -s tests/python

@@ -299,11 +299,11 @@ pub extern "C" fn fmi2Instantiate(
             },
         };
         comp.instance = Instance::new(&name, resources);
-        if loggingOn == 0 {
-            comp.logging_on = true; // error statuses stay reported; debug categories are off
-        } else {
-            comp.enabled.extend(LOG_CATEGORIES.iter().map(|(n, _)| *n));
-        }
+        // Quiet by default: with loggingOn false nothing reaches the logger
+        // until fmi2SetDebugLogging; with it true every category but the
+        // per-call trace.
+        comp.logging_on = loggingOn != 0;
+        comp.enabled = LOG_CATEGORIES.iter().map(|(n, _)| *n).filter(|n| *n != "logCalls").collect();
         Some(Box::into_raw(comp) as fmi2Component)
     });
     made.ok().flatten().unwrap_or(std::ptr::null_mut())

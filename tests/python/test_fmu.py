@@ -1,0 +1,173 @@
+"""The packed FMU, used the way fmpy users use it.
+
+Needs fmu/planetwear.fmu (the README's test command builds and packs it)."""
+
+import math
+import subprocess
+import sys
+import textwrap
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+from fmpy.validation import validate_fmu
+
+REPO = Path(__file__).resolve().parents[2]
+FMU = REPO / "fmu" / "planetwear.fmu"
+# Mean tooth force per planet of the default parameters: 750 N·m on the sun
+# over four planets at the sun's base radius 25.5 mm · cos 21.3°.
+F0 = 750.0 / (4 * 0.0255 * math.cos(math.radians(21.3)))
+
+
+@pytest.fixture(scope="module")
+def fmu():
+    if not FMU.is_file():
+        pytest.fail(f"{FMU} is missing: run `cargo build --release && target/release/planetwear fmu pack`")
+    md = read_model_description(str(FMU))
+    return md, extract(str(FMU))
+
+
+def slave(md, unzipdir, name="instance"):
+    s = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+    return s
+
+
+def test_fmpy_validate_finds_no_problem():
+    problems = validate_fmu(str(FMU))
+    print(f"fmpy validate: {len(problems)} problems", *problems, sep="\n")
+    assert problems == []
+
+
+def test_only_fmi2_symbols_are_exported(fmu, tmp_path):
+    md, unzipdir = fmu
+    so = Path(unzipdir) / "binaries" / "linux64" / "planetwear.so"
+    out = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
+    names = sorted(line.split()[-1] for line in out.splitlines() if line.strip())
+    print("nm -D --defined-only:", " ".join(names))
+    assert names and all(n.startswith("fmi2") for n in names), names
+    assert len(names) == 34
+
+
+def test_simulate_with_start_values(fmu):
+    res = simulate_fmu(str(FMU), stop_time=0.01, output_interval=1e-4,
+                       output=["sun.speed", "planet[1].sunMeshForce", "planet[4].ringMeshForce", "window.cycles"])
+    assert len(res) == 101
+    for name in res.dtype.names:
+        assert np.all(np.isfinite(res[name])), name
+    f = res["planet[1].sunMeshForce"][50:]
+    assert abs(f.mean() / F0 - 1) < 0.01, f.mean()
+    assert res["planet[4].ringMeshForce"][50:].mean() > 0.9 * F0
+
+
+@pytest.mark.parametrize("step", [1e-5, 1e-4, 1e-3, 1e-2])
+def test_communication_steps_from_1e_5_to_1e_2_s(step):
+    stop = max(20 * step, 2e-3)
+    res = simulate_fmu(str(FMU), stop_time=stop, output_interval=step,
+                       output=["planet[1].sunMeshForce", "sun.speed"])
+    assert np.all(np.isfinite(res["planet[1].sunMeshForce"]))
+    assert abs(res["sun.speed"][-1] / (3000 * math.pi / 30) - 1) < 0.05
+
+
+MESSAGES = []
+
+
+def _logger(env, name, status, category, message):
+    MESSAGES.append(message.decode() if isinstance(message, bytes) else str(message))
+
+
+def test_an_invalid_parameter_is_an_error_that_names_it(fmu):
+    # The logger stays referenced at module level: fmpy's logging shim keeps
+    # a global pointer to the last logger it was given.
+    messages = MESSAGES
+    messages.clear()
+    with pytest.raises(FMICallException):
+        simulate_fmu(str(FMU), stop_time=1e-3, start_values={"module": -0.0015}, logger=_logger, debug_logging=True)
+    print(*messages, sep="\n")
+    assert any("module" in m for m in messages), messages
+
+
+def run_states(md, unzipdir, name):
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = slave(md, unzipdir, name)
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    return s, vr
+
+
+def test_state_serialized_in_one_process_continues_bit_identically_in_another(fmu, tmp_path):
+    md, unzipdir = fmu
+    s, vr = run_states(md, unzipdir, "first")
+    h = 5e-5
+    # Communication points from integer counts, the same in both processes.
+    for k in range(40):
+        s.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+    state = s.getFMUState()
+    blob = s.serializeFMUState(state)
+    (tmp_path / "state.bin").write_bytes(blob)
+    expected = []
+    for k in range(40, 80):
+        s.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+        expected.append(s.getReal([vr["planet[1].sunMeshForce"], vr["sun.angle"]]))
+    s.freeFMUState(state)
+    s.terminate()
+    s.freeInstance()
+    script = textwrap.dedent(f"""
+        import sys, json
+        from fmpy import read_model_description
+        from fmpy.fmi2 import FMU2Slave
+        md = read_model_description({str(FMU)!r})
+        vr = {{v.name: v.valueReference for v in md.modelVariables}}
+        s = FMU2Slave(guid=md.guid, unzipDirectory={str(unzipdir)!r}, modelIdentifier='planetwear', instanceName='second')
+        s.instantiate(); s.setupExperiment(startTime=0.0); s.enterInitializationMode(); s.exitInitializationMode()
+        st = s.deserializeFMUState(open({str(tmp_path / 'state.bin')!r}, 'rb').read())
+        s.setFMUState(st)
+        h, out = 5e-5, []
+        for k in range(40, 80):
+            s.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+            out.append([x.hex() for x in s.getReal([vr['planet[1].sunMeshForce'], vr['sun.angle']])])
+        print(json.dumps(out))
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    got = __import__("json").loads(proc.stdout.strip().splitlines()[-1])
+    assert got == [[x.hex() for x in row] for row in expected]
+
+
+def test_a_corrupt_state_is_refused(fmu):
+    md, unzipdir = fmu
+    s, _ = run_states(md, unzipdir, "corrupt")
+    s.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-4)
+    blob = bytearray(s.serializeFMUState(s.getFMUState()))
+    blob[len(blob) // 2] ^= 0xFF
+    with pytest.raises(FMICallException):
+        s.deserializeFMUState(bytes(blob))
+
+
+def test_two_instances_in_two_threads_give_identical_results(fmu):
+    md, unzipdir = fmu
+    results = {}
+
+    def run(name):
+        s, vr = run_states(md, unzipdir, name)
+        t, h, out = 0.0, 1e-4, []
+        for _ in range(50):
+            s.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+            t += h
+            out.append(s.getReal([vr["planet[2].sunMeshForce"]])[0])
+        s.terminate()
+        s.freeInstance()
+        results[name] = out
+
+    threads = [threading.Thread(target=run, args=(n,)) for n in ("a", "b")]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    assert results["a"] == results["b"]
