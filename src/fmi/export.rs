@@ -736,3 +736,60 @@ pub extern "C" fn fmi2DeSerializeFMUstate(
         write_out(state, Box::into_raw(Box::new(s)) as fmi2FMUstate, "FMUstate")
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn instantiate(guid: &CStr) -> fmi2Component {
+        fmi2Instantiate(
+            c"unit".as_ptr(),
+            fmi2Type_fmi2CoSimulation,
+            guid.as_ptr(),
+            std::ptr::null(),
+            std::ptr::null(),
+            0,
+            0,
+        )
+    }
+
+    #[test]
+    fn a_panic_inside_a_call_is_answered_with_fatal_and_only_free_is_allowed_after() {
+        let guid = CString::new(GUID).unwrap();
+        let c = instantiate(&guid);
+        assert!(!c.is_null());
+        let status = guard(c, Call::SetupExperiment, "test", |_| panic!("forced"));
+        assert_eq!(status, fmi2Status_fmi2Fatal);
+        assert_eq!(fmi2Reset(c), fmi2Status_fmi2Error, "nothing but fmi2FreeInstance after a fatal error");
+        fmi2FreeInstance(c);
+    }
+
+    #[test]
+    fn resource_locations_in_every_legal_form() {
+        for uri in [
+            "file:///tmp/fmu/resources",
+            "file:///tmp/fmu/resources/",
+            "file:/tmp/fmu/resources",
+            "file://localhost/tmp/fmu/resources/",
+        ] {
+            assert_eq!(resource_path(uri), Some(PathBuf::from("/tmp/fmu/resources")), "{uri}");
+        }
+        assert_eq!(resource_path("file:///tmp/a%20b/res%2Fx"), Some(PathBuf::from("/tmp/a b/res/x")));
+        assert_eq!(resource_path("http://host/x"), None);
+        assert_eq!(resource_path("file://otherhost/x"), None);
+        assert_eq!(resource_path("file:///bad%zz"), None);
+    }
+
+    #[test]
+    fn the_call_order_table_matches_the_standard_at_its_corners() {
+        assert!(allowed(Call::DoStep, Phase::StepComplete));
+        assert!(!allowed(Call::DoStep, Phase::InitializationMode));
+        assert!(!allowed(Call::DoStep, Phase::StepFailed));
+        assert!(allowed(Call::Get, Phase::Error));
+        assert!(!allowed(Call::Get, Phase::Instantiated));
+        assert!(!allowed(Call::Set, Phase::Terminated));
+        assert!(allowed(Call::FreeInstance, Phase::Fatal));
+        assert!(!allowed(Call::Reset, Phase::Fatal));
+        assert!(!allowed(Call::CancelStep, Phase::StepComplete));
+    }
+}

@@ -1,0 +1,170 @@
+//! The exported FMI functions called in-process, as an importer would.
+
+use std::ffi::{CStr, CString};
+
+use fmi_sys::fmi2::*;
+use planetwear::fmi::export::*;
+use planetwear::fmi::variables::{vr, GUID};
+
+fn instantiate(guid: &str, name: &CStr) -> fmi2Component {
+    let guid = CString::new(guid).unwrap();
+    fmi2Instantiate(
+        name.as_ptr(),
+        fmi2Type_fmi2CoSimulation,
+        guid.as_ptr(),
+        c"file:///tmp/resources/".as_ptr(),
+        std::ptr::null(),
+        0,
+        0,
+    )
+}
+
+fn initialized() -> fmi2Component {
+    let c = instantiate(GUID, c"life");
+    assert!(!c.is_null());
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 1, 0.01), fmi2Status_fmi2OK);
+    assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+    c
+}
+
+#[test]
+fn the_full_life_cycle() {
+    // SAFETY: both return pointers to static NUL-terminated strings.
+    let version = unsafe { CStr::from_ptr(fmi2GetVersion()) };
+    // SAFETY: as above.
+    let platform = unsafe { CStr::from_ptr(fmi2GetTypesPlatform()) };
+    assert_eq!(version.to_str().unwrap(), "2.0");
+    assert_eq!(platform.to_str().unwrap(), "default");
+    let c = initialized();
+    let refs = [vr::PLANET_1_SUN_MESH_FORCE, vr::SUN_SPEED];
+    let mut out = [0.0; 2];
+    let h = 1e-4;
+    for k in 0..20 {
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+    }
+    assert_eq!(fmi2GetReal(c, refs.as_ptr(), 2, out.as_mut_ptr()), fmi2Status_fmi2OK);
+    assert!(out[0] > 0.0 && out[1] > 300.0, "{out:?}");
+    let mut t = 0.0;
+    assert_eq!(fmi2GetRealStatus(c, fmi2StatusKind_fmi2LastSuccessfulTime, &mut t), fmi2Status_fmi2OK);
+    assert!((t - 20.0 * h).abs() < 1e-15);
+    let mut terminated = 1;
+    assert_eq!(fmi2GetBooleanStatus(c, fmi2StatusKind_fmi2Terminated, &mut terminated), fmi2Status_fmi2OK);
+    assert_eq!(terminated, 0);
+    // Passing the stop time is refused.
+    assert_eq!(fmi2DoStep(c, 20.0 * h, 1.0, 1), fmi2Status_fmi2Error);
+    fmi2FreeInstance(c);
+    let c = initialized();
+    assert_eq!(fmi2Terminate(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2Reset(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2Status_fmi2OK);
+    fmi2FreeInstance(c);
+}
+
+#[test]
+fn illegal_call_sequences_are_errors_and_leave_the_phase() {
+    let c = instantiate(GUID, c"order");
+    assert_eq!(fmi2DoStep(c, 0.0, 1e-4, 1), fmi2Status_fmi2Error, "doStep before initialization");
+    assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2Error, "exit before enter");
+    let mut x = 0.0;
+    assert_eq!(fmi2GetReal(c, &vr::SUN_SPEED, 1, &mut x), fmi2Status_fmi2Error, "get before initialization");
+    // The phase is unchanged: the proper sequence still works.
+    assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(
+        fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0),
+        fmi2Status_fmi2Error,
+        "setup after initialization"
+    );
+    assert_eq!(fmi2CancelStep(c), fmi2Status_fmi2Error);
+    fmi2FreeInstance(c);
+}
+
+#[test]
+fn null_pointers_are_errors_and_zero_counts_never_read_them() {
+    assert_eq!(fmi2DoStep(std::ptr::null_mut(), 0.0, 1e-4, 1), fmi2Status_fmi2Error);
+    fmi2FreeInstance(std::ptr::null_mut());
+    let c = initialized();
+    assert_eq!(fmi2GetReal(c, std::ptr::null(), 0, std::ptr::null_mut()), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetReal(c, std::ptr::null(), 0, std::ptr::null()), fmi2Status_fmi2OK);
+    assert_eq!(fmi2GetReal(c, std::ptr::null(), 1, std::ptr::null_mut()), fmi2Status_fmi2Error);
+    fmi2FreeInstance(c);
+    let c = initialized();
+    let mut x = 0.0;
+    assert_eq!(fmi2GetReal(c, &vr::SUN_SPEED, 1, std::ptr::null_mut()), fmi2Status_fmi2Error);
+    fmi2FreeInstance(c);
+    let c = initialized();
+    assert_eq!(fmi2GetReal(c, &99_999, 1, &mut x), fmi2Status_fmi2Error, "unknown value reference");
+    fmi2FreeInstance(c);
+}
+
+#[test]
+fn a_wrong_guid_or_name_gives_no_instance() {
+    assert!(instantiate("{00000000-0000-0000-0000-000000000000}", c"guid").is_null());
+    assert!(instantiate(GUID, c"").is_null());
+    let guid = CString::new(GUID).unwrap();
+    let me = fmi2Instantiate(
+        c"me".as_ptr(),
+        fmi2Type_fmi2ModelExchange,
+        guid.as_ptr(),
+        std::ptr::null(),
+        std::ptr::null(),
+        0,
+        0,
+    );
+    assert!(me.is_null(), "model exchange is refused");
+}
+
+#[test]
+fn states_get_set_and_round_trip_through_bytes() {
+    let c = initialized();
+    let h = 1e-4;
+    for k in 0..10 {
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+    }
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    let mut size = 0usize;
+    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), fmi2Status_fmi2OK);
+    let mut bytes = vec![0 as fmi2Byte; size];
+    assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr(), size), fmi2Status_fmi2OK);
+    let mut after = [0.0; 1];
+    for k in 10..15 {
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+    }
+    assert_eq!(fmi2GetReal(c, &vr::PLANET_1_RING_MESH_FORCE, 1, after.as_mut_ptr()), fmi2Status_fmi2OK);
+    // Roll back twice: from the state handle and from its bytes.
+    assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
+    for k in 10..15 {
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+    }
+    let mut again = [0.0; 1];
+    assert_eq!(fmi2GetReal(c, &vr::PLANET_1_RING_MESH_FORCE, 1, again.as_mut_ptr()), fmi2Status_fmi2OK);
+    assert_eq!(after[0].to_bits(), again[0].to_bits());
+    let mut restored: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2DeSerializeFMUstate(c, bytes.as_ptr(), size, &mut restored), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetFMUstate(c, restored), fmi2Status_fmi2OK);
+    for k in 10..15 {
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+    }
+    assert_eq!(fmi2GetReal(c, &vr::PLANET_1_RING_MESH_FORCE, 1, again.as_mut_ptr()), fmi2Status_fmi2OK);
+    assert_eq!(after[0].to_bits(), again[0].to_bits());
+    assert_eq!(fmi2FreeFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    assert!(state.is_null());
+    assert_eq!(fmi2FreeFMUstate(c, &mut restored), fmi2Status_fmi2OK);
+    fmi2FreeInstance(c);
+}
+
+#[test]
+fn an_invalid_parameter_makes_initialization_fail() {
+    let c = instantiate(GUID, c"bad");
+    let module = -1.5e-3;
+    assert_eq!(fmi2SetReal(c, &vr::MODULE, 1, &module), fmi2Status_fmi2OK);
+    assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2Error);
+    let nan = f64::NAN;
+    let c2 = instantiate(GUID, c"nan");
+    assert_eq!(fmi2SetReal(c2, &vr::SUN_TORQUE, 1, &nan), fmi2Status_fmi2Error);
+    fmi2FreeInstance(c);
+    fmi2FreeInstance(c2);
+}
