@@ -48,6 +48,18 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Time-domain run from the start, printing outputs at every communication point (JSON lines).
+    Simulate {
+        /// A built-in scene name or a scene file.
+        #[arg(long)]
+        scene: String,
+        /// End time [s].
+        #[arg(long)]
+        stop: f64,
+        /// Communication step [s].
+        #[arg(long)]
+        step: f64,
+    },
     /// Steady-state dynamic response at one input speed.
     Run {
         /// A built-in scene name or a scene file.
@@ -204,6 +216,26 @@ fn run(cli: Cli) -> Result<()> {
                 println!("lumped scene '{}' is valid: {} planets", s.name, set.planet_angles.len());
             }
         },
+        Command::Simulate { scene, stop, step } => {
+            let set = validated(&load_scene(&scene)?)?;
+            if !(step.is_finite() && step > 0.0 && stop.is_finite() && stop > 0.0) {
+                bail!("--stop and --step must be finite and positive (got {stop} and {step})");
+            }
+            let model = PlanetaryDynamics::new(&set, SetModel::new(&set))?;
+            let mut sim =
+                planetwear::physics::simulation::Simulation::new(&set, model, 0.0, set.dynamics.input_speed)?;
+            let n = (stop / step).round() as u64;
+            for k in 0..n {
+                sim.do_step(k as f64 * step, step)?;
+                let row = serde_json::json!({
+                    "time": sim.time(),
+                    "sun.speed": sim.speed(planetwear::physics::gear::Member::Sun),
+                    "planet[1].sunMeshForce": sim.mesh_force(0, planetwear::physics::gear::MeshKind::SunPlanet),
+                    "planet[1].ringMeshForce": sim.mesh_force(0, planetwear::physics::gear::MeshKind::RingPlanet),
+                });
+                println!("{row}");
+            }
+        }
         Command::Run { scene, speed, json, plots } => {
             let set = validated(&load_scene(&scene)?)?;
             let mut model = PlanetaryDynamics::new(&set, SetModel::new(&set))?;

@@ -270,7 +270,9 @@ impl Simulation {
             });
         }
         let steps = ((h / self.nominal_step) - 1e-9).ceil().max(1.0) as u64;
-        let start = self.time;
+        // The caller's communication point is the time base (it was checked
+        // to be the current time), so no rounding accumulates across steps.
+        let start = t;
         let end = start + h;
         let mut f = vec![0.0; self.model.dim()];
         for k in 1..=steps {

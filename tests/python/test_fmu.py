@@ -171,3 +171,25 @@ def test_two_instances_in_two_threads_give_identical_results(fmu):
     for th in threads:
         th.join()
     assert results["a"] == results["b"]
+
+
+def test_the_fmu_equals_the_native_run_of_the_same_scene():
+    import json
+    import os
+
+    exe = os.environ.get("PLANETWEAR_BIN", str(REPO / "target" / "release" / "planetwear"))
+    step, stop = 1e-4, 0.005
+    native = subprocess.run([exe, "simulate", "--scene", "example-2004", "--stop", str(stop), "--step", str(step)],
+                            capture_output=True, text=True, check=True).stdout
+    rows = [json.loads(line) for line in native.splitlines()]
+    res = simulate_fmu(str(FMU), stop_time=stop, output_interval=step,
+                       output=["sun.speed", "planet[1].sunMeshForce", "planet[1].ringMeshForce"])
+    assert len(rows) == len(res) - 1
+    worst = 0.0
+    for row, fmu_row in zip(rows, res[1:]):
+        assert abs(row["time"] - fmu_row["time"]) < 1e-12
+        for name in ["sun.speed", "planet[1].sunMeshForce", "planet[1].ringMeshForce"]:
+            a, b = row[name], fmu_row[name]
+            worst = max(worst, abs(a - b) / max(abs(a), 1e-9))
+    print(f"largest relative difference FMU vs native: {worst:.3e}")
+    assert worst < 1e-9
