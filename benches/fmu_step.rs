@@ -1,0 +1,70 @@
+//! Cost of fmi2DoStep at 3000 rpm: communication steps of one mesh cycle and
+//! of 1 ms, the overhead of the FMI layer against the native `Simulation`,
+//! and the real-time factor, for both fidelity levels.
+//! Run: `cargo bench --bench fmu_step` (docs/PERFORMANCE.md records the figures).
+
+use std::ffi::CString;
+use std::time::Instant;
+
+use fmi_sys::fmi2::*;
+use planetwear::fmi::export::*;
+use planetwear::fmi::variables::{vr, GUID};
+use planetwear::physics::dynamics::PlanetaryDynamics;
+use planetwear::physics::ltca::SetModel;
+use planetwear::physics::simulation::Simulation;
+use planetwear::scene::{Fidelity, Scene};
+
+fn fmu_run(fidelity: i32, h: f64, span: f64) -> f64 {
+    let guid = CString::new(GUID).expect("no NUL");
+    let c = fmi2Instantiate(c"bench".as_ptr(), fmi2Type_fmi2CoSimulation, guid.as_ptr(), std::ptr::null(), std::ptr::null(), 0, 0);
+    assert!(!c.is_null());
+    assert_eq!(fmi2SetInteger(c, &vr::FIDELITY, 1, &fidelity), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2Status_fmi2OK);
+    assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+    let n = (span / h).round() as u64;
+    let refs = [vr::PLANET_1_SUN_MESH_FORCE, vr::PLANET_1_RING_MESH_FORCE, vr::SUN_SPEED];
+    let mut out = [0.0; 3];
+    let start = Instant::now();
+    for k in 0..n {
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+        assert_eq!(fmi2GetReal(c, refs.as_ptr(), 3, out.as_mut_ptr()), fmi2Status_fmi2OK);
+    }
+    let wall = start.elapsed().as_secs_f64();
+    fmi2FreeInstance(c);
+    wall / n as f64
+}
+
+fn native_run(fidelity: Fidelity, h: f64, span: f64) -> f64 {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = fidelity;
+    let set = s.validate().expect("valid");
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
+    let mut sim = Simulation::new(&set, model, 0.0, 3000.0 * std::f64::consts::PI / 30.0).expect("sim");
+    let n = (span / h).round() as u64;
+    let start = Instant::now();
+    for k in 0..n {
+        sim.do_step(k as f64 * h, h).expect("step");
+    }
+    start.elapsed().as_secs_f64() / n as f64
+}
+
+fn main() {
+    let fm = 34.0 * 3000.0 / 60.0;
+    let span = 0.05;
+    println!("fmi2DoStep at 3000 rpm (f_m = {fm} Hz), {span} s simulated, generalized-alpha 120 steps per mesh cycle");
+    println!("  {:<22} {:>12} {:>14} {:>14} {:>12} {:>10}", "fidelity", "step", "FMU per step", "native/step", "overhead", "real time");
+    for (name, code, fidelity) in [("torsional", 0, Fidelity::Torsional), ("transverse-torsional", 1, Fidelity::TransverseTorsional)] {
+        for (label, h) in [("1 mesh cycle", 1.0 / fm), ("1 ms", 1e-3)] {
+            let f = fmu_run(code, h, span);
+            let n = native_run(fidelity, h, span);
+            println!(
+                "  {name:<22} {label:>12} {:>11.1} µs {:>11.1} µs {:>11.1} % {:>9.3}×",
+                f * 1e6,
+                n * 1e6,
+                100.0 * (f / n - 1.0),
+                h / f
+            );
+        }
+    }
+}
