@@ -23,4 +23,7 @@ start=$(date +%s%N)
     --histories 3000,5000 --out out/sweep
 end=$(date +%s%N)
 echo "sweep took $(( (end - start) / 1000000 )) ms"
-echo "== done: see out/ltca.json, out/modes.txt, out/sweep/ and out/plots/*.png"
+echo "== FMU: pack fmu/planetwear.fmu and co-simulate it in a drivetrain with fmpy (out/cosim.png)"
+"$bin" fmu pack --out fmu/planetwear.fmu
+.venv/bin/python examples/drivetrain_cosim.py --out out/cosim.png
+echo "== done: see out/ltca.json, out/modes.txt, out/sweep/, out/cosim.png and out/plots/*.png"

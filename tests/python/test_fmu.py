@@ -193,3 +193,16 @@ def test_the_fmu_equals_the_native_run_of_the_same_scene():
             worst = max(worst, abs(a - b) / max(abs(a), 1e-9))
     print(f"largest relative difference FMU vs native: {worst:.3e}")
     assert worst < 1e-9
+
+
+def test_the_drivetrain_cosimulation_example_runs_and_stays_near_its_set_point(tmp_path):
+    sys.path.insert(0, str(REPO / "examples"))
+    import drivetrain_cosim
+
+    rows = drivetrain_cosim.run(str(FMU), stop=0.01)
+    assert np.all(np.isfinite(rows))
+    sun_rpm = rows[:, 1] * 30 / math.pi
+    assert abs(sun_rpm[len(sun_rpm) // 2:].mean() / 3000 - 1) < 0.05
+    assert abs(rows[len(rows) // 2:, 6].mean() / F0 - 1) < 0.05
+    drivetrain_cosim.plot(rows, tmp_path / "cosim.png")
+    assert (tmp_path / "cosim.png").stat().st_size > 10_000
