@@ -16,7 +16,15 @@ use planetwear::scene::{Fidelity, Scene};
 
 fn fmu_run(fidelity: i32, h: f64, span: f64) -> f64 {
     let guid = CString::new(GUID).expect("no NUL");
-    let c = fmi2Instantiate(c"bench".as_ptr(), fmi2Type_fmi2CoSimulation, guid.as_ptr(), std::ptr::null(), std::ptr::null(), 0, 0);
+    let c = fmi2Instantiate(
+        c"bench".as_ptr(),
+        fmi2Type_fmi2CoSimulation,
+        guid.as_ptr(),
+        std::ptr::null(),
+        std::ptr::null(),
+        0,
+        0,
+    );
     assert!(!c.is_null());
     assert_eq!(fmi2SetInteger(c, &vr::FIDELITY, 1, &fidelity), fmi2Status_fmi2OK);
     assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2Status_fmi2OK);
@@ -53,8 +61,13 @@ fn main() {
     let fm = 34.0 * 3000.0 / 60.0;
     let span = 0.05;
     println!("fmi2DoStep at 3000 rpm (f_m = {fm} Hz), {span} s simulated, generalized-alpha 120 steps per mesh cycle");
-    println!("  {:<22} {:>12} {:>14} {:>14} {:>12} {:>10}", "fidelity", "step", "FMU per step", "native/step", "overhead", "real time");
-    for (name, code, fidelity) in [("torsional", 0, Fidelity::Torsional), ("transverse-torsional", 1, Fidelity::TransverseTorsional)] {
+    println!(
+        "  {:<22} {:>12} {:>14} {:>14} {:>12} {:>10}",
+        "fidelity", "step", "FMU per step", "native/step", "overhead", "real time"
+    );
+    for (name, code, fidelity) in
+        [("torsional", 0, Fidelity::Torsional), ("transverse-torsional", 1, Fidelity::TransverseTorsional)]
+    {
         for (label, h) in [("1 mesh cycle", 1.0 / fm), ("1 ms", 1e-3)] {
             let f = fmu_run(code, h, span);
             let n = native_run(fidelity, h, span);

@@ -13,6 +13,8 @@ cargo test --release
 echo "== build and pack the FMU (fmu/planetwear.fmu)"
 cargo build --release --quiet
 target/release/planetwear fmu pack --out fmu/planetwear.fmu
+echo "== cargo test: the packed FMU under the fmi crate"
+cargo test --release --test fmu_import -- --include-ignored
 echo "== pytest"
 PLANETWEAR_BIN="$PWD/target/release/planetwear" PYTHONDONTWRITEBYTECODE=1 \
     .venv/bin/python -m pytest -p no:cacheprovider -s tests/python
