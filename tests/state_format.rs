@@ -26,6 +26,7 @@ fn snapshot(values: Vec<f64>, n: usize) -> Snapshot {
         window_sun: take(4),
         window_ring: take(5),
         window_last: take(6).into_iter().take(3).collect(),
+        drive: take(7).into_iter().take(2).collect(),
     }
 }
 
@@ -44,6 +45,7 @@ proptest! {
         prop_assert_eq!(bits(&back.window_sun), bits(&s.window_sun));
         prop_assert_eq!(bits(&back.window_ring), bits(&s.window_ring));
         prop_assert_eq!(bits(&back.window_last), bits(&s.window_last));
+        prop_assert_eq!(bits(&back.drive), bits(&s.drive));
     }
 
     #[test]

@@ -458,6 +458,32 @@ impl PlanetaryDynamics {
         }
     }
 
+    /// The speed drive's source state (angle offset [m] and speed [m/s] on
+    /// u), empty for the torque drive.
+    pub fn drive_state(&self) -> Vec<f64> {
+        self.speed_drive.map_or(Vec::new(), |d| vec![d.offset, d.speed])
+    }
+
+    /// Restores a state from [`Self::drive_state`] (ignored when its length
+    /// does not fit this model's drive).
+    pub fn set_drive_state(&mut self, state: &[f64]) {
+        if let (Some(d), [offset, speed]) = (&mut self.speed_drive, state) {
+            d.offset = *offset;
+            d.speed = *speed;
+        }
+    }
+
+    /// Changes the speed drive's source speed at time `t` [s] keeping the
+    /// source's angle continuous (no jump in the shaft's wind-up).
+    pub fn change_drive_speed(&mut self, omega: f64, t: f64) {
+        let lever = self.input_lever;
+        if let Some(d) = &mut self.speed_drive {
+            let new = omega * lever;
+            d.offset += (d.speed - new) * t;
+            d.speed = new;
+        }
+    }
+
     /// Rigid-body initial state at input speed `omega` [rad/s], elastic
     /// deflection from the static load: q = 0 but for a uniform approach.
     pub fn rigid_velocity_at(&self, omega: f64) -> Vec<f64> {

@@ -414,6 +414,8 @@ pub fn sweep(
     for (i, rpm) in speeds_rpm.iter().enumerate() {
         let omega = rpm * std::f64::consts::PI / 30.0;
         let mut ss = steady_state(model, set, omega, state.as_ref())?;
+        // Report the grid speed as given, not its rpm → rad/s → rpm round trip.
+        ss.input_speed_rpm = *rpm;
         state = Some(ss.end.clone());
         if !keep_histories_rpm.iter().any(|k| (k - rpm).abs() < 1e-9) {
             ss.time = Vec::new();

@@ -64,6 +64,8 @@ pub struct Snapshot {
     pub window_ring: Vec<f64>,
     /// The window's last (travel [m], sun force [N], ring force [N]), if any.
     pub window_last: Vec<f64>,
+    /// The speed drive's source state (empty for the torque drive).
+    pub drive: Vec<f64>,
 }
 
 /// Order-tracked samples of planet 1's two mesh forces over the last mesh
@@ -249,7 +251,7 @@ impl Simulation {
             });
         }
         self.speed_reference = omega;
-        self.model.set_drive_speed(omega);
+        self.model.change_drive_speed(omega, self.time);
         Ok(())
     }
 
@@ -452,6 +454,7 @@ impl Simulation {
             window_sun: self.window.sun.iter().copied().collect(),
             window_ring: self.window.ring.iter().copied().collect(),
             window_last: self.window.last.map_or(Vec::new(), |(a, b, c)| vec![a, b, c]),
+            drive: self.model.drive_state(),
         }
     }
 
@@ -467,6 +470,7 @@ impl Simulation {
         }
         self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
         self.set_speed_reference(s.speed_reference)?;
+        self.model.set_drive_state(&s.drive);
         self.stepper
             .restore(&mut self.model, s.time, &s.q, &s.v, &s.integrator)
             .map_err(|source| SimulationError::Integration { t: s.time, source })?;

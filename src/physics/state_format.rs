@@ -10,8 +10,8 @@
 //! | 4 | length L of the interface fingerprint (u32) |
 //! | L | fingerprint: the FMU GUID and the gear set it belongs to |
 //! | 8 | time (f64) |
-//! | 4·6 | lengths of q, v, the integrator state, the two harmonic-window sample arrays and the window's last point (u32) |
-//! | 8·n | those six arrays (f64) |
+//! | 4·7 | lengths of q, v, the integrator state, the two harmonic-window sample arrays, the window's last point and the speed drive's state (u32) |
+//! | 8·n | those seven arrays (f64) |
 //! | 8·4 | torques on sun, ring, carrier, speed reference (f64) |
 //! | 8 | FNV-1a 64 checksum of everything before it |
 //!
@@ -82,6 +82,7 @@ pub fn encode(snapshot: &Snapshot, fingerprint: &str) -> Vec<u8> {
         &snapshot.window_sun,
         &snapshot.window_ring,
         &snapshot.window_last,
+        &snapshot.drive,
     ];
     for v in arrays {
         out.extend_from_slice(&(v.len() as u32).to_le_bytes());
@@ -138,8 +139,8 @@ pub fn decode(data: &[u8], fingerprint: &str) -> Result<Snapshot, StateFormatErr
     let found = r.take(flen).ok_or(short(16 + flen))?;
     let found = String::from_utf8_lossy(found).into_owned();
     let time = r.f64();
-    let lens: Vec<Option<u32>> = (0..6).map(|_| r.u32()).collect();
-    let header = 16 + flen + 8 + 24;
+    let lens: Vec<Option<u32>> = (0..7).map(|_| r.u32()).collect();
+    let header = 16 + flen + 8 + 28;
     let (Some(time), Some(lens)) = (time, lens.into_iter().collect::<Option<Vec<u32>>>()) else {
         return Err(short(header + 8));
     };
@@ -168,6 +169,7 @@ pub fn decode(data: &[u8], fingerprint: &str) -> Result<Snapshot, StateFormatErr
     let window_sun = read(lens[3]);
     let window_ring = read(lens[4]);
     let window_last = read(lens[5]);
+    let drive = read(lens[6]);
     let rest = read(4);
     Ok(Snapshot {
         time,
@@ -179,5 +181,6 @@ pub fn decode(data: &[u8], fingerprint: &str) -> Result<Snapshot, StateFormatErr
         window_sun,
         window_ring,
         window_last,
+        drive,
     })
 }

@@ -206,3 +206,44 @@ def test_the_drivetrain_cosimulation_example_runs_and_stays_near_its_set_point(t
     assert abs(rows[len(rows) // 2:, 6].mean() / F0 - 1) < 0.05
     drivetrain_cosim.plot(rows, tmp_path / "cosim.png")
     assert (tmp_path / "cosim.png").stat().st_size > 10_000
+
+
+def test_a_speed_sweep_driven_from_python_reproduces_the_native_sweep(fmu, tmp_path):
+    """One instance carried from speed to speed (the state continues; the
+    speed-driven input shaft takes the train to each new reference), F(rms)
+    read from the windowed outputs, against `planetwear sweep` of the same
+    speed-driven scene (which carries its steady states the same way)."""
+    import csv
+    import os
+
+    exe = os.environ.get("PLANETWEAR_BIN", str(REPO / "target" / "release" / "planetwear"))
+    scene = subprocess.run([exe, "scene", "show", "example-2004"], capture_output=True, text=True, check=True).stdout
+    scene = scene.replace('drive = "torque"', 'drive = "speed"')
+    (tmp_path / "speed.toml").write_text(scene)
+    speeds = [2000.0, 3000.0, 4000.0]
+    subprocess.run([exe, "sweep", "--scene", str(tmp_path / "speed.toml"), "--from", "2000", "--to", "4000",
+                    "--step", "1000", "--direction", "up", "--out", str(tmp_path / "sweep")], check=True, capture_output=True)
+    native = {float(r["speed_rpm"]): float(r["p0_sun_rms_n_per_mm"]) * 30.0
+              for r in csv.DictReader(open(tmp_path / "sweep" / "sweep_up.csv"))}
+
+    md, unzipdir = fmu
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = slave(md, unzipdir, "sweep")
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.setInteger([vr["driveMode"]], [1])
+    s.setReal([vr["initialSpeed"], vr["inputSpeedReference"]], [speeds[0] * math.pi / 30] * 2)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    k, h = 0, 1e-4
+    for rpm in speeds:
+        s.setReal([vr["inputSpeedReference"]], [rpm * math.pi / 30])
+        fm = 34 * rpm / 60
+        for _ in range(int(round(150 / fm / h))):   # 150 mesh cycles: settle, then a full window
+            s.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+            k += 1
+        [frms] = s.getReal([vr["window.sunMeshFrms"]])
+        print(f"{rpm:.0f} rpm: FMU F(rms) {frms / 30:.3f} N/mm, native {native[rpm] / 30:.3f} N/mm")
+        assert abs(frms / native[rpm] - 1) < 0.02, (rpm, frms, native[rpm])
+    s.terminate()
+    s.freeInstance()
