@@ -247,3 +247,37 @@ def test_a_speed_sweep_driven_from_python_reproduces_the_native_sweep(fmu, tmp_p
         assert abs(frms / native[rpm] - 1) < 0.02, (rpm, frms, native[rpm])
     s.terminate()
     s.freeInstance()
+
+
+def test_a_step_that_cannot_be_completed_is_discarded_with_terminated_reported(fmu):
+    """An unstable explicit coupling (a motor droop of 20 N·m·s/rad held over
+    0.1 ms steps against ~1.1e-3 kg·m² of train) drives the loads up until the
+    integrator cannot complete a step: the FMU answers fmi2Discard, reports
+    fmi2Terminated and the last successful time, and returns no NaN."""
+    from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
+
+    md, unzipdir = fmu
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = slave(md, unzipdir, "unstable")
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    h, w_set, discarded = 1e-4, 3000 * math.pi / 30, None
+    for k in range(400):
+        [w] = s.getReal([vr["sun.speed"]])
+        assert math.isfinite(w)
+        s.setReal([vr["sunTorque"]], [750.0 + 20.0 * (w_set - w)])
+        try:
+            s.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+        except FMICallException as e:
+            discarded = (k, e)
+            break
+    assert discarded is not None, "the unstable coupling was expected to end in a discarded step"
+    k, e = discarded
+    assert "discard" in str(e)
+    assert s.getBooleanStatus(fmi2Terminated) == 1
+    last = s.getRealStatus(fmi2LastSuccessfulTime)
+    assert k * h <= last < (k + 1) * h, (k, last)
+    assert all(math.isfinite(x) for x in s.getReal([vr["planet[1].sunMeshForce"], vr["sun.speed"]]))
+    s.freeInstance()
