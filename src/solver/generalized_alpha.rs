@@ -73,7 +73,9 @@
 
 use nalgebra::{DMatrix, DVector, Dyn, LU};
 
-use super::{check_dim, check_range, check_system, first_non_finite, SecondOrderSystem, SolverError, Stats};
+use super::{
+    check_dim, check_initial_state, check_range, first_non_finite, SecondOrderSystem, SolverError, Stats,
+};
 
 /// The deepest halving level of one step (2⁴⁰ sub-steps), a guard independent of `min_step`.
 const MAX_HALVINGS: u32 = 40;
@@ -328,20 +330,7 @@ impl GeneralizedAlpha {
         q0: &[f64],
         v0: &[f64],
     ) -> Result<(), SolverError> {
-        let n = check_system(sys, q0, v0)?;
-        if !t0.is_finite() {
-            return Err(SolverError::InvalidArgument {
-                name: "t0",
-                value: t0,
-                reason: "time must be finite",
-            });
-        }
-        if let Some(index) = first_non_finite(q0) {
-            return Err(SolverError::NonFiniteState { t: t0, index });
-        }
-        if let Some(index) = first_non_finite(v0) {
-            return Err(SolverError::NonFiniteState { t: t0, index: n + index });
-        }
+        let n = check_initial_state(sys, t0, q0, v0)?;
         let mut f = vec![0.0; n];
         sys.force(t0, q0, v0, &mut f);
         self.stats.rhs_evaluations += 1;

@@ -235,6 +235,28 @@ pub enum SolverError {
     },
 }
 
+/// Checks a system and an initial state: dimensions (as [`check_system`]),
+/// a finite time, finite coordinates and velocities (velocity indices are
+/// reported after the n coordinates). Returns n.
+pub(crate) fn check_initial_state<S: SecondOrderSystem + ?Sized>(
+    sys: &S,
+    t0: f64,
+    q0: &[f64],
+    v0: &[f64],
+) -> Result<usize, SolverError> {
+    let n = check_system(sys, q0, v0)?;
+    if !t0.is_finite() {
+        return Err(SolverError::InvalidArgument { name: "t0", value: t0, reason: "time must be finite" });
+    }
+    if let Some(index) = first_non_finite(q0) {
+        return Err(SolverError::NonFiniteState { t: t0, index });
+    }
+    if let Some(index) = first_non_finite(v0) {
+        return Err(SolverError::NonFiniteState { t: t0, index: n + index });
+    }
+    Ok(n)
+}
+
 /// Checks that the system, its mass vector and the given state slices agree in length and that the
 /// masses are positive and finite.
 fn check_system<S: SecondOrderSystem + ?Sized>(sys: &S, q: &[f64], v: &[f64]) -> Result<usize, SolverError> {

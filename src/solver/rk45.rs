@@ -57,7 +57,9 @@
 //! one step (a contact shorter than a step) leave no sign change at the step end and are not
 //! seen; bound `max_step` by the shortest contact duration if that matters.
 
-use super::{check_dim, check_range, check_system, first_non_finite, SecondOrderSystem, SolverError, Stats};
+use super::{
+    check_dim, check_initial_state, check_range, first_non_finite, SecondOrderSystem, SolverError, Stats,
+};
 
 // Dormand–Prince 5(4) coefficients (Hairer, Nørsett & Wanner, Table II.5.2, and DOPRI5).
 const C2: f64 = 1.0 / 5.0;
@@ -402,20 +404,10 @@ impl Rk45 {
         q0: &[f64],
         v0: &[f64],
     ) -> Result<(), SolverError> {
-        let n = check_system(sys, q0, v0)?;
-        if !t0.is_finite() {
-            return Err(SolverError::InvalidArgument {
-                name: "t0",
-                value: t0,
-                reason: "time must be finite",
-            });
-        }
+        let n = check_initial_state(sys, t0, q0, v0)?;
         let mut y = Vec::with_capacity(2 * n);
         y.extend_from_slice(q0);
         y.extend_from_slice(v0);
-        if let Some(index) = first_non_finite(&y) {
-            return Err(SolverError::NonFiniteState { t: t0, index });
-        }
         self.initialized = false;
         self.n = n;
         self.t = t0;
