@@ -1,5 +1,5 @@
 //! The physics core: pure functions of validated input. No I/O, no FMI, no
-//! printing, no `unsafe`.
+//! printing, and only safe Rust (raw pointers live in src/fmi/export.rs alone).
 
 pub mod dynamics;
 pub mod gear;
