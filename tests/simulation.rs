@@ -3,7 +3,7 @@
 use planetwear::physics::dynamics::PlanetaryDynamics;
 use planetwear::physics::gear::{GearSet, Member, MeshKind};
 use planetwear::physics::ltca::SetModel;
-use planetwear::physics::simulation::{torques_of, Simulation, SimulationError};
+use planetwear::physics::simulation::{Simulation, SimulationError};
 use planetwear::scene::{Fidelity, Scene};
 use planetwear::solver::SecondOrderSystem;
 
@@ -119,7 +119,7 @@ fn an_unbalanced_torque_accelerates_the_train_at_the_rigid_body_rate() {
     let j_eff: f64 = model.mass().iter().zip(&r).map(|(m, r)| m * r * r).sum();
     let fm = model.mesh_frequency_per_input_speed * OMEGA;
     let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
-    let t = torques_of(&set);
+    let t = set.balanced_torques();
     let extra = 50.0;
     sim.set_torques(t[0] + extra, t[1], t[2]).unwrap();
     let cycles = 68.0;

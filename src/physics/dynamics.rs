@@ -259,24 +259,14 @@ impl PlanetaryDynamics {
                 damping: c_rp,
             });
         }
-        // External generalised forces: n·F0 on sun and ring, −n·F0(cos α_s + cos α_r)
-        // on the carrier, applied to the input and output members.
-        let n = set.planet_angles.len() as f64;
-        let lever_in = match set.input {
-            Member::Sun => rbs,
-            Member::Ring => rbr,
-            Member::Carrier => -(rbs + rbr),
+        // External torques: the set's balance ([`GearSet::balanced_torques`]),
+        // applied through `set_torques` once the model stands.
+        let torques = set.balanced_torques();
+        let input_torque = match set.input {
+            Member::Sun => torques[0],
+            Member::Ring => torques[1],
+            Member::Carrier => torques[2],
         };
-        let f0 = set.input_torque / (n * lever_in);
-        let mut f_ext = vec![0.0; dim];
-        for m in [set.input, set.output()] {
-            if let Some(i) = u(m) {
-                f_ext[i] += match m {
-                    Member::Sun | Member::Ring => n * f0,
-                    Member::Carrier => -n * f0 * (alpha_s.cos() + alpha_r.cos()),
-                };
-            }
-        }
         let input_index = u(set.input).ok_or_else(|| DynamicsError::InvalidParameter {
             name: "operation.input".into(),
             value: set.input.name().into(),
@@ -319,14 +309,11 @@ impl PlanetaryDynamics {
                     stiffness: k,
                     damping: c,
                     speed: 0.0,
-                    offset: f_ext[input_index] / k,
-                    preload: f_ext[input_index],
+                    offset: input_torque / input_lever / k,
+                    preload: input_torque / input_lever,
                 })
             }
         };
-        if speed_drive.is_some() {
-            f_ext[input_index] = 0.0;
-        }
         let slots = vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()];
         let mut support_nz = Vec::new();
         for i in 0..dim {
@@ -338,7 +325,7 @@ impl PlanetaryDynamics {
             }
         }
         let meshes = vec![MeshState::default(); links.len()];
-        Ok(Self {
+        let mut model = Self {
             contact,
             lumped,
             reduction,
@@ -347,7 +334,7 @@ impl PlanetaryDynamics {
             c_support,
             support_nz,
             links,
-            f_ext,
+            f_ext: vec![0.0; dim],
             speed_drive,
             input_index,
             input_lever,
@@ -358,7 +345,9 @@ impl PlanetaryDynamics {
             slots,
             events_scratch: Vec::new(),
             cache: None,
-        })
+        };
+        model.set_torques(torques[0], torques[1], torques[2]);
+        Ok(model)
     }
 
     /// The constant external generalised forces: the input torque (or the

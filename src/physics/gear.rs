@@ -473,6 +473,26 @@ impl GearSet {
         self.input_torque.abs() / (self.planet_angles.len() as f64 * lever)
     }
 
+    /// The balanced external torques on sun, ring and carrier [N·m],
+    /// counter-clockwise positive: the input torque on the input member, the
+    /// balancing torque on the output member (T_sun = nF r_b,sun,
+    /// T_ring = nF r_b,ring, T_carrier = −nF(r_b,sun + r_b,ring) with the
+    /// signed tooth force F), zero on the held member.
+    pub fn balanced_torques(&self) -> [f64; 3] {
+        let n = self.planet_angles.len() as f64;
+        let f = self.mesh_load_per_planet() * self.input_torque.signum();
+        let (rbs, rbr) = (self.sun.base_radius(), self.ring.base_radius());
+        let mut t = [0.0; 3];
+        for m in [self.input, self.output()] {
+            match m {
+                Member::Sun => t[0] = n * f * rbs,
+                Member::Ring => t[1] = n * f * rbr,
+                Member::Carrier => t[2] = -n * f * (rbs + rbr),
+            }
+        }
+        t
+    }
+
     /// Circumferential backlash at the operating pitch circle [m].
     pub fn circumferential_backlash(&self, mesh: MeshKind) -> f64 {
         self.normal_backlash(mesh) / self.operating_pressure_angle(mesh).cos()

@@ -314,8 +314,7 @@ pub fn steady_state(
             continue;
         }
         let (q, v) = stepper.state();
-        let (q, v) = (q.to_vec(), v.to_vec());
-        model.force(t_run, &q, &v, &mut scratch);
+        model.force(t_run, q, v, &mut scratch);
         let signature: Vec<f64> =
             model.meshes.iter().flat_map(|m| [m.force, m.approach_rate * rate_scale]).collect();
         if let Some(p) = &previous {
@@ -337,8 +336,7 @@ pub fn steady_state(
             stepper.advance(model, t, steps_per_sample).map_err(err)?;
         }
         let (q, v) = stepper.state();
-        let (q, v) = (q.to_vec(), v.to_vec());
-        model.force(t, &q, &v, &mut scratch);
+        model.force(t, q, v, &mut scratch);
         if let Some(i) = scratch.iter().position(|x| !x.is_finite()) {
             return Err(err(SolverError::NonFiniteState { t, index: i }));
         }

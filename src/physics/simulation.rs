@@ -167,7 +167,7 @@ impl Simulation {
         let nominal_step = 1.0 / (fm * set.dynamics.steps_per_mesh_cycle as f64);
         let mut model = model;
         let start = static_state(&model, input_speed);
-        let torques = torques_of(set);
+        let torques = set.balanced_torques();
         model.set_torques(torques[0], torques[1], torques[2]);
         model.set_drive_speed(input_speed);
         model.rebase_drive(&start.q);
@@ -304,8 +304,7 @@ impl Simulation {
     /// integrator's last evaluation was that state).
     fn refresh(&mut self, f: &mut [f64]) {
         let (q, v) = self.stepper.state();
-        let (q, v) = (q.to_vec(), v.to_vec());
-        self.model.force(self.time, &q, &v, f);
+        self.model.force(self.time, q, v, f);
     }
 
     /// Torque the input member receives [N·m]: from its shaft in the speed
@@ -497,28 +496,4 @@ impl Simulation {
     pub fn gear_set(&self) -> &GearSet {
         &self.set
     }
-}
-
-/// The balanced torques of a gear set's operation: the input torque on the
-/// input member and the balancing torque on the output member [N·m] on
-/// sun, ring, carrier.
-pub fn torques_of(set: &GearSet) -> [f64; 3] {
-    let n = set.planet_angles.len() as f64;
-    let f0 = set.mesh_load_per_planet() * set.input_torque.signum();
-    let (rbs, rbr) = (set.sun.base_radius(), set.ring.base_radius());
-    let torque = |m: Member| match m {
-        Member::Sun => n * f0 * rbs,
-        Member::Ring => n * f0 * rbr,
-        Member::Carrier => -n * f0 * (rbs + rbr),
-    };
-    let mut t = [0.0; 3];
-    for m in [set.input, set.output()] {
-        let k = match m {
-            Member::Sun => 0,
-            Member::Ring => 1,
-            Member::Carrier => 2,
-        };
-        t[k] = torque(m);
-    }
-    t
 }
