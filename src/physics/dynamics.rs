@@ -22,7 +22,7 @@ use nalgebra::DMatrix;
 use super::gear::{Drive, GearSet, Member, MeshKind};
 use super::ltca::{CycleStats, SetModel};
 use super::lumped::{add_outer, Coordinate, LumpedSet, Reduction};
-use crate::solver::SecondOrderSystem;
+use crate::solver::{LowRankJacobian, RankOneTerm, SecondOrderSystem, TermCoefficients};
 
 /// One mesh of one planet in the dynamic model.
 #[derive(Clone, Debug)]
@@ -524,13 +524,14 @@ impl PlanetaryDynamics {
             let delta: f64 = link.b_nz.iter().map(|(j, b)| b * q[*j]).sum();
             let rate: f64 = link.b_nz.iter().map(|(j, b)| b * v[*j]).sum();
             let s: f64 = link.p_nz.iter().map(|(j, p)| p * q[*j]).sum::<f64>() + link.s0;
-            let slots = self.slots[if link.kind == MeshKind::SunPlanet { 0 } else { 1 }];
-            let start = events.len();
-            events.resize(start + 2 * slots, 0.0);
-            let (f, kd, ks) = self.model(link.kind).force_with_derivatives(s, delta, &mut events[start..]);
-            if !with_events {
-                events.truncate(start);
-            }
+            let (f, kd, ks) = if with_events {
+                let slots = self.slots[if link.kind == MeshKind::SunPlanet { 0 } else { 1 }];
+                let start = events.len();
+                events.resize(start + 2 * slots, 0.0);
+                self.model(link.kind).force_with_derivatives(s, delta, &mut events[start..])
+            } else {
+                self.model(link.kind).force_tangents(s, delta)
+            };
             let damping_force = if kd > 0.0 { link.damping * rate } else { 0.0 };
             self.meshes[i] = MeshState {
                 position: s,
@@ -598,6 +599,34 @@ impl SecondOrderSystem for PlanetaryDynamics {
             let i = self.input_index;
             k[(i, i)] += d.stiffness;
             c[(i, i)] += d.damping;
+        }
+    }
+
+    fn low_rank_jacobian(&self) -> Option<LowRankJacobian> {
+        // Bearings and the drive shaft are constant; each mesh adds u = b (δ = bᵀq) with the
+        // contact's tangent stiffness and damping, and the rank-one term b ∂F/∂s pᵀ.
+        let (mut k0, mut c0) = (self.k_support.clone(), self.c_support.clone());
+        if let Some(d) = self.speed_drive {
+            let i = self.input_index;
+            k0[(i, i)] += d.stiffness;
+            c0[(i, i)] += d.damping;
+        }
+        let terms = self.links.iter().map(|l| RankOneTerm { u: l.b_nz.clone(), p: l.p_nz.clone() }).collect();
+        Some(LowRankJacobian { k0, c0, terms })
+    }
+
+    fn jacobian_coefficients(&mut self, _t: f64, q: &[f64], v: &[f64], out: &mut [TermCoefficients]) {
+        self.evaluate_meshes(q, v, false);
+        for ((link, state), c) in self.links.iter().zip(&self.meshes).zip(out.iter_mut()) {
+            *c = if state.stiffness == 0.0 {
+                TermCoefficients::default()
+            } else {
+                TermCoefficients {
+                    stiffness: state.stiffness,
+                    damping: link.damping,
+                    cross: state.position_derivative,
+                }
+            };
         }
     }
 

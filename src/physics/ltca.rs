@@ -42,6 +42,10 @@ pub struct MeshModel {
     face_width: f64,
     drive_k: Vec<f64>,
     back_k: Vec<f64>,
+    /// One face slice's tables interleaved per grid point (drive separation, back separation,
+    /// drive pair stiffness, back pair stiffness), so that one pair's lookup reads one cache
+    /// line; empty with more than one slice.
+    packed: Vec<[f64; 4]>,
 }
 
 /// State of one tooth pair at one instant.
@@ -99,9 +103,17 @@ impl MeshModel {
         }
         let separation = tables[0].clone();
         let stiffness = PairStiffness::new(set, mesh);
-        let drive_k = separation.drive.positions().map(|s| stiffness.at(s)).collect();
-        let back_k = separation.back.positions().map(|s| stiffness.at(separation.back_mirror - s)).collect();
+        let drive_k: Vec<f64> = separation.drive.positions().map(|s| stiffness.at(s)).collect();
+        let back_k: Vec<f64> =
+            separation.back.positions().map(|s| stiffness.at(separation.back_mirror - s)).collect();
         let (g1, g2) = set.mesh_gears(mesh);
+        let packed: Vec<[f64; 4]> = if tables.len() == 1 {
+            (0..drive_k.len())
+                .map(|i| [tables[0].drive.values[i], tables[0].back.values[i], drive_k[i], back_k[i]])
+                .collect()
+        } else {
+            Vec::new()
+        };
         Self {
             separation,
             slices: tables,
@@ -109,6 +121,7 @@ impl MeshModel {
             face_width: g1.face_width.min(g2.face_width),
             drive_k,
             back_k,
+            packed,
         }
     }
 
@@ -231,6 +244,62 @@ impl MeshModel {
                 events[slot] = law.event_drive;
                 events[slot + 1] = law.event_back;
             }
+        }
+        (f, kd, ks)
+    }
+
+    /// Mesh force [N] and its derivatives ∂F/∂δ [N/m] and ∂F/∂s [N/m], as
+    /// [`Self::force_with_derivatives`] without the event values: the
+    /// dynamic model's hot path, with a single face slice read from the
+    /// interleaved tables.
+    pub fn force_tangents(&self, s: f64, delta: f64) -> (f64, f64, f64) {
+        let g = &self.packed;
+        if g.len() < 2 {
+            return self.force_with_derivatives(s, delta, &mut []);
+        }
+        let grid = &self.separation.drive;
+        let inv_step = 1.0 / grid.step;
+        let last = (g.len() - 1) as f64;
+        // Pair k sits at grid coordinate x0 + k·(p_b/step); the pairs in the tables are those
+        // with 0 ≤ x ≤ last.
+        let x0 = (s - grid.start) * inv_step;
+        let per_pitch = self.path().base_pitch * inv_step;
+        let k_lo = (-x0 / per_pitch).ceil();
+        let k_hi = ((last - x0) / per_pitch).floor();
+        let (mut f, mut kd, mut ks) = (0.0, 0.0, 0.0);
+        let mut k = k_lo;
+        while k <= k_hi {
+            let x = (x0 + k * per_pitch).clamp(0.0, last);
+            k += 1.0;
+            let i = (x as usize).min(g.len() - 2);
+            let t = x - i as f64;
+            let (a, b) = (g[i], g[i + 1]);
+            let gd = a[0] + t * (b[0] - a[0]);
+            let (sign, pen, kk, dk, dg) = if gd < NO_CONTACT && delta > gd {
+                (
+                    1.0,
+                    delta - gd,
+                    a[2] + t * (b[2] - a[2]),
+                    (b[2] - a[2]) * inv_step,
+                    (b[0] - a[0]) * inv_step,
+                )
+            } else {
+                let gb = a[1] + t * (b[1] - a[1]);
+                if gb < NO_CONTACT && -delta > gb {
+                    (
+                        -1.0,
+                        -delta - gb,
+                        a[3] + t * (b[3] - a[3]),
+                        (b[3] - a[3]) * inv_step,
+                        (b[1] - a[1]) * inv_step,
+                    )
+                } else {
+                    continue;
+                }
+            };
+            f += sign * kk * pen;
+            kd += kk;
+            ks += sign * (dk * pen - kk * dg);
         }
         (f, kd, ks)
     }

@@ -73,6 +73,8 @@
 
 use nalgebra::{DMatrix, DVector, Dyn, LU};
 
+use super::low_rank::{LowRankSolver, TermCoefficients};
+
 use super::{
     check_dim, check_initial_state, check_range, first_non_finite, SecondOrderSystem, SolverError, Stats,
 };
@@ -289,6 +291,9 @@ pub struct GeneralizedAlpha {
     c: DMatrix<f64>,
     rhs: DVector<f64>,
     estimate: DVector<f64>,
+    /// The Woodbury solver when the system gives a low-rank Jacobian structure.
+    low_rank: Option<LowRankSolver>,
+    coefficients: Vec<TermCoefficients>,
     stats: Stats,
 }
 
@@ -316,6 +321,8 @@ impl GeneralizedAlpha {
             c: DMatrix::zeros(0, 0),
             rhs: DVector::zeros(0),
             estimate: DVector::zeros(0),
+            low_rank: None,
+            coefficients: Vec::new(),
             stats: Stats::default(),
         })
     }
@@ -359,6 +366,10 @@ impl GeneralizedAlpha {
         self.c = DMatrix::zeros(n, n);
         self.rhs = DVector::zeros(n);
         self.estimate = DVector::zeros(n);
+        let structure = sys.low_rank_jacobian();
+        let terms = structure.as_ref().map_or(0, |j| j.terms.len());
+        self.low_rank = structure.and_then(|j| LowRankSolver::new(j, n));
+        self.coefficients = vec![TermCoefficients::default(); terms];
         self.initialized = true;
         Ok(())
     }
@@ -447,12 +458,17 @@ impl GeneralizedAlpha {
         let t0 = self.t;
         let span = t_end - t0;
         let steps_f = steps as f64;
+        // The nominal step of this call with its last 24 mantissa bits cleared (relative change
+        // below 4e-9): the constant part of a low-rank iteration matrix is built for it, so calls
+        // whose steps differ by rounding share one build, and a restored state, whose calls
+        // compute the same nominal step, continues bit-identically.
+        let nominal = f64::from_bits((span / steps_f).to_bits() & !((1u64 << 24) - 1));
         for k in 1..=steps {
             let tb = if k == steps { t_end } else { t0 + span * (k as f64) / steps_f };
             if tb <= self.t {
                 return Err(SolverError::StepTooSmall { t: self.t, h: tb - self.t });
             }
-            self.step_with_halving(sys, tb)?;
+            self.step_with_halving(sys, tb, nominal)?;
         }
         Ok(())
     }
@@ -462,6 +478,7 @@ impl GeneralizedAlpha {
         &mut self,
         sys: &mut S,
         tb: f64,
+        nominal: f64,
     ) -> Result<(), SolverError> {
         let ta = self.t;
         let span = tb - ta;
@@ -474,7 +491,7 @@ impl GeneralizedAlpha {
             }
             let target = if j + 1 == n_sub { tb } else { ta + span * ((j + 1) as f64) / (n_sub as f64) };
             let h = target - self.t;
-            match self.try_step(sys, target) {
+            match self.try_step(sys, target, nominal / (n_sub as f64)) {
                 Ok(()) => {
                     self.commit(target);
                     j += 1;
@@ -519,7 +536,12 @@ impl GeneralizedAlpha {
 
     /// One generalized-α step from the committed state to `t1`, leaving the result in the
     /// `*_new` buffers.
-    fn try_step<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, t1: f64) -> Result<(), Failure> {
+    fn try_step<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t1: f64,
+        nominal: f64,
+    ) -> Result<(), Failure> {
         let AlphaParameters { alpha_m, alpha_f, gamma, beta } = self.settings.parameters;
         let n = self.n;
         let h = t1 - self.t;
@@ -534,7 +556,14 @@ impl GeneralizedAlpha {
             self.a_new[i] = self.a[i];
         }
         let mut lu: Option<LU<f64, Dyn, Dyn>> = None;
+        let mut low_rank_factored = false;
         let max_iterations = self.settings.max_iterations;
+        let ck = (1.0 - alpha_f) * beta * h2;
+        let cc = (1.0 - alpha_f) * gamma * h;
+        if let Some(solver) = &mut self.low_rank {
+            let (ckn, ccn) = ((1.0 - alpha_f) * beta * nominal * nominal, (1.0 - alpha_f) * gamma * nominal);
+            solver.prepare(&self.mass, 1.0 - alpha_m, ckn, ccn).map_err(|_| Failure::Singular)?;
+        }
         for iteration in 0..=max_iterations {
             for i in 0..n {
                 self.q_new[i] = self.q_pred[i] + beta * h2 * self.a_new[i];
@@ -564,7 +593,17 @@ impl GeneralizedAlpha {
                         - alpha_f * self.f[i]);
                 }
             }
-            if let Some(lu) = &lu {
+            if let (Some(solver), true) = (&mut self.low_rank, low_rank_factored) {
+                // Size of the next correction, estimated with the last iteration matrix.
+                self.estimate.copy_from(&self.rhs);
+                solver.solve(self.estimate.as_mut_slice());
+                if first_non_finite(self.estimate.as_slice()).is_none() {
+                    let next = self.wrms((0..n).map(|i| h2 * self.estimate[i]));
+                    if next <= 1.0 {
+                        return Ok(());
+                    }
+                }
+            } else if let Some(lu) = &lu {
                 // Size of the next correction, estimated with the last iteration matrix.
                 self.estimate.copy_from(&self.rhs);
                 if lu.solve_mut(&mut self.estimate) {
@@ -577,6 +616,31 @@ impl GeneralizedAlpha {
             if iteration == max_iterations {
                 break;
             }
+            if let Some(solver) = &mut self.low_rank {
+                sys.jacobian_coefficients(t1, &self.q_new, &self.v_new, &mut self.coefficients);
+                self.stats.jacobian_evaluations += 1;
+                if let Some(m) = self
+                    .coefficients
+                    .iter()
+                    .position(|c| !(c.stiffness.is_finite() && c.damping.is_finite() && c.cross.is_finite()))
+                {
+                    return Err(Failure::NonFiniteJacobian { t: t1, row: m, col: m });
+                }
+                // The rank-one part uses the actual step; only the constant part is built for the
+                // nominal one.
+                solver.factor(&self.coefficients, ck, cc).map_err(|_| Failure::Singular)?;
+                self.stats.lu_factorizations += 1;
+                solver.solve(self.rhs.as_mut_slice());
+                self.stats.newton_iterations += 1;
+                if let Some(index) = first_non_finite(self.rhs.as_slice()) {
+                    return Err(Failure::NonFiniteState { t: t1, index: 2 * n + index });
+                }
+                for i in 0..n {
+                    self.a_new[i] += self.rhs[i];
+                }
+                low_rank_factored = true;
+                continue;
+            }
             self.k.as_mut_slice().fill(0.0);
             self.c.as_mut_slice().fill(0.0);
             sys.jacobian(t1, &self.q_new, &self.v_new, &mut self.k, &mut self.c);
@@ -587,8 +651,6 @@ impl GeneralizedAlpha {
                 self.c = DMatrix::zeros(n, n);
                 return Err(Failure::Singular);
             }
-            let ck = (1.0 - alpha_f) * beta * h2;
-            let cc = (1.0 - alpha_f) * gamma * h;
             // Column-major storage: entry (row, col) sits at col·n + row.
             let (kd, cd) = (self.k.as_slice(), self.c.as_slice());
             if let Some(p) = kd.iter().zip(cd).position(|(kv, cv)| !(kv.is_finite() && cv.is_finite())) {

@@ -41,9 +41,11 @@
 //! and count their work in [`Stats`].
 
 mod generalized_alpha;
+mod low_rank;
 mod rk45;
 
 pub use generalized_alpha::{AlphaParameters, GeneralizedAlpha, GeneralizedAlphaSettings};
+pub use low_rank::{LowRankJacobian, RankOneTerm, TermCoefficients};
 pub use rk45::{LocatedEvent, Rk45, Rk45Settings, StepController};
 
 use thiserror::Error;
@@ -69,6 +71,17 @@ pub trait SecondOrderSystem {
     /// Event functions: their zero crossings mark switches of the piecewise force
     /// (a tooth pair starting or ending contact). Default: none.
     fn events(&mut self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut Vec<f64>) {}
+    /// The Jacobian's structure when it is a constant matrix plus rank-one terms
+    /// ([`LowRankJacobian`]); the generalized-α method then solves its Newton systems by the
+    /// Woodbury identity instead of factorising the n × n matrix. Read once at initialisation;
+    /// it must not change during a run, and [`Self::jacobian`] must equal
+    /// [`LowRankJacobian::assemble`] of [`Self::jacobian_coefficients`]. Default: none.
+    fn low_rank_jacobian(&self) -> Option<LowRankJacobian> {
+        None
+    }
+    /// The coefficients of the terms of [`Self::low_rank_jacobian`] at (t, q, v), one per term,
+    /// contact status frozen as in [`Self::jacobian`]. Called only when the structure is given.
+    fn jacobian_coefficients(&mut self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut [TermCoefficients]) {}
 }
 
 /// Work counters of an integrator; all counts accumulate until [`Stats::reset`] is called.
