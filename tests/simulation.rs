@@ -221,3 +221,64 @@ mod outputs {
         assert_eq!(sim.bearing_force(Bearing::Planet(7)), 0.0);
     }
 }
+
+fn speed_steps_setup() -> (GearSet, PlanetaryDynamics) {
+    let mut s = Scene::example_2004();
+    s.dynamics.drive = planetwear::scene::Drive::SpeedSteps;
+    let set = s.validate().unwrap();
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+    (set, model)
+}
+
+#[test]
+fn a_speed_step_moves_the_rigid_body_speed_and_keeps_the_elastic_state() {
+    let (set, model) = speed_steps_setup();
+    let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    let h = 1.0 / (34.0 * OMEGA / (2.0 * std::f64::consts::PI));
+    for _ in 0..20 {
+        sim.do_step(sim.time(), h).unwrap();
+    }
+    let before = sim.snapshot();
+    let (ws, wr) = (sim.speed(Member::Sun), sim.speed(Member::Ring));
+    let te: Vec<f64> = (0..4).map(|p| sim.transmission_error(p, MeshKind::SunPlanet)).collect();
+    sim.set_speed_reference(2.0 * OMEGA).unwrap();
+    let after = sim.snapshot();
+    // Deflections unchanged; the speeds moved by the rigid-body pattern (Willis).
+    assert_eq!(before.q, after.q);
+    assert!((sim.speed(Member::Sun) - ws - OMEGA).abs() < 1e-9 * OMEGA, "sun {}", sim.speed(Member::Sun));
+    let ratio = -f64::from(set.sun.teeth) / f64::from(set.ring.teeth);
+    assert!((sim.speed(Member::Ring) - wr - ratio * OMEGA).abs() < 1e-9 * OMEGA);
+    for (p, te0) in te.iter().enumerate() {
+        assert_eq!(sim.transmission_error(p, MeshKind::SunPlanet), *te0);
+    }
+    // The same reference again is no step; zero is refused with its name.
+    sim.set_speed_reference(2.0 * OMEGA).unwrap();
+    assert_eq!(sim.snapshot().v, after.v);
+    let e = sim.set_speed_reference(0.0).unwrap_err().to_string();
+    assert!(e.contains("inputSpeedReference") && e.contains("non-zero"), "{e}");
+    // After the step the set runs at the new speed, and the internal step follows it.
+    for _ in 0..40 {
+        sim.do_step(sim.time(), h / 2.0).unwrap();
+    }
+    let mean_sun = sim.speed(Member::Sun);
+    assert!((mean_sun / (2.0 * OMEGA) - 1.0).abs() < 0.01, "sun speed {mean_sun}");
+}
+
+#[test]
+fn a_snapshot_after_speed_steps_continues_bit_identically() {
+    let (set, model) = speed_steps_setup();
+    let mut a = Simulation::new(&set, model.clone(), 0.0, OMEGA).unwrap();
+    let h = 2e-4;
+    for k in 0..10 {
+        a.set_speed_reference(OMEGA * (1.0 + 0.1 * f64::from(k))).unwrap();
+        a.do_step(a.time(), h).unwrap();
+    }
+    let snap = a.snapshot();
+    let mut b = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    b.restore(&snap).unwrap();
+    for _ in 0..10 {
+        a.do_step(a.time(), h).unwrap();
+        b.do_step(b.time(), h).unwrap();
+    }
+    assert_eq!(a.snapshot(), b.snapshot());
+}

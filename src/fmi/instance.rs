@@ -241,8 +241,12 @@ impl Instance {
             scene.dynamics.drive = match self.int(vr::DRIVE_MODE) {
                 0 => Drive::Torque,
                 1 => Drive::Speed,
+                2 => Drive::SpeedSteps,
                 x => {
-                    return Err(Refusal::error(format!("driveMode = {x}: allowed are 0 (torque), 1 (speed)")))
+                    return Err(Refusal::error(format!(
+                        "driveMode = {x}: allowed are 0 (torque), 1 (speed through the input shaft), \
+                         2 (torque, with speed steps to each new inputSpeedReference)"
+                    )))
                 }
             }
         });

@@ -299,7 +299,7 @@ impl PlanetaryDynamics {
             ((ws - wc) * f64::from(set.sun.teeth) / (2.0 * std::f64::consts::PI)).abs();
         let rotations = [(u(Member::Carrier), a), (u(Member::Ring), rbr), (u(Member::Sun), rbs)];
         let speed_drive = match set.dynamics.drive {
-            Drive::Torque => None,
+            Drive::Torque | Drive::SpeedSteps => None,
             Drive::Speed => {
                 // Shaft stiffness on u: k_θ / lever²; damping ratio 0.05 of the
                 // input body on the shaft.

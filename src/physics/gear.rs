@@ -346,6 +346,13 @@ pub enum Drive {
     /// The input member is driven through a torsional shaft from a source
     /// turning at the set speed; the output carries the balancing torque.
     Speed,
+    /// Constant input torque as [`Drive::Torque`], and each new speed
+    /// reference steps the set's rigid-body speed to it, keeping the elastic
+    /// state (deflections and vibration velocities): the continuation of a
+    /// speed sweep (MODEL.md §3) with the published torque boundary
+    /// condition, which a stiff shaft from a constant-speed source would
+    /// change (it clamps the input member and shifts the rotational modes).
+    SpeedSteps,
 }
 
 /// Time integrator.

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
 use super::dynamics::PlanetaryDynamics;
-use super::gear::{GearSet, Member, MeshKind};
+use super::gear::{Drive, GearSet, Member, MeshKind};
 use super::lumped::{full_index, planet_bearing_vectors, Coordinate, Fidelity};
 use super::response::{static_state, Stepper};
 use super::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
@@ -241,17 +241,66 @@ impl Simulation {
         Ok(())
     }
 
-    /// Sets the speed the speed drive's source turns at [rad/s].
+    /// Sets the input speed reference [rad/s]. Under the speed drive the
+    /// shaft's source turns at it from now on; under [`Drive::SpeedSteps`] a
+    /// new reference steps the rigid-body speed to it (the elastic state is
+    /// kept); under the torque drive it is only recorded. With the speed
+    /// drive and the speed steps the internal step follows the reference, so
+    /// a step count per mesh cycle holds at every speed.
     pub fn set_speed_reference(&mut self, omega: f64) -> Result<(), SimulationError> {
+        let invalid = |reason: &str| SimulationError::InvalidInput {
+            name: "inputSpeedReference".into(),
+            value: omega.to_string(),
+            reason: reason.into(),
+        };
         if !omega.is_finite() {
-            return Err(SimulationError::InvalidInput {
-                name: "inputSpeedReference".into(),
-                value: omega.to_string(),
-                reason: "must be finite".into(),
-            });
+            return Err(invalid("must be finite"));
         }
-        self.speed_reference = omega;
-        self.model.change_drive_speed(omega, self.time);
+        if omega == self.speed_reference {
+            return Ok(());
+        }
+        match self.set.dynamics.drive {
+            Drive::Torque => self.speed_reference = omega,
+            Drive::Speed => {
+                self.speed_reference = omega;
+                self.model.change_drive_speed(omega, self.time);
+                self.retune(omega)?;
+            }
+            Drive::SpeedSteps => {
+                if omega == 0.0 {
+                    return Err(invalid("must be non-zero with driveMode 2 (speed steps)"));
+                }
+                let (q, v) = self.stepper.state();
+                let q = q.to_vec();
+                let dv = omega - self.speed_reference;
+                let v: Vec<f64> = v.iter().zip(&self.model.rigid_velocity).map(|(v, r)| v + r * dv).collect();
+                self.speed_reference = omega;
+                self.retune(omega)?;
+                let t = self.time;
+                self.stepper
+                    .init(&mut self.model, t, &q, &v)
+                    .map_err(|source| SimulationError::Integration { t, source })?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Sets the internal step for input speed `omega` [rad/s] (unchanged at
+    /// zero speed) and rebuilds the integrator for it, continuing from the
+    /// current state.
+    fn retune(&mut self, omega: f64) -> Result<(), SimulationError> {
+        let fm = self.model.mesh_frequency_per_input_speed * omega.abs();
+        if !(fm.is_finite() && fm > 0.0) {
+            return Ok(());
+        }
+        self.nominal_step = 1.0 / (fm * self.set.dynamics.steps_per_mesh_cycle as f64);
+        let t = self.time;
+        let err = |source| SimulationError::Integration { t, source };
+        let mut stepper = Stepper::new(&self.set, 1.0 / fm).map_err(err)?;
+        let (q, v) = self.stepper.state();
+        let internal = self.stepper.internal();
+        stepper.restore(&mut self.model, t, q, v, &internal).map_err(err)?;
+        self.stepper = stepper;
         Ok(())
     }
 
@@ -468,8 +517,19 @@ impl Simulation {
             });
         }
         self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
-        self.set_speed_reference(s.speed_reference)?;
+        if !s.speed_reference.is_finite() {
+            return Err(SimulationError::InvalidInput {
+                name: "snapshot".into(),
+                value: s.speed_reference.to_string(),
+                reason: "the speed reference must be finite".into(),
+            });
+        }
+        self.speed_reference = s.speed_reference;
         self.model.set_drive_state(&s.drive);
+        if self.set.dynamics.drive != Drive::Torque {
+            // The internal step follows the reference (see `set_speed_reference`).
+            self.retune(s.speed_reference)?;
+        }
         self.stepper
             .restore(&mut self.model, s.time, &s.q, &s.v, &s.integrator)
             .map_err(|source| SimulationError::Integration { t: s.time, source })?;
