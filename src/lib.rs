@@ -5,6 +5,7 @@
 //! into validated SI input; [`report`] writes files for the command-line tool.
 #![deny(clippy::print_stdout, clippy::print_stderr)]
 
+pub mod files;
 pub mod fmi;
 pub mod physics;
 pub mod report;
