@@ -578,6 +578,8 @@ fn an_update_wears_each_flank_by_its_gears_cycles_up_to_the_update_depth() {
     for f in [Flank::SunCoast, Flank::PlanetRingSide, Flank::RingDrive, Flank::RingCoast] {
         assert!(s1.flanks.get(f)[0].is_zero(), "{f:?}");
     }
+    // A cycle applies only to the state it was computed on.
+    assert!(matches!(model.apply(&s1, &c0, Limit::Update), Err(WearError::CycleMismatch { .. })));
     // A partial update of a given number of revolutions.
     let r = 0.3 * u.revolutions;
     let part = model.run(&s0, Stop::Revolutions(r)).unwrap();

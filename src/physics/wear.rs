@@ -345,6 +345,16 @@ pub enum WearError {
         /// Largest wear per input revolution [m].
         rate: f64,
     },
+    /// The cycle was not computed on this state.
+    #[error("the wear cycle of κ = {cycle_kappa} does not belong to this state (κ = {state_kappa}) on flank {flank}: compute the cycle on the state it updates")]
+    CycleMismatch {
+        /// κ of the cycle.
+        cycle_kappa: u32,
+        /// κ of the state.
+        state_kappa: u32,
+        /// The first flank whose grid differs (or the flank checked).
+        flank: &'static str,
+    },
     /// The total wear limit is already reached.
     #[error("the deepest wear {depth:e} m already reaches total_depth = {limit:e} m: no further update")]
     TotalWearReached {
@@ -564,9 +574,9 @@ pub struct MeshPassage {
     pub mesh: MeshKind,
     /// Pair positions s_0..s_R on the line of action, first to last contact [m].
     pub position: Vec<f64>,
-    /// Contact point on gear 1's flank at each position [rad of roll].
+    /// Roll angle of the contact point on gear 1's flank at each position [rad].
     pub roll_gear1: Vec<f64>,
-    /// Contact point on gear 2's flank at each position [rad of roll].
+    /// Roll angle of the contact point on gear 2's flank at each position [rad].
     pub roll_gear2: Vec<f64>,
     /// Relative slip of the two surfaces between consecutive positions [m].
     pub slip: Vec<f64>,
@@ -1005,6 +1015,16 @@ impl WearModel {
                 r
             }
         };
+        for fw in &cycle.flanks {
+            let grid = state.flanks.get(fw.flank).get(fw.slice).map(|d| &d.roll);
+            if cycle.kappa != state.kappa || grid != Some(&fw.roll) {
+                return Err(WearError::CycleMismatch {
+                    cycle_kappa: cycle.kappa,
+                    state_kappa: state.kappa,
+                    flank: fw.flank.name(),
+                });
+            }
+        }
         // Wear per input revolution at every grid point of every wearing flank.
         let mut max_rate = 0.0_f64;
         let mut limiting = cycle.flanks.first().map(|f| f.flank).unwrap_or(Flank::SunDrive);

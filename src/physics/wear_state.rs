@@ -155,9 +155,9 @@ pub enum WornStateError {
 pub struct ParameterDifference {
     /// Parameter name, e.g. `sun.teeth`.
     pub name: String,
-    /// Value in the state (`None`: absent) [SI].
+    /// Value in the state, `None` where absent [SI unit of the parameter].
     pub state: Option<f64>,
-    /// Value of this gear set (`None`: absent) [SI].
+    /// Value of this gear set, `None` where absent [SI unit of the parameter].
     pub expected: Option<f64>,
 }
 
@@ -195,7 +195,7 @@ pub struct GearSetPrint {
     pub name: String,
     /// FNV-1a 64 of the parameters, `fnv1a64:` and 16 hex digits.
     pub fingerprint: String,
-    /// Geometry and material parameters, SI (m, rad, Pa, counts).
+    /// Geometry and material parameters by name [SI: m, rad, Pa, counts].
     pub parameters: BTreeMap<String, f64>,
 }
 
