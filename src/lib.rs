@@ -2,9 +2,12 @@
 //! flanks wear.
 //!
 //! The physics core ([`physics`]) is pure; [`scene`] turns what a user writes
-//! into validated SI input; [`report`] writes files for the command-line tool.
+//! into validated SI input; [`report`] writes files for the command-line tool;
+//! [`files`] reads and writes the library's own data files (the worn-profile
+//! state).
 #![deny(clippy::print_stdout, clippy::print_stderr)]
 
+pub mod files;
 pub mod fmi;
 pub mod physics;
 pub mod report;

@@ -139,6 +139,64 @@ impl MeshModel {
         k_lo..=k_hi
     }
 
+    /// Which flank of one slice touches under approach `delta` [m], given the
+    /// slice's drive and back separations `gd`, `gb` [m] at the pair's
+    /// position: the sign of the force, the penetration [m], the pair
+    /// stiffness table and the slice's separation table of that flank.
+    #[inline(always)]
+    fn slice_contact<'a>(
+        &'a self,
+        slice: &'a MeshSeparation,
+        gd: f64,
+        gb: f64,
+        delta: f64,
+    ) -> Option<(f64, f64, &'a [f64], &'a [f64])> {
+        if gd < NO_CONTACT && delta > gd {
+            Some((1.0, delta - gd, &self.drive_k, &slice.drive.values))
+        } else if gb < NO_CONTACT && -delta > gb {
+            Some((-1.0, -delta - gb, &self.back_k, &slice.back.values))
+        } else {
+            None
+        }
+    }
+
+    /// Force [N] of each face slice of the pair at position `pos` [m] under
+    /// approach `delta` [m], written to `out` (one value per slice, negative
+    /// on the back flank, zero outside the tables); they add up to
+    /// [`Self::pair_force`]. The wear model reads the line load of each slice
+    /// from here.
+    pub fn pair_slice_forces(&self, pos: f64, delta: f64, out: &mut Vec<f64>) {
+        out.clear();
+        let grid = &self.separation.drive;
+        if pos < grid.start || pos > grid.end() {
+            out.resize(self.slices.len(), 0.0);
+            return;
+        }
+        // The same cell and weights as the summed law of `pair`.
+        let inv_step = 1.0 / grid.step;
+        let last = grid.values.len() - 1;
+        let x = ((pos - grid.start) * inv_step).clamp(0.0, last as f64);
+        let i = (x as usize).min(last - 1);
+        let t = x - i as f64;
+        let lerp = |v: &[f64]| v[i] + t * (v[i + 1] - v[i]);
+        let fraction = 1.0 / self.slices.len() as f64;
+        for slice in &self.slices {
+            let (gd, gb) = (lerp(&slice.drive.values), lerp(&slice.back.values));
+            out.push(match self.slice_contact(slice, gd, gb, delta) {
+                Some((sign, x, k_table, _)) => {
+                    let k = fraction * lerp(k_table);
+                    sign * k * x
+                }
+                None => 0.0,
+            });
+        }
+    }
+
+    /// Face width carried by the mesh, the narrower of its two gears [m].
+    pub fn face_width(&self) -> f64 {
+        self.face_width
+    }
+
     /// Everything the contact law says about the pair at position `pos` [m]
     /// under approach `delta` [m], summed over the face slices: one table
     /// cell lookup serves every table (they share one grid).
@@ -161,12 +219,7 @@ impl MeshModel {
             let gb = lerp(&slice.back.values);
             law.event_drive = law.event_drive.max(delta - gd);
             law.event_back = law.event_back.max(-delta - gb);
-            // (sign of the force, penetration, its table, separation table)
-            let (sign, x, k_table, g_table) = if gd < NO_CONTACT && delta > gd {
-                (1.0, delta - gd, &self.drive_k, &slice.drive.values)
-            } else if gb < NO_CONTACT && -delta > gb {
-                (-1.0, -delta - gb, &self.back_k, &slice.back.values)
-            } else {
+            let Some((sign, x, k_table, g_table)) = self.slice_contact(slice, gd, gb, delta) else {
                 continue;
             };
             let k = fraction * lerp(k_table);
@@ -586,6 +639,43 @@ impl SetModel {
         p.start + (s - p.start).rem_euclid(p.base_pitch)
     }
 
+    /// Static equilibrium of the whole set at sun travel `lambda` [m] under
+    /// the total tooth force `total` [N] (n·F, shared by the planets),
+    /// starting the iterations from `guess` (a neighbouring equilibrium or
+    /// [`SetEquilibrium::unloaded`]).
+    pub fn equilibrium(&self, total: f64, lambda: f64, guess: &SetEquilibrium) -> SetEquilibrium {
+        let n = self.planet_angles.len();
+        let guesses: Vec<f64> =
+            (0..n).map(|p| guess.sun_mesh_approach.get(p).copied().unwrap_or(0.0)).collect();
+        let g = |u: f64| {
+            let mut f = 0.0;
+            let mut k = 0.0;
+            for (p, guess) in guesses.iter().enumerate() {
+                let (fp, x) = self.planet_load(p, lambda, u, *guess);
+                f += fp;
+                // Series stiffness of the planet's two meshes at this state.
+                let ks = self.sun_planet.force(self.sun_position(p, lambda), x, None).1;
+                let kr = self.ring_planet.force(self.ring_position(p, lambda), u - x, None).1;
+                if ks + kr > 0.0 {
+                    k += ks * kr / (ks + kr);
+                }
+            }
+            (f, k)
+        };
+        let us = solve_increasing(g, total, guess.sun_approach);
+        let mut out = SetEquilibrium {
+            sun_approach: us,
+            sun_mesh_approach: Vec::with_capacity(n),
+            planet_load: Vec::with_capacity(n),
+        };
+        for (p, guess) in guesses.iter().enumerate() {
+            let (f, x) = self.planet_load(p, lambda, us, *guess);
+            out.sun_mesh_approach.push(x);
+            out.planet_load.push(f);
+        }
+        out
+    }
+
     /// Load [N] through planet `n` when the sun has advanced `u_s` [m]
     /// elastically, with the approach of its sun mesh.
     pub fn planet_load(&self, n: usize, lambda: f64, u_s: f64, guess: f64) -> (f64, f64) {
@@ -598,6 +688,25 @@ impl SetModel {
         };
         let x = solve_increasing(g, 0.0, guess);
         (self.sun_planet.force(ss, x, None).0, x)
+    }
+}
+
+/// Static equilibrium of the whole set at one sun travel.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SetEquilibrium {
+    /// Sun rotation as displacement along the line of action [m].
+    pub sun_approach: f64,
+    /// Approach of each planet's sun mesh [m]; its ring mesh's approach is
+    /// `sun_approach` minus this.
+    pub sun_mesh_approach: Vec<f64>,
+    /// Load through each planet [N].
+    pub planet_load: Vec<f64>,
+}
+
+impl SetEquilibrium {
+    /// The unloaded set of `planets` planets: the starting guess of a first solve.
+    pub fn unloaded(planets: usize) -> Self {
+        Self { sun_approach: 0.0, sun_mesh_approach: vec![0.0; planets], planet_load: vec![0.0; planets] }
     }
 }
 
@@ -625,8 +734,7 @@ pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
     let n = model.planet_angles.len();
     let total = set.mesh_load_per_planet() * n as f64;
     let pb = model.sun_planet.path().base_pitch;
-    let mut guesses = vec![0.0; n];
-    let mut us = 0.0;
+    let mut state = SetEquilibrium::unloaded(n);
     let mut out = SetLtca {
         travel: Vec::new(),
         sun_approach: Vec::new(),
@@ -636,28 +744,11 @@ pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
     };
     for i in 0..samples {
         let lambda = pb * i as f64 / samples as f64;
-        let g = |u: f64| {
-            let mut f = 0.0;
-            let mut k = 0.0;
-            for (p, guess) in guesses.iter().enumerate() {
-                let (fp, x) = model.planet_load(p, lambda, u, *guess);
-                f += fp;
-                // Series stiffness of the planet's two meshes at this state.
-                let ks = model.sun_planet.force(model.sun_position(p, lambda), x, None).1;
-                let kr = model.ring_planet.force(model.ring_position(p, lambda), u - x, None).1;
-                if ks + kr > 0.0 {
-                    k += ks * kr / (ks + kr);
-                }
-            }
-            (f, k)
-        };
-        us = solve_increasing(g, total, us);
+        state = model.equilibrium(total, lambda, &state);
         out.travel.push(lambda);
-        out.sun_approach.push(us);
-        for (p, guess) in guesses.iter_mut().enumerate() {
-            let (f, x) = model.planet_load(p, lambda, us, *guess);
-            *guess = x;
-            out.planet_load[p].push(f);
+        out.sun_approach.push(state.sun_approach);
+        for (p, f) in state.planet_load.iter().enumerate() {
+            out.planet_load[p].push(*f);
         }
     }
     let mean_all = total / n as f64;

@@ -17,3 +17,5 @@ pub mod simulation;
 pub mod spectrum;
 pub mod state_format;
 pub mod stiffness;
+pub mod wear;
+pub mod wear_state;
