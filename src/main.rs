@@ -12,6 +12,7 @@ use planetwear::physics::ltca::SetModel;
 use planetwear::physics::lumped::LumpedSet;
 use planetwear::physics::modes::{natural_modes, ModeClass};
 use planetwear::physics::response::{steady_state, sweep, Direction, SteadyState};
+use planetwear::physics::wear::{Flank, Limit, WearError, WearModel, WearSettings, WearingFlanks};
 use planetwear::report::ltca::LtcaStudy;
 use planetwear::report::sweep::{
     find_peaks, sweep_csv, write_csv, write_forced_response, write_steady_state,
@@ -44,6 +45,9 @@ enum Command {
         /// A built-in scene (example-2004, lumped-benchmark) or a scene file.
         #[arg(long)]
         scene: String,
+        /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
+        #[arg(long)]
+        wear_state: Option<PathBuf>,
         /// Print the full result as JSON (SI units, frequencies in Hz).
         #[arg(long)]
         json: bool,
@@ -53,6 +57,9 @@ enum Command {
         /// A built-in scene name or a scene file.
         #[arg(long)]
         scene: String,
+        /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
+        #[arg(long)]
+        wear_state: Option<PathBuf>,
         /// End time [s].
         #[arg(long)]
         stop: f64,
@@ -65,6 +72,9 @@ enum Command {
         /// A built-in scene name or a scene file.
         #[arg(long)]
         scene: String,
+        /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
+        #[arg(long)]
+        wear_state: Option<PathBuf>,
         /// Input speed [rpm]; default: the scene's dynamics.input_speed_rpm.
         #[arg(long)]
         speed: Option<f64>,
@@ -80,6 +90,9 @@ enum Command {
         /// A built-in scene name or a scene file.
         #[arg(long)]
         scene: String,
+        /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
+        #[arg(long)]
+        wear_state: Option<PathBuf>,
         /// First speed [rpm].
         #[arg(long)]
         from: f64,
@@ -102,6 +115,11 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Archard wear of the tooth flanks: the wear stepper and the wear run.
+    Wear {
+        #[command(subcommand)]
+        action: WearAction,
+    },
     /// Quasi-static loaded tooth contact analysis of both meshes and of the whole set.
     Ltca {
         /// A built-in scene name (example-2004) or a scene file (TOML).
@@ -122,6 +140,51 @@ enum Command {
         /// Write SVG and PNG plots into this directory.
         #[arg(long)]
         plots: Option<PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
+enum WearAction {
+    /// Advance a worn-profile state by one update (the largest new wear reaches
+    /// the threshold) or by a number of input revolutions.
+    Step {
+        /// A built-in scene name or a scene file.
+        #[arg(long)]
+        scene: String,
+        /// The state to advance; default: the unworn set (κ = 0).
+        #[arg(long)]
+        state: Option<PathBuf>,
+        /// Where to write the new state (atomically).
+        #[arg(long)]
+        out: PathBuf,
+        /// Largest new wear of the update [µm] (default 2.5).
+        #[arg(long, conflicts_with = "revolutions")]
+        threshold: Option<f64>,
+        /// Advance by this many input revolutions instead of one whole update.
+        #[arg(long)]
+        revolutions: Option<f64>,
+        /// Wear the ring–planet mesh's flanks as well as the sun–planet mesh's.
+        #[arg(long)]
+        ring: bool,
+    },
+    /// Run the wear model from the unworn set to κ: states kappa-<κ>.json,
+    /// summary.json and plots of wear depth against roll angle.
+    Run {
+        /// A built-in scene name or a scene file.
+        #[arg(long)]
+        scene: String,
+        /// Last geometry state κ (the run stops earlier at the total wear limit).
+        #[arg(long, default_value_t = 6)]
+        to_kappa: u32,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Wear the ring–planet mesh's flanks as well as the sun–planet mesh's.
+        #[arg(long)]
+        ring: bool,
+        /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -200,6 +263,94 @@ fn validated(scene: &Scene) -> Result<GearSet> {
     scene.validate().map_err(anyhow::Error::from)
 }
 
+/// The contact model of the set, unworn or with the flanks of a worn-profile state.
+fn contact_model(set: &GearSet, wear_state: Option<&Path>) -> Result<SetModel> {
+    match wear_state {
+        None => Ok(SetModel::new(set)),
+        Some(path) => {
+            let state = planetwear::files::read_worn_state(path, set)
+                .with_context(|| format!("--wear-state {}", path.display()))?;
+            Ok(state.set_model(set))
+        }
+    }
+}
+
+fn wear_model(set: &GearSet, ring: bool, threshold_um: Option<f64>) -> Result<WearModel> {
+    let mut settings = WearSettings::for_set(set);
+    if ring {
+        settings.wearing = WearingFlanks::both_meshes();
+    }
+    if let Some(t) = threshold_um {
+        settings.update_depth = t * 1e-6;
+    }
+    WearModel::new(set, settings).map_err(|e| match threshold_um {
+        Some(t) => anyhow::anyhow!("--threshold {t} µm: {e}"),
+        None => e.into(),
+    })
+}
+
+fn wear_run(scene: &str, to_kappa: u32, out: &Path, ring: bool, json: bool) -> Result<()> {
+    let set = validated(&load_scene(scene)?)?;
+    let model = wear_model(&set, ring, None)?;
+    std::fs::create_dir_all(out.join("plots")).with_context(|| format!("creating {}", out.display()))?;
+    let mut state = model.unworn();
+    let mut states = vec![state.clone()];
+    let mut seconds = vec![0.0];
+    planetwear::files::write_worn_state(&out.join("kappa-0.json"), &state)?;
+    let bar = progress_bar(u64::from(to_kappa));
+    let mut stopped = None;
+    for _ in 0..to_kappa {
+        let started = std::time::Instant::now();
+        match model.step(&state, Limit::Update) {
+            Ok(next) => state = next,
+            Err(e @ WearError::TotalWearReached { .. }) => {
+                stopped = Some(e.to_string());
+                break;
+            }
+            Err(e) => return Err(e.into()),
+        }
+        seconds.push(started.elapsed().as_secs_f64());
+        planetwear::files::write_worn_state(&out.join(format!("kappa-{}.json", state.kappa)), &state)?;
+        states.push(state.clone());
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let doc = planetwear::report::wear::summary(&set, &states, &seconds);
+    write_atomic(&out.join("summary.json"), serde_json::to_string_pretty(&doc)?.as_bytes())?;
+    let files = planetwear::report::wear::write_plots(&set, &states, &out.join("plots"))?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&doc)?);
+        return Ok(());
+    }
+    println!(
+        "wear of {}: {} updates, states and summary.json in {}, {} plot files",
+        set.name,
+        states.len() - 1,
+        out.display(),
+        files.len()
+    );
+    println!("   κ  cycles sun  cycles planet   input rev   sun max µm @ roll   planet max µm @ roll   time");
+    for s in doc["states"].as_array().into_iter().flatten().skip(1) {
+        let f = |m: &str, k: &str| s["flanks"][m][k].as_f64().unwrap_or(f64::NAN);
+        println!(
+            "  {:>2}  {:>10.4e}  {:>13.4e}  {:>10.4e}   {:>6.3} @ {:>6.2}°     {:>6.3} @ {:>6.2}°      {:.2} s",
+            s["kappa"],
+            s["cycles_sun"].as_f64().unwrap_or(f64::NAN),
+            s["cycles_planet"].as_f64().unwrap_or(f64::NAN),
+            s["input_revolutions"].as_f64().unwrap_or(f64::NAN),
+            f("sun", "max_um"),
+            f("sun", "max_roll_deg"),
+            f("planet", "max_um"),
+            f("planet", "max_roll_deg"),
+            s["seconds"].as_f64().unwrap_or(0.0),
+        );
+    }
+    if let Some(why) = stopped {
+        println!("stopped before κ = {to_kappa}: {why}");
+    }
+    Ok(())
+}
+
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Scene { action: SceneAction::Show { scene } } => match load_any(&scene)? {
@@ -216,12 +367,12 @@ fn run(cli: Cli) -> Result<()> {
                 println!("lumped scene '{}' is valid: {} planets", s.name, set.planet_angles.len());
             }
         },
-        Command::Simulate { scene, stop, step } => {
+        Command::Simulate { scene, wear_state, stop, step } => {
             let set = validated(&load_scene(&scene)?)?;
             if !(step.is_finite() && step > 0.0 && stop.is_finite() && stop > 0.0) {
                 bail!("--stop and --step must be finite and positive (got {stop} and {step})");
             }
-            let model = PlanetaryDynamics::new(&set, SetModel::new(&set))?;
+            let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
             let mut sim =
                 planetwear::physics::simulation::Simulation::new(&set, model, 0.0, set.dynamics.input_speed)?;
             let n = (stop / step).round() as u64;
@@ -236,9 +387,9 @@ fn run(cli: Cli) -> Result<()> {
                 println!("{row}");
             }
         }
-        Command::Run { scene, speed, json, plots } => {
+        Command::Run { scene, wear_state, speed, json, plots } => {
             let set = validated(&load_scene(&scene)?)?;
-            let mut model = PlanetaryDynamics::new(&set, SetModel::new(&set))?;
+            let mut model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
             let rpm = speed.unwrap_or(set.dynamics.input_speed * 30.0 / std::f64::consts::PI);
             let ss = steady_state(&mut model, &set, rpm * std::f64::consts::PI / 30.0, None)?;
             if let Some(dir) = &plots {
@@ -251,7 +402,7 @@ fn run(cli: Cli) -> Result<()> {
                 print_steady_state(&ss, set.sun.face_width * 1e3);
             }
         }
-        Command::Sweep { scene, from, to, step, direction, out, histories, json } => {
+        Command::Sweep { scene, wear_state, from, to, step, direction, out, histories, json } => {
             let set = validated(&load_scene(&scene)?)?;
             let speeds = speed_grid(from, to, step)?;
             let dirs: Vec<Direction> = match direction.as_str() {
@@ -261,7 +412,7 @@ fn run(cli: Cli) -> Result<()> {
                 other => bail!("--direction {other}: allowed are up, down, both"),
             };
             std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-            let model = PlanetaryDynamics::new(&set, SetModel::new(&set))?;
+            let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
             let modes = natural_modes(&model.lumped);
             let bar = progress_bar((speeds.len() * dirs.len()) as u64);
             let started = std::time::Instant::now();
@@ -340,6 +491,39 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
         }
+        Command::Wear { action: WearAction::Run { scene, to_kappa, out, ring, json } } => {
+            wear_run(&scene, to_kappa, &out, ring, json)?;
+        }
+        Command::Wear { action: WearAction::Step { scene, state, out, threshold, revolutions, ring } } => {
+            let set = validated(&load_scene(&scene)?)?;
+            let model = wear_model(&set, ring, threshold)?;
+            let before = match &state {
+                Some(path) => planetwear::files::read_worn_state(path, &set)
+                    .with_context(|| format!("--state {}", path.display()))?,
+                None => model.unworn(),
+            };
+            let limit = match revolutions {
+                Some(n) if n.is_finite() && n > 0.0 => Limit::Revolutions(n),
+                Some(n) => bail!("--revolutions {n}: must be a finite number of input revolutions > 0"),
+                None => Limit::Update,
+            };
+            let after = model.step(&before, limit)?;
+            planetwear::files::write_worn_state(&out, &after)?;
+            let deepest = |s: &planetwear::physics::wear_state::WornState, f| s.deepest_on(f);
+            let (sun, planet) = (Flank::SunDrive, Flank::PlanetSunSide);
+            println!(
+                "κ {} → {}: {:.4e} input revolutions ({:.4e} in all); deepest wear sun {:.3} µm at {:.2}°, planet {:.3} µm at {:.2}°; wrote {}",
+                before.kappa,
+                after.kappa,
+                after.revolutions - before.revolutions,
+                after.revolutions,
+                deepest(&after, sun).depth * 1e6,
+                deepest(&after, sun).roll.to_degrees(),
+                deepest(&after, planet).depth * 1e6,
+                deepest(&after, planet).roll.to_degrees(),
+                out.display()
+            );
+        }
         Command::Fmu { action: FmuAction::Pack { out, library } } => {
             let library = match library {
                 Some(l) => l,
@@ -358,12 +542,15 @@ fn run(cli: Cli) -> Result<()> {
                 None => print!("{xml}"),
             }
         }
-        Command::Modes { scene, json } => {
+        Command::Modes { scene, wear_state, json } => {
             let (name, lumped) = match load_any(&scene)? {
                 AnyScene::Gear(s) => {
                     let set = validated(&s)?;
-                    let model = PlanetaryDynamics::new(&set, SetModel::new(&set))?;
+                    let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
                     (set.name.clone(), model.lumped)
+                }
+                AnyScene::Lumped(_) if wear_state.is_some() => {
+                    bail!("--wear-state: a lumped-parameter scene has no tooth flanks to wear")
                 }
                 AnyScene::Lumped(s) => (s.name.clone(), s.validate()?),
             };

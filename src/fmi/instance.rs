@@ -208,11 +208,6 @@ impl Instance {
             })?;
             Scene::from_toml(&text).map_err(|e| Refusal::error(format!("sceneFile = {file}: {e}")))?
         };
-        if !self.strings.get(&vr::WEAR_STATE_FILE).is_none_or(|s| s.is_empty()) {
-            return Err(Refusal::error(
-                "wearStateFile: worn-profile states are not read by this version of the FMU; leave it empty",
-            ));
-        }
         let all = file.is_empty();
         let use_it = |v: u32| all || self.explicitly_set.contains(&v);
         let r = |v: u32| self.real(v);
@@ -369,6 +364,25 @@ impl Instance {
         Ok(scene)
     }
 
+    /// The contact model: unworn, or with the flanks of the worn-profile
+    /// state named by wearStateFile (a path, or a file in resources/ such as
+    /// `wear/example-2004/kappa-2.json`), which must belong to this gear set.
+    fn contact_model(&self, set: &crate::physics::gear::GearSet) -> Result<SetModel, Refusal> {
+        let file = self.strings.get(&vr::WEAR_STATE_FILE).cloned().unwrap_or_default();
+        if file.is_empty() {
+            return Ok(SetModel::new(set));
+        }
+        let mut path = PathBuf::from(&file);
+        if !path.is_absolute() && !path.exists() {
+            if let Some(r) = &self.resources {
+                path = r.join(&file);
+            }
+        }
+        let state = crate::files::read_worn_state(&path, set)
+            .map_err(|e| Refusal::error(format!("wearStateFile = {file}: {e}")))?;
+        Ok(state.set_model(set))
+    }
+
     /// Builds the simulation from the parameters.
     fn build(&mut self) -> Result<(), Refusal> {
         let scene = self.scene()?;
@@ -381,8 +395,8 @@ impl Instance {
                 set.planet_angles.len()
             )));
         }
-        let model =
-            PlanetaryDynamics::new(&set, SetModel::new(&set)).map_err(|e| Refusal::error(e.to_string()))?;
+        let model = PlanetaryDynamics::new(&set, self.contact_model(&set)?)
+            .map_err(|e| Refusal::error(e.to_string()))?;
         let speed = self.real(vr::INITIAL_SPEED);
         let mut sim = Simulation::new(&set, model, self.start_time, speed)
             .map_err(|e| Refusal::error(format!("initialSpeed: {e}")))?;

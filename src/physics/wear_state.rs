@@ -187,6 +187,10 @@ fn fnv1a(data: &[u8]) -> u64 {
     h
 }
 
+/// Relative difference below which two gear-set parameters are the same
+/// (unit conversions round in the last bits; any design change is far larger).
+pub const SAME_PARAMETER: f64 = 1e-12;
+
 /// The gear set a state belongs to: its name, fingerprint and the
 /// parameters the fingerprint is made of.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -409,6 +413,10 @@ impl WornState {
     }
 
     /// Refuses a state made for another gear set, naming what differs.
+    /// Parameters agree when they differ by at most [`SAME_PARAMETER`] of
+    /// their size: a set entered in other units (degrees, millimetres, as
+    /// through the FMU's parameters) converts back with rounding in the last
+    /// bits and is the same set.
     pub fn check_gear_set(&self, set: &GearSet) -> Result<(), WornStateError> {
         let here = GearSetPrint::of(set);
         if here.fingerprint == self.gear_set.fingerprint {
@@ -419,9 +427,16 @@ impl WornState {
             here.parameters.keys().chain(self.gear_set.parameters.keys()).collect();
         for name in names {
             let (a, b) = (self.gear_set.parameters.get(name).copied(), here.parameters.get(name).copied());
-            if a.map(f64::to_bits) != b.map(f64::to_bits) {
+            let same = match (a, b) {
+                (Some(x), Some(y)) => (x - y).abs() <= SAME_PARAMETER * x.abs().max(y.abs()),
+                _ => false,
+            };
+            if !same {
                 differences.push(ParameterDifference { name: name.clone(), state: a, expected: b });
             }
+        }
+        if differences.is_empty() {
+            return Ok(());
         }
         Err(WornStateError::Foreign {
             state_set: self.gear_set.name.clone(),

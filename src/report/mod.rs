@@ -6,5 +6,6 @@ pub mod ltca;
 pub mod pack;
 pub mod plot;
 pub mod sweep;
+pub mod wear;
 
 pub use plot::write_atomic;

@@ -9,6 +9,8 @@ use std::path::Path;
 use zip::write::SimpleFileOptions;
 
 use crate::fmi::variables::{Causality, GUID, MODEL_DESCRIPTION_XML, MODEL_IDENTIFIER, VARIABLES};
+use crate::physics::wear::{Limit, WearModel, WearSettings};
+use crate::physics::wear_state::WornState;
 use crate::scene::lumped::LumpedScene;
 use crate::scene::Scene;
 
@@ -32,6 +34,9 @@ pub enum PackError {
     /// The archive could not be written.
     #[error("writing the FMU archive: {0}")]
     Zip(#[from] zip::result::ZipError),
+    /// The example's worn-profile states could not be computed.
+    #[error("computing the example's worn-profile states: {0}")]
+    Wear(String),
 }
 
 fn html_escape(s: &str) -> String {
@@ -44,7 +49,7 @@ pub fn documentation() -> String {
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>planetwear FMU</title></head><body>\n",
     );
     h.push_str("<h1>planetwear</h1>\n<p>Nonlinear tooth-by-tooth dynamics of a spur planetary gear set (sun, ring, carrier, up to 8 planets) with time-varying mesh stiffness, tooth separation, back-flank contact and tip-corner contact, in Lin &amp; Parker's transverse-torsional or the torsional model. FMI 2.0 co-simulation; internal time integration by generalized-alpha or adaptive Runge-Kutta 5(4).</p>\n");
-    h.push_str(&format!("<p>GUID {GUID}. The parameters default to the automatic-transmission planetary set of a 2004 tooth-wear study (sun 34, planet 18, ring 70 teeth, module 1.5 mm, 4 planets, carrier held, 750 N·m on the sun). With <code>sceneFile</code> empty every parameter defines the set; with a scene file (a path or a file in resources/), only the parameters the importer sets override it.</p>\n"));
+    h.push_str(&format!("<p>GUID {GUID}. The parameters default to the automatic-transmission planetary set of a 2004 tooth-wear study (sun 34, planet 18, ring 70 teeth, module 1.5 mm, 4 planets, carrier held, 750 N·m on the sun). With <code>sceneFile</code> empty every parameter defines the set; with a scene file (a path or a file in resources/), only the parameters the importer sets override it. <code>wearStateFile</code> names a worn-profile state written by <code>planetwear wear</code> (a path, or a file in resources/): the example's states after 0 to 6 wear updates are shipped as <code>wear/example-2004/kappa-0.json</code> … <code>kappa-6.json</code>; a state of another gear set is refused.</p>\n"));
     for (title, causality) in
         [("Parameters", Causality::Parameter), ("Inputs", Causality::Input), ("Outputs", Causality::Output)]
     {
@@ -63,6 +68,21 @@ pub fn documentation() -> String {
     }
     h.push_str("</body></html>\n");
     h
+}
+
+/// The worn-profile states κ = 0..6 of the example with the default wear settings.
+pub fn example_wear_states() -> Result<Vec<WornState>, PackError> {
+    let set = Scene::example_2004().validate().map_err(|e| PackError::Wear(e.to_string()))?;
+    let model =
+        WearModel::new(&set, WearSettings::for_set(&set)).map_err(|e| PackError::Wear(e.to_string()))?;
+    let mut states = vec![model.unworn()];
+    for _ in 0..6 {
+        let next = model
+            .step(&states[states.len() - 1], Limit::Update)
+            .map_err(|e| PackError::Wear(e.to_string()))?;
+        states.push(next);
+    }
+    Ok(states)
 }
 
 /// Writes the FMU archive to `out` from the shared library at `library`.
@@ -93,6 +113,12 @@ pub fn pack(library: &Path, out: &Path) -> Result<(), PackError> {
     add(&format!("binaries/linux64/{MODEL_IDENTIFIER}.so"), &so)?;
     add("resources/example-2004.toml", Scene::example_2004().to_toml().as_bytes())?;
     add("resources/lumped-benchmark.toml", LumpedScene::lumped_benchmark().to_toml().as_bytes())?;
+    // The example's worn-profile states κ = 0..6 (the wear model's run,
+    // about 5 s), for the wearStateFile parameter.
+    for (kappa, state) in example_wear_states()?.iter().enumerate() {
+        let text = state.to_json().map_err(|e| PackError::Wear(e.to_string()))?;
+        add(&format!("resources/wear/example-2004/kappa-{kappa}.json"), text.as_bytes())?;
+    }
     add("documentation/index.html", documentation().as_bytes())?;
     zip.finish()?;
     std::fs::rename(&tmp, out).map_err(io(out))?;
