@@ -185,7 +185,7 @@ def main():
     p.add_argument("--from", dest="start", type=float, default=500.0)
     p.add_argument("--to", dest="stop", type=float, default=15000.0)
     p.add_argument("--step", type=float, default=250.0)
-    p.add_argument("--off-resonance", type=float, nargs=2, default=[3000.0, 8000.0],
+    p.add_argument("--off-resonance", type=float, nargs=2, default=[1500.0, 3000.0],
                    help="two off-resonance speeds [rpm] for the change of F(rms) with wear")
     p.add_argument("--resonance", type=float, default=5000.0, help="a resonant speed [rpm]")
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1)
@@ -201,7 +201,7 @@ def main():
     if not (0 < a.start <= a.stop) or a.step <= 0:
         raise SystemExit(f"--from {a.start} --to {a.stop} --step {a.step}: need 0 < from <= to and step > 0")
     speeds = study_fmu.grid(a.start, a.stop, a.step)
-    focus = [a.off_resonance[0], a.resonance, a.off_resonance[1]]
+    focus = sorted([*a.off_resonance, a.resonance])
     for s in focus:
         if s not in speeds:
             raise SystemExit(f"speed {s:.0f} rpm is not on the grid {a.start:.0f}:{a.step:.0f}:{a.stop:.0f}")
@@ -210,7 +210,7 @@ def main():
         raise SystemExit(f"--wear {a.wear}: no summary.json (run `planetwear wear run`)")
     summary = json.loads(summary_path.read_text())
     out.mkdir(parents=True, exist_ok=True)
-    timings = json.loads(Path(a.timings).read_text()) if a.timings else {}
+    timings = {k: v for k, v in json.loads(Path(a.timings).read_text()).items() if k != "_"} if a.timings else {}
 
     print(f"== sweeps through the FMU: κ = {kappas}, {len(speeds)} speeds, up and down, {a.workers} processes",
           flush=True)

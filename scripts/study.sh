@@ -1,29 +1,46 @@
 #!/usr/bin/env bash
 # The main job: the published example (MODEL.md §1) end to end, with plots.
-# Output: out/ (JSON and report) and out/plots/ (SVG and PNG).
+# Stages: scene, loaded tooth contact analysis, natural modes, the native
+# speed sweep, the Archard wear model to κ = 6 (MODEL.md §4), the FMU packed
+# with the example's worn states, speed sweeps up and down at κ = 0, 2, 4, 6
+# through the FMU driven by fmpy, the study's plots and report
+# (out/study/report.md), and the drivetrain co-simulation example.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 cargo build --release --quiet
 mkdir -p out/plots
 bin=target/release/planetwear
+timings=out/timings.json.tmp
+echo "{" > "$timings"
+stage() { # name, then the command
+    local name=$1; shift
+    local start end
+    start=$(date +%s%N)
+    "$@"
+    end=$(date +%s%N)
+    printf '  "%s": %s,\n' "$name" "$(awk "BEGIN {print ($end - $start) / 1e9}")" >> "$timings"
+    echo "-- $name took $(( (end - start) / 1000000 )) ms"
+}
 echo "== scene example-2004 (out/example-2004.toml)"
 "$bin" scene show example-2004 > out/example-2004.toml.tmp && mv out/example-2004.toml.tmp out/example-2004.toml
 echo "== loaded tooth contact analysis (out/ltca.json, out/plots/)"
-start=$(date +%s%N)
-"$bin" ltca --scene example-2004 --out out/ltca.json --plots out/plots
-end=$(date +%s%N)
-echo "LTCA took $(( (end - start) / 1000000 )) ms"
-echo "== natural modes (out/modes.json)"
+stage "loaded tooth contact analysis" "$bin" ltca --scene example-2004 --out out/ltca.json --plots out/plots
+echo "== natural modes (out/modes.txt, out/modes.json)"
 "$bin" modes --scene example-2004 | tee out/modes.txt
 "$bin" modes --scene example-2004 --json > out/modes.json.tmp && mv out/modes.json.tmp out/modes.json
-echo "== speed sweep up and down, 500-15000 rpm in 250 rpm steps (out/sweep/)"
-start=$(date +%s%N)
-"$bin" sweep --scene example-2004 --from 500 --to 15000 --step 250 --direction both \
-    --histories 3000,5000 --out out/sweep
-end=$(date +%s%N)
-echo "sweep took $(( (end - start) / 1000000 )) ms"
-echo "== FMU: pack fmu/planetwear.fmu and co-simulate it in a drivetrain with fmpy (out/cosim.png)"
-"$bin" fmu pack --out fmu/planetwear.fmu
+echo "== native speed sweep up and down, 500-15000 rpm in 250 rpm steps, unworn (out/sweep/)"
+stage "native sweep (unworn)" "$bin" sweep --scene example-2004 --from 500 --to 15000 --step 250 \
+    --direction both --histories 3000,5000 --out out/sweep
+echo "== wear model to kappa = 6 (out/wear/: states, summary.json, plots)"
+stage "wear model to κ = 6" "$bin" wear run --scene example-2004 --to-kappa 6 --out out/wear
+echo "== FMU: pack fmu/planetwear.fmu (with the example's worn states)"
+stage "FMU pack" "$bin" fmu pack --out fmu/planetwear.fmu
+echo "== sweeps through the FMU at kappa = 0, 2, 4, 6 (out/study/)"
+echo '  "_": 0}' >> "$timings"
+mv "$timings" out/timings.json
+.venv/bin/python scripts/study.py --fmu fmu/planetwear.fmu --wear out/wear --out out/study \
+    --timings out/timings.json
+echo "== drivetrain co-simulation with fmpy (out/cosim.png)"
 .venv/bin/python examples/drivetrain_cosim.py --out out/cosim.png
-echo "== done: see out/ltca.json, out/modes.txt, out/sweep/, out/cosim.png and out/plots/*.png"
+echo "== done: out/study/report.md (the study), out/wear/, out/sweep/, out/ltca.json, out/modes.txt, out/cosim.png, out/plots/"

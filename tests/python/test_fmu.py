@@ -278,6 +278,83 @@ def test_a_sweep_with_speed_steps_through_the_fmu_reproduces_the_native_torque_d
     assert peak["speed_rpm"] == 5000.0 and peak["sun_frms"] > 3 * rows[0]["sun_frms"]
 
 
+def _init_with_wear_state(md, unzipdir, state, messages):
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier,
+                  instanceName="worn")
+    s.instantiate(loggingOn=True)
+    s.setupExperiment(startTime=0.0)
+    s.setString([vr["wearStateFile"]], [str(state)])
+    s.enterInitializationMode()
+    return s, vr
+
+
+def test_the_shipped_worn_states_load_and_change_the_static_transmission_error(fmu):
+    """resources/wear/example-2004/kappa-<κ>.json: κ = 0 gives the unworn
+    set's outputs; κ = 6 raises the sun mesh's static transmission error
+    (worn flanks meet later) by a few µm, never more than the deepest wear."""
+    md, unzipdir = fmu
+    te = {}
+    for kappa in (0, 6):
+        s, vr = _init_with_wear_state(md, unzipdir, f"wear/example-2004/kappa-{kappa}.json", [])
+        s.exitInitializationMode()
+        h = 1.0 / (34 * 50)
+        values = []
+        for k in range(20):
+            s.doStep(currentCommunicationPoint=k * h / 10, communicationStepSize=h / 10)
+            values.append(s.getReal([vr["planet[1].sunStaticTransmissionError"]])[0])
+        te[kappa] = np.array(values)
+        s.terminate()
+        s.freeInstance()
+    shift = (te[6] - te[0]).mean()
+    print(f"mean static TE shift κ 0 → 6: {shift * 1e6:.2f} µm")
+    assert 1e-6 < shift < 15e-6 + 6e-6, shift
+
+
+def test_a_foreign_or_corrupt_wear_state_is_refused_with_the_reason(fmu, tmp_path):
+    import os
+    exe = os.environ.get("PLANETWEAR_BIN", str(REPO / "target" / "release" / "planetwear"))
+    scene = subprocess.run([exe, "scene", "show", "example-2004"], capture_output=True, text=True, check=True).stdout
+    other = scene.replace("rim_radius_mm = 58.95", "rim_radius_mm = 60.0")
+    assert other != scene
+    (tmp_path / "other.toml").write_text(other)
+    subprocess.run([exe, "wear", "step", "--scene", str(tmp_path / "other.toml"), "--revolutions", "1000",
+                    "--out", str(tmp_path / "foreign.json")], check=True, capture_output=True)
+    good = unzipdir_state = Path(fmu[1]) / "resources" / "wear" / "example-2004" / "kappa-1.json"
+    text = good.read_text()
+    (tmp_path / "cut.json").write_text(text[: len(text) // 2])
+    (tmp_path / "altered.json").write_text(text.replace('"kappa": 1', '"kappa": 2', 1))
+    cases = {"foreign.json": "ring.body_radius", "cut.json": "", "altered.json": "",
+             "missing.json": "cannot"}
+    md, unzipdir = fmu
+    for name, must in cases.items():
+        s, vr = _init_with_wear_state(md, unzipdir, tmp_path / name, [])
+        with pytest.raises(FMICallException):
+            s.exitInitializationMode()
+        s.freeInstance()
+    # The reason is logged: run one case in a subprocess with fmpy's logger on stdout.
+    code = textwrap.dedent(f"""
+        from fmpy import read_model_description, extract
+        from fmpy.fmi2 import FMU2Slave
+        md = read_model_description({str(FMU)!r}); u = extract({str(FMU)!r})
+        vr = {{v.name: v.valueReference for v in md.modelVariables}}
+        s = FMU2Slave(guid=md.guid, unzipDirectory=u, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="w")
+        s.instantiate(loggingOn=True)
+        s.setupExperiment(startTime=0.0)
+        s.setString([vr["wearStateFile"]], [{str(tmp_path / "foreign.json")!r}])
+        s.enterInitializationMode()
+        try:
+            s.exitInitializationMode()
+        except Exception as e:
+            print("refused:", e)
+    """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    log = out.stdout + out.stderr
+    print(log)
+    assert "refused" in log and "wearStateFile" in log and "ring.body_radius" in log, log
+    assert unzipdir_state.exists()
+
+
 def test_a_step_that_cannot_be_completed_is_discarded_with_terminated_reported(fmu):
     """An unstable explicit coupling (a motor droop of 20 N·m·s/rad held over
     0.1 ms steps against ~1.1e-3 kg·m² of train) drives the loads up until the
