@@ -70,6 +70,10 @@ fn in_the_low_speed_limit_the_dynamic_loads_give_the_quasi_static_wear() {
         assert_eq!(f.dynamic_max_roll, f.quasi_static_max_roll, "{}", flank.name());
     }
     let m = c.mesh(MeshKind::SunPlanet).unwrap();
+    println!(
+        "largest pair load: dynamic {} N, quasi-static {} N",
+        m.dynamic_max_pair_load, m.quasi_static_max_pair_load
+    );
     assert!(
         (m.dynamic_max_pair_load / m.quasi_static_max_pair_load - 1.0).abs() < 0.01,
         "largest pair load dynamic {} N vs quasi-static {} N",
