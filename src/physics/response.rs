@@ -260,6 +260,21 @@ pub fn steady_state(
     omega: f64,
     start: Option<&State>,
 ) -> Result<SteadyState, ResponseError> {
+    steady_state_observed(model, set, omega, start, |_, _| {})
+}
+
+/// [`steady_state`], calling `observe(k, model)` at every sample k of the
+/// window (k = 0 .. cycles × samples per mesh cycle) with the model's mesh
+/// states ([`PlanetaryDynamics::meshes`]: each mesh's reference position and
+/// approach) evaluated at that sample, so a caller can read more than the
+/// mesh forces (the wear model reads each tooth pair's load).
+pub fn steady_state_observed(
+    model: &mut PlanetaryDynamics,
+    set: &GearSet,
+    omega: f64,
+    start: Option<&State>,
+    mut observe: impl FnMut(usize, &PlanetaryDynamics),
+) -> Result<SteadyState, ResponseError> {
     let rpm = omega * 30.0 / std::f64::consts::PI;
     let fm = model.mesh_frequency_per_input_speed * omega.abs();
     if !(fm.is_finite() && fm > 0.0) {
@@ -344,6 +359,7 @@ pub fn steady_state(
         for (m, state) in model.meshes.iter().enumerate() {
             force[m].push(state.force);
         }
+        observe(k, model);
     }
     // Close the window so the end state is one full cycle set later.
     let t_end = t_run + cycles as f64 * period;

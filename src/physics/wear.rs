@@ -25,6 +25,15 @@
 //! and between planets. The whole set carries both; its cost is a few
 //! hundred small equilibria per cycle.
 //!
+//! # Where the pair loads come from
+//!
+//! The pair's first and last contact and its load per slice at each
+//! position come from a [`PressureSource`]: the whole-set quasi-static LTCA
+//! above (the study's, and the default), or the steady state of the dynamic
+//! model at an input speed ([`super::dynamic_wear`]). Everything after the
+//! loads (bands, sliding, Archard wear, the update) is the same code for
+//! both.
+//!
 //! # Contact point, band and sliding distance
 //!
 //! On the involute path a pair at position s touches gear 1 at roll angle
@@ -235,11 +244,15 @@ pub struct WearSettings {
     pub total_depth: f64,
     /// Which flanks wear.
     pub wearing: WearingFlanks,
+    /// Where the tooth-pair loads of a wear cycle come from (the quasi-static
+    /// LTCA unless set).
+    #[serde(default)]
+    pub source: PressureSource,
 }
 
 impl Default for WearSettings {
     /// The study's settings: k = 1e-18 m²/N, R = 200, I = 50, J = 1,
-    /// ε^κ = 2.5 µm, ε_tot = 15 µm, sun and planet wear.
+    /// ε^κ = 2.5 µm, ε_tot = 15 µm, sun and planet wear, quasi-static loads.
     fn default() -> Self {
         Self {
             archard_coefficient: EXAMPLE_ARCHARD_COEFFICIENT,
@@ -249,6 +262,48 @@ impl Default for WearSettings {
             update_depth: 2.5e-6,
             total_depth: 15e-6,
             wearing: WearingFlanks::default(),
+            source: PressureSource::QuasiStatic,
+        }
+    }
+}
+
+/// Where a wear cycle takes the tooth-pair loads from (MODEL.md §4.1 uses
+/// the quasi-static ones; the dynamic ones are an option beyond the study).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum PressureSource {
+    /// The whole-set quasi-static LTCA at each pair position.
+    #[default]
+    QuasiStatic,
+    /// The steady state of the nonlinear dynamic model at an input speed, on
+    /// the state's worn geometry, with the gear set's dynamics settings: each
+    /// pair's elastic load as a function of its position, averaged over the
+    /// window's mesh cycles ([`super::dynamic_wear`]).
+    Dynamic {
+        /// Input speed [rpm].
+        speed_rpm: f64,
+    },
+}
+
+impl PressureSource {
+    /// Checks the source; a speed that cannot be run is named.
+    pub fn validate(&self) -> Result<(), WearError> {
+        match *self {
+            PressureSource::QuasiStatic => Ok(()),
+            PressureSource::Dynamic { speed_rpm } if speed_rpm.is_finite() && speed_rpm > 0.0 => Ok(()),
+            PressureSource::Dynamic { speed_rpm } => Err(WearError::InvalidSetting {
+                name: "source.speed_rpm",
+                value: format!("{speed_rpm} rpm"),
+                allowed: "a finite positive input speed",
+            }),
+        }
+    }
+
+    /// A short description for messages and reports.
+    pub fn describe(&self) -> String {
+        match self {
+            PressureSource::QuasiStatic => "quasi-static".into(),
+            PressureSource::Dynamic { speed_rpm } => format!("dynamic at {speed_rpm} rpm"),
         }
     }
 }
@@ -301,7 +356,7 @@ impl WearSettings {
                 "at least one of sun_drive, planet_sun_side, planet_ring_side, ring_drive",
             );
         }
-        Ok(())
+        self.source.validate()
     }
 }
 
@@ -354,6 +409,14 @@ pub enum WearError {
         state_kappa: u32,
         /// The first flank whose grid differs (or the flank checked).
         flank: &'static str,
+    },
+    /// The dynamic run of a dynamic pressure source failed.
+    #[error("dynamic tooth loads at {speed_rpm} rpm: {reason}")]
+    DynamicRun {
+        /// Input speed [rpm].
+        speed_rpm: f64,
+        /// What failed (the dynamic model's or the integrator's error).
+        reason: String,
     },
     /// The total wear limit is already reached.
     #[error("the deepest wear {depth:e} m already reaches total_depth = {limit:e} m: no further update")]
@@ -637,6 +700,9 @@ impl FlankWear {
 pub struct CycleWear {
     /// Geometry state the cycle ran on.
     pub kappa: u32,
+    /// Where the tooth-pair loads came from.
+    #[serde(default)]
+    pub source: PressureSource,
     /// Tooth cycles per input revolution [-].
     pub cycles_per_revolution: GearCycles,
     /// The pair's passage through each wearing mesh.
@@ -691,6 +757,36 @@ pub enum UpdateEnd {
     Revolutions,
 }
 
+/// The tooth-pair loads of one wear cycle: where the pairs of a mesh are
+/// first and last loaded, and each planet's pair load per face slice at
+/// given positions. The whole-set quasi-static LTCA gives them
+/// ([`QuasiStaticLoads`]), or a dynamic run ([`super::dynamic_wear`]); the
+/// bands, sliding distances and wear follow from them in one place.
+pub(crate) trait PairLoads {
+    /// First and last loaded position of the pairs of `mesh` over all planets [m].
+    fn engagement(&self, mesh: MeshKind) -> (f64, f64);
+
+    /// Per-slice drive-flank loads [N] (never negative) of each planet's
+    /// pair of `mesh` at each of `position` [m]: `[planet][slice][r]`.
+    fn slice_loads(&self, mesh: MeshKind, position: &[f64]) -> Vec<Vec<Vec<f64>>>;
+}
+
+/// The pair loads of the whole-set quasi-static LTCA on a set's contact models.
+struct QuasiStaticLoads<'a> {
+    wear: &'a WearModel,
+    model: &'a SetModel,
+}
+
+impl PairLoads for QuasiStaticLoads<'_> {
+    fn engagement(&self, mesh: MeshKind) -> (f64, f64) {
+        self.wear.engagement(self.model, mesh)
+    }
+
+    fn slice_loads(&self, mesh: MeshKind, position: &[f64]) -> Vec<Vec<Vec<f64>>> {
+        self.wear.quasi_static_loads(self.model, mesh, position)
+    }
+}
+
 /// The Archard wear model of a gear set.
 #[derive(Clone, Debug)]
 pub struct WearModel {
@@ -743,7 +839,9 @@ impl WearModel {
         WornState::unworn(&self.set, self.settings.profile_points, self.settings.face_slices)
     }
 
-    fn check(&self, state: &WornState) -> Result<(), WearError> {
+    /// Refuses a state of another gear set, with unusable grids or with
+    /// another number of face slices.
+    pub(crate) fn check(&self, state: &WornState) -> Result<(), WearError> {
         state.check_gear_set(&self.set)?;
         state.validate()?;
         let slices = state.face_slices();
@@ -754,14 +852,42 @@ impl WearModel {
     }
 
     /// One wear cycle on the state's geometry: each wearing flank's wear per
-    /// tooth cycle on its grid, with the pressures and sliding distances.
+    /// tooth cycle on its grid, with the pressures and sliding distances,
+    /// from the tooth-pair loads of the settings' source.
     pub fn cycle(&self, state: &WornState) -> Result<CycleWear, WearError> {
-        self.check(state)?;
-        let (sp, rp) = state.mesh_flanks();
-        let model = SetModel::with_flanks(&self.set, &sp, &rp);
+        self.cycle_with(state, self.settings.source)
+    }
+
+    /// One wear cycle on the state's geometry with the tooth-pair loads of
+    /// `source`: the bands, sliding distances and Archard wear are the same
+    /// for every source; only the pair loads per position differ.
+    pub fn cycle_with(&self, state: &WornState, source: PressureSource) -> Result<CycleWear, WearError> {
+        match source {
+            PressureSource::QuasiStatic => {
+                self.check(state)?;
+                let model = state.set_model(&self.set);
+                let loads = QuasiStaticLoads { wear: self, model: &model };
+                Ok(self.cycle_on(state, &model, &loads, source))
+            }
+            PressureSource::Dynamic { speed_rpm } => {
+                super::dynamic_wear::dynamic_cycle(self, state, speed_rpm).map(|(cycle, _)| cycle)
+            }
+        }
+    }
+
+    /// One wear cycle on `model` (the state's contact models) with the pair
+    /// loads of `loads`, labelled with `source`.
+    pub(crate) fn cycle_on(
+        &self,
+        state: &WornState,
+        model: &SetModel,
+        loads: &dyn PairLoads,
+        source: PressureSource,
+    ) -> CycleWear {
         let wearing = self.settings.wearing;
         let mut out = CycleWear {
             kappa: state.kappa,
+            source,
             cycles_per_revolution: self.cycles_per_revolution,
             meshes: Vec::new(),
             flanks: Vec::new(),
@@ -774,18 +900,18 @@ impl WearModel {
             if !wearing.contains(f1) && !wearing.contains(f2) {
                 continue;
             }
-            let (passage, slice_loads) = self.passage(&model, mesh);
+            let (passage, slice_loads) = self.passage(model, mesh, loads);
             for (flank, gear1) in [(f1, true), (f2, false)] {
                 if !wearing.contains(flank) {
                     continue;
                 }
                 for (j, dev) in state.flanks.get(flank).iter().enumerate() {
-                    out.flanks.push(self.flank_wear(&model, &passage, &slice_loads, flank, gear1, j, dev));
+                    out.flanks.push(self.flank_wear(model, &passage, &slice_loads, flank, gear1, j, dev));
                 }
             }
             out.meshes.push(passage);
         }
-        Ok(out)
+        out
     }
 
     /// Sun travel [m] at which planet `planet`'s pair of `mesh` sits at `s`.
@@ -866,13 +992,18 @@ impl WearModel {
     }
 
     /// The pair's passage through `mesh` and its per-slice loads
-    /// `[planet][slice][r]` [N].
-    fn passage(&self, model: &SetModel, mesh: MeshKind) -> (MeshPassage, Vec<Vec<Vec<f64>>>) {
+    /// `[planet][slice][r]` [N], from the pair loads of `loads`.
+    fn passage(
+        &self,
+        model: &SetModel,
+        mesh: MeshKind,
+        loads: &dyn PairLoads,
+    ) -> (MeshPassage, Vec<Vec<Vec<f64>>>) {
         let path = match mesh {
             MeshKind::SunPlanet => model.sun_planet.path().clone(),
             MeshKind::RingPlanet => model.ring_planet.path().clone(),
         };
-        let (first, last) = self.engagement(model, mesh);
+        let (first, last) = loads.engagement(mesh);
         let r_steps = self.settings.positions;
         let position: Vec<f64> =
             (0..=r_steps).map(|r| first + (last - first) * r as f64 / r_steps as f64).collect();
@@ -891,22 +1022,7 @@ impl WearModel {
                 (d1 - orientation * d2).abs()
             })
             .collect();
-        let planets = model.planet_angles.len();
-        let mut loads = vec![Vec::new(); planets];
-        let mut forces = Vec::new();
-        for (p, planet_loads) in loads.iter_mut().enumerate() {
-            let mut guess = SetEquilibrium::unloaded(planets);
-            let mut per_slice = vec![Vec::with_capacity(position.len()); self.settings.face_slices];
-            for s in &position {
-                self.pair_at(model, mesh, p, *s, &mut guess, &mut forces);
-                for (j, f) in forces.iter().enumerate() {
-                    if let Some(v) = per_slice.get_mut(j) {
-                        v.push(*f);
-                    }
-                }
-            }
-            *planet_loads = per_slice;
-        }
+        let loads = loads.slice_loads(mesh, &position);
         let pair_load = loads
             .iter()
             .map(|slices| (0..position.len()).map(|r| slices.iter().map(|v| v[r]).sum()).collect())
@@ -989,6 +1105,28 @@ impl WearModel {
             }
         }
         out
+    }
+
+    /// Per-slice loads `[planet][slice][r]` [N] of each planet's pair of
+    /// `mesh` at `position` [m] from the whole-set quasi-static LTCA.
+    fn quasi_static_loads(&self, model: &SetModel, mesh: MeshKind, position: &[f64]) -> Vec<Vec<Vec<f64>>> {
+        let planets = model.planet_angles.len();
+        let mut loads = vec![Vec::new(); planets];
+        let mut forces = Vec::new();
+        for (p, planet_loads) in loads.iter_mut().enumerate() {
+            let mut guess = SetEquilibrium::unloaded(planets);
+            let mut per_slice = vec![Vec::with_capacity(position.len()); self.settings.face_slices];
+            for s in position {
+                self.pair_at(model, mesh, p, *s, &mut guess, &mut forces);
+                for (j, f) in forces.iter().enumerate() {
+                    if let Some(v) = per_slice.get_mut(j) {
+                        v.push(*f);
+                    }
+                }
+            }
+            *planet_loads = per_slice;
+        }
+        loads
     }
 
     /// Applies one update to `state` from the wear of one `cycle` on it
@@ -1092,7 +1230,18 @@ impl WearModel {
 
     /// One update: a wear cycle on the state's geometry, then [`Self::apply`].
     pub fn step(&self, state: &WornState, limit: Limit) -> Result<WornState, WearError> {
-        let cycle = self.cycle(state)?;
+        self.step_with(state, limit, self.settings.source)
+    }
+
+    /// One update with the tooth-pair loads of `source`: a wear cycle on the
+    /// state's geometry ([`Self::cycle_with`]), then [`Self::apply`].
+    pub fn step_with(
+        &self,
+        state: &WornState,
+        limit: Limit,
+        source: PressureSource,
+    ) -> Result<WornState, WearError> {
+        let cycle = self.cycle_with(state, source)?;
         self.apply(state, &cycle, limit)
     }
 
