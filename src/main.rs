@@ -6,13 +6,16 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
+use planetwear::physics::dynamic_wear::compare_sources;
 use planetwear::physics::dynamics::PlanetaryDynamics;
 use planetwear::physics::gear::GearSet;
 use planetwear::physics::ltca::SetModel;
 use planetwear::physics::lumped::LumpedSet;
 use planetwear::physics::modes::{natural_modes, ModeClass};
 use planetwear::physics::response::{steady_state, sweep, Direction, SteadyState};
-use planetwear::physics::wear::{Flank, Limit, WearError, WearModel, WearSettings, WearingFlanks};
+use planetwear::physics::wear::{
+    Flank, Limit, PressureSource, WearError, WearModel, WearSettings, WearingFlanks,
+};
 use planetwear::report::ltca::LtcaStudy;
 use planetwear::report::sweep::{
     find_peaks, sweep_csv, write_csv, write_forced_response, write_steady_state,
@@ -166,6 +169,26 @@ enum WearAction {
         /// Wear the ring–planet mesh's flanks as well as the sun–planet mesh's.
         #[arg(long)]
         ring: bool,
+        /// Drive the wear by the tooth loads of a dynamic steady state at this
+        /// input speed [rpm] instead of the quasi-static LTCA.
+        #[arg(long)]
+        dynamic_speed: Option<f64>,
+    },
+    /// Compare the wear per cycle driven by quasi-static and by dynamic tooth
+    /// loads at the given speeds.
+    Compare {
+        /// A built-in scene name or a scene file.
+        #[arg(long)]
+        scene: String,
+        /// The worn-profile state to compare on; default: the unworn set.
+        #[arg(long)]
+        state: Option<PathBuf>,
+        /// Input speeds [rpm].
+        #[arg(long, value_delimiter = ',', required = true)]
+        speeds: Vec<f64>,
+        /// Print the comparison as JSON (SI units).
+        #[arg(long)]
+        json: bool,
     },
     /// Run the wear model from the unworn set to κ: states kappa-<κ>.json,
     /// summary.json and plots of wear depth against roll angle.
@@ -182,6 +205,10 @@ enum WearAction {
         /// Wear the ring–planet mesh's flanks as well as the sun–planet mesh's.
         #[arg(long)]
         ring: bool,
+        /// Drive the wear by the tooth loads of a dynamic steady state at this
+        /// input speed [rpm] instead of the quasi-static LTCA.
+        #[arg(long)]
+        dynamic_speed: Option<f64>,
         /// Print the summary as JSON.
         #[arg(long)]
         json: bool,
@@ -275,8 +302,19 @@ fn contact_model(set: &GearSet, wear_state: Option<&Path>) -> Result<SetModel> {
     }
 }
 
-fn wear_model(set: &GearSet, ring: bool, threshold_um: Option<f64>) -> Result<WearModel> {
+fn wear_model(
+    set: &GearSet,
+    ring: bool,
+    threshold_um: Option<f64>,
+    dynamic_rpm: Option<f64>,
+) -> Result<WearModel> {
     let mut settings = WearSettings::for_set(set);
+    if let Some(rpm) = dynamic_rpm {
+        if !(rpm.is_finite() && rpm > 0.0) {
+            bail!("--dynamic-speed {rpm}: must be a finite input speed > 0 rpm");
+        }
+        settings.source = PressureSource::Dynamic { speed_rpm: rpm };
+    }
     if ring {
         settings.wearing = WearingFlanks::both_meshes();
     }
@@ -289,9 +327,16 @@ fn wear_model(set: &GearSet, ring: bool, threshold_um: Option<f64>) -> Result<We
     })
 }
 
-fn wear_run(scene: &str, to_kappa: u32, out: &Path, ring: bool, json: bool) -> Result<()> {
+fn wear_run(
+    scene: &str,
+    to_kappa: u32,
+    out: &Path,
+    ring: bool,
+    dynamic: Option<f64>,
+    json: bool,
+) -> Result<()> {
     let set = validated(&load_scene(scene)?)?;
-    let model = wear_model(&set, ring, None)?;
+    let model = wear_model(&set, ring, None, dynamic)?;
     std::fs::create_dir_all(out.join("plots")).with_context(|| format!("creating {}", out.display()))?;
     let mut state = model.unworn();
     let mut states = vec![state.clone()];
@@ -491,12 +536,72 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
         }
-        Command::Wear { action: WearAction::Run { scene, to_kappa, out, ring, json } } => {
-            wear_run(&scene, to_kappa, &out, ring, json)?;
+        Command::Wear { action: WearAction::Run { scene, to_kappa, out, ring, dynamic_speed, json } } => {
+            wear_run(&scene, to_kappa, &out, ring, dynamic_speed, json)?;
         }
-        Command::Wear { action: WearAction::Step { scene, state, out, threshold, revolutions, ring } } => {
+        Command::Wear { action: WearAction::Compare { scene, state, speeds, json } } => {
             let set = validated(&load_scene(&scene)?)?;
-            let model = wear_model(&set, ring, threshold)?;
+            let model = wear_model(&set, false, None, None)?;
+            let state = match &state {
+                Some(path) => planetwear::files::read_worn_state(path, &set)
+                    .with_context(|| format!("--state {}", path.display()))?,
+                None => model.unworn(),
+            };
+            let face_mm = set.sun.face_width * 1e3;
+            let mut docs = Vec::new();
+            for rpm in speeds {
+                if !(rpm.is_finite() && rpm > 0.0) {
+                    bail!("--speeds {rpm}: speeds must be finite and > 0 rpm");
+                }
+                let c = compare_sources(&model, &state, rpm)?;
+                if json {
+                    docs.push(serde_json::json!({
+                        "speed_rpm": rpm,
+                        "flanks": c.flanks.iter().map(|f| serde_json::json!({
+                            "flank": f.flank.name(), "roll": f.roll, "quasi_static": f.quasi_static,
+                            "dynamic": f.dynamic, "ratio": f.ratio,
+                            "quasi_static_max_roll": f.quasi_static_max_roll, "dynamic_max_roll": f.dynamic_max_roll,
+                        })).collect::<Vec<_>>(),
+                        "meshes": c.meshes.iter().map(|m| serde_json::json!({
+                            "mesh": m.mesh.name(), "mean_force": m.mean_mesh_force, "rms_force": m.rms_mesh_force,
+                            "quasi_static_max_pair_load": m.quasi_static_max_pair_load,
+                            "dynamic_max_pair_load": m.dynamic_max_pair_load,
+                        })).collect::<Vec<_>>(),
+                    }));
+                    continue;
+                }
+                println!("{rpm:.0} rpm (κ = {}):", state.kappa);
+                for m in &c.meshes {
+                    println!(
+                        "  {}: F(rms) {:.1} N/mm; largest pair load quasi-static {:.1}, dynamic {:.1} N/mm ({:.3}×)",
+                        m.mesh.name(),
+                        m.rms_mesh_force / face_mm,
+                        m.quasi_static_max_pair_load / face_mm,
+                        m.dynamic_max_pair_load / face_mm,
+                        m.dynamic_max_pair_load / m.quasi_static_max_pair_load
+                    );
+                }
+                for f in &c.flanks {
+                    println!(
+                        "  {}: largest wear per cycle quasi-static {:.4} pm at {:.2}°, dynamic {:.4} pm at {:.2}° ({:.3}×)",
+                        f.flank.name(),
+                        f.quasi_static_max * 1e12,
+                        f.quasi_static_max_roll.to_degrees(),
+                        f.dynamic_max * 1e12,
+                        f.dynamic_max_roll.to_degrees(),
+                        f.ratio
+                    );
+                }
+            }
+            if json {
+                println!("{}", serde_json::to_string_pretty(&docs)?);
+            }
+        }
+        Command::Wear {
+            action: WearAction::Step { scene, state, out, threshold, revolutions, ring, dynamic_speed },
+        } => {
+            let set = validated(&load_scene(&scene)?)?;
+            let model = wear_model(&set, ring, threshold, dynamic_speed)?;
             let before = match &state {
                 Some(path) => planetwear::files::read_worn_state(path, &set)
                     .with_context(|| format!("--state {}", path.display()))?,
