@@ -282,7 +282,10 @@ def _init_with_wear_state(md, unzipdir, state, messages):
     vr = {v.name: v.valueReference for v in md.modelVariables}
     s = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier,
                   instanceName="worn")
-    s.instantiate(loggingOn=True)
+    # Logging off in-process: fmpy's logger shim may outlive a freed instance
+    # (a crash in fmpy, not in the FMU); the logged reasons are checked in a
+    # subprocess below.
+    s.instantiate(loggingOn=False)
     s.setupExperiment(startTime=0.0)
     s.setString([vr["wearStateFile"]], [str(state)])
     s.enterInitializationMode()
