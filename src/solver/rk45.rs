@@ -708,6 +708,31 @@ impl Rk45 {
         sys: &mut S,
         t_end: f64,
     ) -> Result<(), SolverError> {
+        self.integrate(sys, t_end, false)
+    }
+
+    /// Takes one accepted step towards `t_max` [s]: the step the controller proposes, ending
+    /// at a located event inside it or at `t_max` if it would reach that far. Dense output
+    /// ([`Rk45::dense_at`]) then covers the step; this is how a caller samples the solution at
+    /// times of its own without forcing step ends onto them. Does nothing at `t_max`.
+    ///
+    /// On error the integrator keeps the last accepted state.
+    pub fn step<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t_max: f64,
+    ) -> Result<(), SolverError> {
+        self.integrate(sys, t_max, true)
+    }
+
+    /// The step loop of [`Rk45::advance_to`] and [`Rk45::step`]: up to `t_end`, or one accepted
+    /// step when `single`.
+    fn integrate<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t_end: f64,
+        single: bool,
+    ) -> Result<(), SolverError> {
         if !self.initialized {
             return Err(SolverError::NotInitialized);
         }
@@ -806,6 +831,9 @@ impl Rk45 {
             if self.n_events == 0 {
                 self.commit(t_new, err);
                 self.h_next = h_next;
+                if single {
+                    break;
+                }
                 continue;
             }
             let mut g_new = std::mem::take(&mut self.g_new);
@@ -827,6 +855,9 @@ impl Rk45 {
                         }
                         self.g_ref[i] = gi;
                     }
+                }
+                if single {
+                    break;
                 }
                 continue;
             }
@@ -881,6 +912,9 @@ impl Rk45 {
             self.commit(t_new, err);
             self.h_next = h_next;
             self.g_ref.copy_from_slice(&self.g_new);
+            if single {
+                break;
+            }
         }
         Ok(())
     }
