@@ -461,6 +461,54 @@ impl Rk45 {
         self.init(sys, t, q, v)
     }
 
+    /// The step controller's state: the proposed next step [s], the last accepted error norm and
+    /// whether the last attempt was rejected (1 or 0). With [`Rk45::restore`] a run continues
+    /// bit-identically from a saved state.
+    pub fn controller_state(&self) -> [f64; 3] {
+        [self.h_next, self.err_old, if self.rejected_last { 1.0 } else { 0.0 }]
+    }
+
+    /// Restarts from time `t` [s], displacements `q` [m or rad] and velocities `v`
+    /// [m/s or rad/s] as [`Rk45::init`], then takes the step controller's state from
+    /// [`Rk45::controller_state`]: the continuation takes the steps the saved run would have
+    /// taken (the force and event functions at the state are recomputed, and equal the saved
+    /// run's because they are functions of it).
+    pub fn restore<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        controller: &[f64; 3],
+    ) -> Result<(), SolverError> {
+        let [h_next, err_old, rejected] = *controller;
+        if !(h_next.is_finite() && h_next > 0.0) {
+            return Err(SolverError::InvalidArgument {
+                name: "h_next",
+                value: h_next,
+                reason: "the saved next step must be positive and finite",
+            });
+        }
+        if !(err_old.is_finite() && err_old >= 0.0) {
+            return Err(SolverError::InvalidArgument {
+                name: "err_old",
+                value: err_old,
+                reason: "the saved error norm must be finite and non-negative",
+            });
+        }
+        // The saved step replaces the automatic choice, which would evaluate the force at a
+        // trial state.
+        let automatic = self.settings.initial_step;
+        self.settings.initial_step = Some(h_next);
+        let started = self.init(sys, t, q, v);
+        self.settings.initial_step = automatic;
+        started?;
+        self.h_next = h_next;
+        self.err_old = err_old;
+        self.rejected_last = rejected != 0.0;
+        Ok(())
+    }
+
     /// Absolute tolerance of component `i` of y = [q, v].
     fn atol(&self, i: usize) -> f64 {
         if i < self.n {
