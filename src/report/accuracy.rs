@@ -332,17 +332,11 @@ pub fn study_csv(study: &Study) -> String {
 pub fn write_point_charts(p: &PointResult, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
     let mut files = Vec::new();
     let floor = p.floor();
-    for (what, stem, x_of) in [
-        (
-            "CPU time",
-            "error_vs_time",
-            (|r: &SettingResult| r.measured.as_ref().map(|m| m.cpu_seconds))
-                as fn(&SettingResult) -> Option<f64>,
-        ),
-        ("right-hand-side evaluations", "error_vs_work", |r: &SettingResult| {
-            r.measured.as_ref().map(|m| m.work.rhs_evaluations as f64)
-        }),
-    ] {
+    let time = |r: &SettingResult| r.measured.as_ref().map(|m| m.cpu_seconds);
+    let work = |r: &SettingResult| r.measured.as_ref().map(|m| m.work.rhs_evaluations as f64);
+    for (stem, x_of) in
+        [("error_vs_time", &time as &dyn Fn(&SettingResult) -> Option<f64>), ("error_vs_work", &work)]
+    {
         let mut series = Vec::new();
         for family in p.families() {
             let mut pts: Vec<(f64, f64)> = p
@@ -366,12 +360,9 @@ pub fn write_point_charts(p: &PointResult, dir: &Path) -> Result<Vec<PathBuf>, P
             if stem == "error_vs_time" { "log₁₀ CPU time [s]" } else { "log₁₀ RHS evaluations" };
         files.extend(write_chart(
             &Chart {
-                title: format!(
-                    "{} ({:.0} rpm): E_h vs {what} (floor {:.0e} omitted)",
-                    p.name, p.speed_rpm, floor
-                ),
+                title: format!("{}, {:.0} rpm", p.name.replace('_', " "), p.speed_rpm),
                 x_label: unit.into(),
-                y_label: "log₁₀ E_h".into(),
+                y_label: format!("log₁₀ E_h (below {floor:.0e} not shown)"),
                 series,
                 vlines: vec![],
             },
