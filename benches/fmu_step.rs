@@ -60,7 +60,20 @@ fn native_run(fidelity: Fidelity, h: f64, span: f64) -> f64 {
 fn main() {
     let fm = 34.0 * 3000.0 / 60.0;
     let span = 0.05;
-    println!("fmi2DoStep at 3000 rpm (f_m = {fm} Hz), {span} s simulated, generalized-alpha 120 steps per mesh cycle");
+    let d = Scene::example_2004().dynamics;
+    let integrator = match d.integrator {
+        planetwear::scene::IntegratorKind::GeneralizedAlpha => {
+            format!(
+                "generalized-alpha rho_inf {} at {} steps per mesh cycle",
+                d.rho_infinity, d.steps_per_mesh_cycle
+            )
+        }
+        planetwear::scene::IntegratorKind::Rk45 => format!(
+            "RK 5(4) at relative tolerance {:e}, landing on {} internal steps per mesh cycle",
+            d.relative_tolerance, d.steps_per_mesh_cycle
+        ),
+    };
+    println!("fmi2DoStep at 3000 rpm (f_m = {fm} Hz), {span} s simulated, default integrator: {integrator}");
     println!(
         "  {:<22} {:>12} {:>14} {:>14} {:>12} {:>10}",
         "fidelity", "step", "FMU per step", "native/step", "overhead", "real time"

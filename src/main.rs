@@ -123,6 +123,17 @@ enum Command {
         #[command(subcommand)]
         action: WearAction,
     },
+    /// Work-precision study of the integrators: E_h of the mesh-force harmonics against CPU time
+    /// and work at four operating points and both fidelity levels (docs/ACCURACY.md).
+    WorkPrecision {
+        /// Output directory (charts, CSV, tables, JSON).
+        #[arg(long)]
+        out: PathBuf,
+        /// Reduced grid (torsional points, ρ∞ = 0.9 at 16…256 steps, RK 5(4) to 1e-7, shorter runs,
+        /// one repeat): seconds instead of minutes.
+        #[arg(long)]
+        quick: bool,
+    },
     /// Quasi-static loaded tooth contact analysis of both meshes and of the whole set.
     Ltca {
         /// A built-in scene name (example-2004) or a scene file (TOML).
@@ -629,6 +640,7 @@ fn run(cli: Cli) -> Result<()> {
                 out.display()
             );
         }
+        Command::WorkPrecision { out, quick } => work_precision(&out, quick)?,
         Command::Fmu { action: FmuAction::Pack { out, library } } => {
             let library = match library {
                 Some(l) => l,
@@ -693,6 +705,35 @@ fn run(cli: Cli) -> Result<()> {
             }
         }
     }
+    Ok(())
+}
+
+fn work_precision(out: &Path, quick: bool) -> Result<()> {
+    use planetwear::physics::accuracy::StudyPlan;
+    use planetwear::physics::lumped::Fidelity;
+    use planetwear::report::accuracy::{operating_points, run_study, tables_markdown, write_study};
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let (plan, mut points) = if quick {
+        (StudyPlan::quick(), operating_points(Fidelity::Torsional)?)
+    } else {
+        (StudyPlan::full(), operating_points(Fidelity::Torsional)?)
+    };
+    if !quick {
+        points.extend(operating_points(Fidelity::TransverseTorsional)?);
+    }
+    let study = run_study(&points, &plan, None, |point, run| {
+        if run == "reference checks" {
+            eprintln!("{point}: reference done; running the methods");
+        }
+    })?;
+    let context = serde_json::json!({
+        "command": std::env::args().collect::<Vec<_>>().join(" "),
+        "machine": planetwear::report::accuracy::machine(),
+        "independent_integrator": "none in the CLI (cargo bench --bench work_precision adds DOP853)",
+    });
+    let files = write_study(&study, out, context)?;
+    print!("{}", tables_markdown(&study));
+    println!("\nstudy took {:.1} s; {} files in {}", study.wall_seconds, files.len(), out.display());
     Ok(())
 }
 

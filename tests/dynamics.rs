@@ -11,6 +11,12 @@ use planetwear::solver::{GeneralizedAlpha, GeneralizedAlphaSettings, SecondOrder
 
 const RPM: f64 = std::f64::consts::PI / 30.0;
 
+/// Work of the default integrator's steady state at 3000 rpm (see
+/// `the_default_adaptive_work_is_pinned`).
+const PINNED_STEPS: u64 = 32885;
+const PINNED_REJECTED: u64 = 4919;
+const PINNED_RHS: u64 = 231716;
+
 fn build(scene: &Scene) -> (GearSet, PlanetaryDynamics) {
     let set = scene.validate().unwrap_or_else(|e| panic!("{e}"));
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
@@ -187,13 +193,29 @@ fn runs_are_deterministic() {
 #[test]
 fn the_integrator_work_is_pinned() {
     // Solver statistics of a reference run; a silent cost regression fails here.
-    let (set, mut model) = build(&Scene::example_2004());
+    let mut scene = Scene::example_2004();
+    scene.dynamics.integrator = IntegratorKind::GeneralizedAlpha;
+    let (set, mut model) = build(&scene);
     let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
     let cycles = (set.dynamics.run_in_revolutions * 34.0).ceil() as u64 + 68;
     assert_eq!(r.stats.steps, cycles * set.dynamics.steps_per_mesh_cycle as u64);
     let per_step = r.stats.newton_iterations as f64 / r.stats.steps as f64;
     assert!(per_step < 1.1, "Newton iterations per step {per_step}");
     let _ = model.dim();
+}
+
+#[test]
+fn the_default_adaptive_work_is_pinned() {
+    // The default (RK 5(4) at 3e-6, docs/ACCURACY.md) at 3000 rpm: steps,
+    // rejections and force evaluations within 2 % of the figures measured
+    // when the default was chosen; a silent cost regression fails here.
+    let (set, mut model) = build(&Scene::example_2004());
+    assert_eq!(set.dynamics.integrator, IntegratorKind::Rk45);
+    let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
+    let near = |x: u64, pinned: u64| (x as f64 / pinned as f64 - 1.0).abs() <= 0.02;
+    assert!(near(r.stats.steps, PINNED_STEPS), "steps {}", r.stats.steps);
+    assert!(near(r.stats.rejected_steps, PINNED_REJECTED), "rejected {}", r.stats.rejected_steps);
+    assert!(near(r.stats.rhs_evaluations, PINNED_RHS), "force evaluations {}", r.stats.rhs_evaluations);
 }
 
 #[test]

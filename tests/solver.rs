@@ -641,6 +641,39 @@ fn rk45_gap_events_independent_of_output_grid() {
     assert_eq!(int.stats().events_located, switches.len() as u64);
 }
 
+/// One `step` at a time takes the same steps as `advance_to` (bit-identical state, events and work),
+/// and the dense output of each step reaches back to the previous step's end.
+#[test]
+fn rk45_single_steps_equal_advance_to() {
+    let sys0 = Gap::standard();
+    let settings = Rk45Settings { rtol: 1e-8, atol_q: 1e-12, atol_v: 1e-12, ..Default::default() };
+    let mut whole_sys = sys0.clone();
+    let mut whole = rk(settings);
+    whole.init(&mut whole_sys, 0.0, &[GAP_X0], &[GAP_V0]).unwrap();
+    whole.advance_to(&mut whole_sys, GAP_T_END).unwrap();
+    let mut sys = sys0.clone();
+    let mut single = rk(settings);
+    single.init(&mut sys, 0.0, &[GAP_X0], &[GAP_V0]).unwrap();
+    let mut calls = 0u64;
+    let (mut q, mut v) = ([0.0], [0.0]);
+    while single.time() < GAP_T_END {
+        let before = single.time();
+        single.step(&mut sys, GAP_T_END).unwrap();
+        calls += 1;
+        let (t0, t1) = single.last_step().unwrap();
+        assert_eq!((t0, t1), (before, single.time()), "one accepted step per call");
+        single.dense_at(t0, &mut q, &mut v).unwrap();
+    }
+    assert_eq!(calls, whole.stats().steps);
+    assert_eq!(single.q(), whole.q());
+    assert_eq!(single.v(), whole.v());
+    assert_eq!(single.stats(), whole.stats());
+    assert!(whole.stats().events_located >= 4);
+    // At t_max a step does nothing.
+    single.step(&mut sys, GAP_T_END).unwrap();
+    assert_eq!(single.stats(), whole.stats());
+}
+
 /// Generalized-α converges to the stitched solution of the gap oscillator with order at least 1.
 #[test]
 fn ga_gap_oscillator_converges() {

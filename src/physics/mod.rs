@@ -1,6 +1,7 @@
 //! The physics core: pure functions of validated input. No I/O, no FMI, no
 //! printing, and only safe Rust (raw pointers live in src/fmi/export.rs alone).
 
+pub mod accuracy;
 pub mod dynamic_wear;
 pub mod dynamics;
 pub mod gear;

@@ -174,6 +174,10 @@ impl Simulation {
         let err = |source| SimulationError::Integration { t: t0, source };
         let mut stepper = Stepper::new(set, 1.0 / fm).map_err(err)?;
         stepper.init(&mut model, t0, &start.q, &start.v).map_err(err)?;
+        // The outputs at t0 are the initial state's, not a trial state's of
+        // the integrator's start.
+        let mut f = vec![0.0; model.dim()];
+        model.force(t0, &start.q, &start.v, &mut f);
         Ok(Self {
             model,
             stepper,
@@ -282,6 +286,11 @@ impl Simulation {
                     .map_err(|source| SimulationError::Integration { t, source })?;
             }
         }
+        // Starting an integrator may evaluate the model at trial states (the
+        // adaptive method's first-step estimate): the outputs are the
+        // accepted state's.
+        let mut f = vec![0.0; self.model.dim()];
+        self.refresh(&mut f);
         Ok(())
     }
 

@@ -2,6 +2,7 @@
 //! shell around the physics: it converts to the field's units only where a
 //! person reads (plots), and writes every file atomically.
 
+pub mod accuracy;
 pub mod ltca;
 pub mod pack;
 pub mod plot;

@@ -461,6 +461,54 @@ impl Rk45 {
         self.init(sys, t, q, v)
     }
 
+    /// The step controller's state: the proposed next step [s], the last accepted error norm and
+    /// whether the last attempt was rejected (1 or 0). With [`Rk45::restore`] a run continues
+    /// bit-identically from a saved state.
+    pub fn controller_state(&self) -> [f64; 3] {
+        [self.h_next, self.err_old, if self.rejected_last { 1.0 } else { 0.0 }]
+    }
+
+    /// Restarts from time `t` [s], displacements `q` [m or rad] and velocities `v`
+    /// [m/s or rad/s] as [`Rk45::init`], then takes the step controller's state from
+    /// [`Rk45::controller_state`]: the continuation takes the steps the saved run would have
+    /// taken (the force and event functions at the state are recomputed, and equal the saved
+    /// run's because they are functions of it).
+    pub fn restore<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        controller: &[f64; 3],
+    ) -> Result<(), SolverError> {
+        let [h_next, err_old, rejected] = *controller;
+        if !(h_next.is_finite() && h_next > 0.0) {
+            return Err(SolverError::InvalidArgument {
+                name: "h_next",
+                value: h_next,
+                reason: "the saved next step must be positive and finite",
+            });
+        }
+        if !(err_old.is_finite() && err_old >= 0.0) {
+            return Err(SolverError::InvalidArgument {
+                name: "err_old",
+                value: err_old,
+                reason: "the saved error norm must be finite and non-negative",
+            });
+        }
+        // The saved step replaces the automatic choice, which would evaluate the force at a
+        // trial state.
+        let automatic = self.settings.initial_step;
+        self.settings.initial_step = Some(h_next);
+        let started = self.init(sys, t, q, v);
+        self.settings.initial_step = automatic;
+        started?;
+        self.h_next = h_next;
+        self.err_old = err_old;
+        self.rejected_last = rejected != 0.0;
+        Ok(())
+    }
+
     /// Absolute tolerance of component `i` of y = [q, v].
     fn atol(&self, i: usize) -> f64 {
         if i < self.n {
@@ -708,6 +756,31 @@ impl Rk45 {
         sys: &mut S,
         t_end: f64,
     ) -> Result<(), SolverError> {
+        self.integrate(sys, t_end, false)
+    }
+
+    /// Takes one accepted step towards `t_max` [s]: the step the controller proposes, ending
+    /// at a located event inside it or at `t_max` if it would reach that far. Dense output
+    /// ([`Rk45::dense_at`]) then covers the step; this is how a caller samples the solution at
+    /// times of its own without forcing step ends onto them. Does nothing at `t_max`.
+    ///
+    /// On error the integrator keeps the last accepted state.
+    pub fn step<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t_max: f64,
+    ) -> Result<(), SolverError> {
+        self.integrate(sys, t_max, true)
+    }
+
+    /// The step loop of [`Rk45::advance_to`] and [`Rk45::step`]: up to `t_end`, or one accepted
+    /// step when `single`.
+    fn integrate<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t_end: f64,
+        single: bool,
+    ) -> Result<(), SolverError> {
         if !self.initialized {
             return Err(SolverError::NotInitialized);
         }
@@ -806,6 +879,9 @@ impl Rk45 {
             if self.n_events == 0 {
                 self.commit(t_new, err);
                 self.h_next = h_next;
+                if single {
+                    break;
+                }
                 continue;
             }
             let mut g_new = std::mem::take(&mut self.g_new);
@@ -827,6 +903,9 @@ impl Rk45 {
                         }
                         self.g_ref[i] = gi;
                     }
+                }
+                if single {
+                    break;
                 }
                 continue;
             }
@@ -881,6 +960,9 @@ impl Rk45 {
             self.commit(t_new, err);
             self.h_next = h_next;
             self.g_ref.copy_from_slice(&self.g_new);
+            if single {
+                break;
+            }
         }
         Ok(())
     }
