@@ -268,7 +268,16 @@ impl Simulation {
             Drive::Speed => {
                 self.speed_reference = omega;
                 self.model.change_drive_speed(omega, self.time);
-                self.retune(omega)?;
+                if let Some(mut stepper) = self.retuned_stepper(omega)? {
+                    // Continue from the current state, integrator state included.
+                    let t = self.time;
+                    let (q, v) = self.stepper.state();
+                    let internal = self.stepper.internal();
+                    stepper
+                        .restore(&mut self.model, t, q, v, &internal)
+                        .map_err(|source| SimulationError::Integration { t, source })?;
+                    self.stepper = stepper;
+                }
             }
             Drive::SpeedSteps => {
                 if omega == 0.0 {
@@ -279,7 +288,9 @@ impl Simulation {
                 let dv = omega - self.speed_reference;
                 let v: Vec<f64> = v.iter().zip(&self.model.rigid_velocity).map(|(v, r)| v + r * dv).collect();
                 self.speed_reference = omega;
-                self.retune(omega)?;
+                if let Some(stepper) = self.retuned_stepper(omega)? {
+                    self.stepper = stepper;
+                }
                 let t = self.time;
                 self.stepper
                     .init(&mut self.model, t, &q, &v)
@@ -294,23 +305,19 @@ impl Simulation {
         Ok(())
     }
 
-    /// Sets the internal step for input speed `omega` [rad/s] (unchanged at
-    /// zero speed) and rebuilds the integrator for it, continuing from the
-    /// current state.
-    fn retune(&mut self, omega: f64) -> Result<(), SimulationError> {
+    /// Sets the internal step for input speed `omega` [rad/s] and returns a
+    /// new, not yet started integrator for it; `None` at zero speed (step and
+    /// integrator unchanged). The caller starts it from the state it needs.
+    fn retuned_stepper(&mut self, omega: f64) -> Result<Option<Stepper>, SimulationError> {
         let fm = self.model.mesh_frequency_per_input_speed * omega.abs();
         if !(fm.is_finite() && fm > 0.0) {
-            return Ok(());
+            return Ok(None);
         }
         self.nominal_step = 1.0 / (fm * self.set.dynamics.steps_per_mesh_cycle as f64);
         let t = self.time;
-        let err = |source| SimulationError::Integration { t, source };
-        let mut stepper = Stepper::new(&self.set, 1.0 / fm).map_err(err)?;
-        let (q, v) = self.stepper.state();
-        let internal = self.stepper.internal();
-        stepper.restore(&mut self.model, t, q, v, &internal).map_err(err)?;
-        self.stepper = stepper;
-        Ok(())
+        Stepper::new(&self.set, 1.0 / fm)
+            .map(Some)
+            .map_err(|source| SimulationError::Integration { t, source })
     }
 
     /// Advances from `t` (which must be the current time) by `h` > 0 [s].
@@ -537,7 +544,9 @@ impl Simulation {
         self.model.set_drive_state(&s.drive);
         if self.set.dynamics.drive != Drive::Torque {
             // The internal step follows the reference (see `set_speed_reference`).
-            self.retune(s.speed_reference)?;
+            if let Some(stepper) = self.retuned_stepper(s.speed_reference)? {
+                self.stepper = stepper;
+            }
         }
         self.stepper
             .restore(&mut self.model, s.time, &s.q, &s.v, &s.integrator)
