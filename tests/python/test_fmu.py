@@ -292,13 +292,17 @@ def test_a_step_that_cannot_be_completed_is_discarded_with_terminated_reported(f
     """An unstable explicit coupling (a motor droop of 20 N·m·s/rad held over
     0.1 ms steps against ~1.1e-3 kg·m² of train) drives the loads up until the
     integrator cannot complete a step: the FMU answers fmi2Discard, reports
-    fmi2Terminated and the last successful time, and returns no NaN."""
+    fmi2Terminated and the last successful time, and returns no NaN. With
+    generalized-alpha (integrator 0), whose Newton iteration fails: the
+    adaptive default follows the growing loads with ever smaller steps
+    instead of failing (docs/ACCURACY.md, open point)."""
     from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 
     md, unzipdir = fmu
     vr = {v.name: v.valueReference for v in md.modelVariables}
     s = slave(md, unzipdir, "unstable")
     s.instantiate()
+    s.setInteger([vr["integrator"]], [0])
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
     s.exitInitializationMode()
