@@ -433,7 +433,12 @@ fn run(cli: Cli) -> Result<()> {
                 planetwear::physics::simulation::Simulation::new(&set, model, 0.0, set.dynamics.input_speed)?;
             let n = (stop / step).round() as u64;
             for k in 0..n {
-                sim.do_step(k as f64 * step, step)?;
+                // Communication points on the integer grid t_k = k·step, each
+                // step t_{k+1} − t_k (as fmpy and most importers call doStep):
+                // the adaptive integrator's steps depend on the last bit of
+                // the step ends.
+                let (t0, t1) = (k as f64 * step, (k + 1) as f64 * step);
+                sim.do_step(t0, t1 - t0)?;
                 let row = serde_json::json!({
                     "time": sim.time(),
                     "sun.speed": sim.speed(planetwear::physics::gear::Member::Sun),

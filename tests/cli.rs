@@ -163,3 +163,28 @@ fn a_small_sweep_writes_its_tables_plots_and_summary() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--step"));
 }
+
+/// `work-precision --quick`: the reduced study writes its charts, CSV,
+/// tables and JSON, and picks a default that meets 1e-3 at every point.
+#[test]
+fn work_precision_quick_writes_the_study_and_a_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = planetwear(&["work-precision", "--quick", "--out", dir.path().to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in ["work_precision.csv", "work_precision_tables.md", "work_precision.json"] {
+        assert!(dir.path().join(f).exists(), "{f}");
+    }
+    assert!(dir.path().join("off_resonance_torsional_error_vs_time.png").exists());
+    let doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("work_precision.json")).unwrap()).unwrap();
+    let points = doc["study"]["points"].as_array().unwrap();
+    assert_eq!(points.len(), 4);
+    let overall = &doc["study"]["defaults"][0];
+    assert_eq!(overall["family"], "all");
+    assert!(overall["method"].is_object(), "no setting met 1e-3 everywhere: {overall}");
+    assert_eq!(overall["errors"].as_array().unwrap().len(), 4);
+    for (_, e) in overall["errors"].as_array().unwrap().iter().map(|p| (p[0].clone(), p[1].as_f64().unwrap()))
+    {
+        assert!(e <= 1e-3, "{overall}");
+    }
+}

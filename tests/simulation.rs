@@ -282,3 +282,30 @@ fn a_snapshot_after_speed_steps_continues_bit_identically() {
     }
     assert_eq!(a.snapshot(), b.snapshot());
 }
+
+/// A torque change reaches the adaptive default at once: the run continues
+/// exactly as a run restored at that instant with the new torques (before
+/// the fix it stepped on with the derivative of the old torques it carried
+/// from its last stage).
+#[test]
+fn a_torque_change_continues_as_a_restart_with_the_new_torques() {
+    let (set, model) = speed_steps_setup();
+    assert_eq!(set.dynamics.integrator, planetwear::scene::IntegratorKind::Rk45);
+    let mut a = Simulation::new(&set, model.clone(), 0.0, OMEGA).unwrap();
+    let h = 1e-4;
+    for _ in 0..10 {
+        a.do_step(a.time(), h).unwrap();
+    }
+    let t = set.balanced_torques();
+    let (sun, ring) = (1.2 * t[0], 1.2 * t[1]);
+    a.set_torques(sun, ring, t[2]).unwrap();
+    let snap = a.snapshot();
+    let mut b = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    b.set_torques(sun, ring, t[2]).unwrap();
+    b.restore(&snap).unwrap();
+    for _ in 0..10 {
+        a.do_step(a.time(), h).unwrap();
+        b.do_step(b.time(), h).unwrap();
+    }
+    assert_eq!(a.snapshot(), b.snapshot());
+}

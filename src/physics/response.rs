@@ -216,6 +216,21 @@ impl Stepper {
         }
     }
 
+    /// The system's forces changed at the current state (new external
+    /// torques): the adaptive method re-evaluates the derivative it carries
+    /// from its last stage (first-same-as-last), keeping its step
+    /// controller; generalized-α needs nothing (its force at the step start
+    /// enters the scheme as the old load).
+    pub(crate) fn forces_changed(&mut self, sys: &mut PlanetaryDynamics) -> Result<(), SolverError> {
+        match self {
+            Stepper::Alpha(_) => Ok(()),
+            Stepper::Rk(r) => {
+                let (t, q, v, c) = (r.time(), r.q().to_vec(), r.v().to_vec(), r.controller_state());
+                r.restore(sys, t, &q, &v, &c)
+            }
+        }
+    }
+
     /// Time of the last accepted step [s].
     pub(crate) fn time(&self) -> f64 {
         match self {

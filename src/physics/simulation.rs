@@ -240,8 +240,17 @@ impl Simulation {
                 });
             }
         }
+        if self.torques == [sun, ring, carrier] {
+            return Ok(());
+        }
         self.torques = [sun, ring, carrier];
         self.model.set_torques(sun, ring, carrier);
+        let t = self.time;
+        self.stepper
+            .forces_changed(&mut self.model)
+            .map_err(|source| SimulationError::Integration { t, source })?;
+        let mut f = vec![0.0; self.model.dim()];
+        self.refresh(&mut f);
         Ok(())
     }
 

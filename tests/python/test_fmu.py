@@ -173,16 +173,26 @@ def test_two_instances_in_two_threads_give_identical_results(fmu):
     assert results["a"] == results["b"]
 
 
-def test_the_fmu_equals_the_native_run_of_the_same_scene():
+@pytest.mark.parametrize("integrator, bound", [(0, 1e-9), (1, 1e-4)])
+def test_the_fmu_equals_the_native_run_of_the_same_scene(tmp_path, integrator, bound):
+    """With generalized-alpha (fixed steps) the FMU reproduces the native run
+    to 1e-9. The adaptive default (RK 5(4) at 3e-6) agrees to its accuracy:
+    the ringTorque start value carries 13 digits of the balancing torque, and
+    an adaptive method turns a 1e-13 change of its input into a change of the
+    order of its tolerance (other step decisions)."""
     import json
     import os
 
     exe = os.environ.get("PLANETWEAR_BIN", str(REPO / "target" / "release" / "planetwear"))
+    scene = subprocess.run([exe, "scene", "show", "example-2004"], capture_output=True, text=True, check=True).stdout
+    name = "generalized_alpha" if integrator == 0 else "rk45"
+    scene = scene.replace('integrator = "rk45"', f'integrator = "{name}"')
+    (tmp_path / "scene.toml").write_text(scene)
     step, stop = 1e-4, 0.005
-    native = subprocess.run([exe, "simulate", "--scene", "example-2004", "--stop", str(stop), "--step", str(step)],
-                            capture_output=True, text=True, check=True).stdout
+    native = subprocess.run([exe, "simulate", "--scene", str(tmp_path / "scene.toml"), "--stop", str(stop),
+                             "--step", str(step)], capture_output=True, text=True, check=True).stdout
     rows = [json.loads(line) for line in native.splitlines()]
-    res = simulate_fmu(str(FMU), stop_time=stop, output_interval=step,
+    res = simulate_fmu(str(FMU), stop_time=stop, output_interval=step, start_values={"integrator": integrator},
                        output=["sun.speed", "planet[1].sunMeshForce", "planet[1].ringMeshForce"])
     assert len(rows) == len(res) - 1
     worst = 0.0
@@ -192,7 +202,7 @@ def test_the_fmu_equals_the_native_run_of_the_same_scene():
             a, b = row[name], fmu_row[name]
             worst = max(worst, abs(a - b) / max(abs(a), 1e-9))
     print(f"largest relative difference FMU vs native: {worst:.3e}")
-    assert worst < 1e-9
+    assert worst < bound
 
 
 def test_the_drivetrain_cosimulation_example_runs_and_stays_near_its_set_point(tmp_path):
@@ -362,13 +372,17 @@ def test_a_step_that_cannot_be_completed_is_discarded_with_terminated_reported(f
     """An unstable explicit coupling (a motor droop of 20 N·m·s/rad held over
     0.1 ms steps against ~1.1e-3 kg·m² of train) drives the loads up until the
     integrator cannot complete a step: the FMU answers fmi2Discard, reports
-    fmi2Terminated and the last successful time, and returns no NaN."""
+    fmi2Terminated and the last successful time, and returns no NaN. With
+    generalized-alpha (integrator 0), whose Newton iteration fails: the
+    adaptive default follows the growing loads with ever smaller steps
+    instead of failing (docs/ACCURACY.md, open point)."""
     from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 
     md, unzipdir = fmu
     vr = {v.name: v.valueReference for v in md.modelVariables}
     s = slave(md, unzipdir, "unstable")
     s.instantiate()
+    s.setInteger([vr["integrator"]], [0])
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
     s.exitInitializationMode()
