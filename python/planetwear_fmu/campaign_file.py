@@ -620,3 +620,29 @@ def from_dict(raw, source, output_dir=None, probe=True):
                     torques=torques, communication_step=step, run_in_cycles=cycles["run_in_cycles"],
                     window_cycles=cycles["window_cycles"], integrator=integ, outputs=outputs,
                     output_types=output_types, loop=lp, raw=raw)
+
+
+def dumps_toml(data):
+    """A TOML text of a campaign dict (strings, numbers, booleans, lists of
+    them, one level of tables): the stage files of `campaign loop`."""
+
+    def value(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, int):
+            return str(v)
+        if isinstance(v, float):
+            if not math.isfinite(v):
+                raise ValueError(f"{v} cannot be written to a campaign file")
+            return repr(v)
+        if isinstance(v, str):
+            return json.dumps(v, ensure_ascii=False)
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+    lines = [f"{k} = {value(v)}" for k, v in data.items() if not isinstance(v, dict)]
+    for k, v in data.items():
+        if isinstance(v, dict):
+            lines += ["", f"[{k}]"] + [f"{kk} = {value(vv)}" for kk, vv in v.items()]
+    return "\n".join(lines) + "\n"

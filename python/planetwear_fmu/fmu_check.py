@@ -35,32 +35,39 @@ def task_parameters(scene, integrator, window_cycles, state_value, torque, first
 
 
 def check(fmu, scene, integrator, window_cycles, first_speed_rpm, torque, states):
-    """Problems the FMU finds: first the settings on the unworn set, then
-    each wear state [(index in wear.states, entry, WearState)]. Returns a
-    list of `Problem` (empty when all is well)."""
+    """Problems the FMU finds with the campaign's settings and each wear
+    state [(index in wear.states, entry, WearState)], one initialization per
+    state file (the unworn set alone when there is none). Returns a list of
+    `Problem` (empty when all is well)."""
 
     def params(value):
         return task_parameters(scene, integrator, window_cycles, value, torque, first_speed_rpm)
 
-    cases = [{"key": "settings", **params("")}]
-    entries = {}
+    cases, entries = [], {}
     for i, entry, s in states:
         if s.fmu_value:
             cases.append({"key": f"wear.states[{i}]", **params(s.fmu_value)})
             entries[f"wear.states[{i}]"] = entry
-    answers = run_cases(str(fmu), cases)
+    if not cases:
+        cases.append({"key": "settings", **params("")})
     problems = []
-    settings = answers[0]
-    if not settings["ok"]:
-        reason = settings["reason"]
-        names = [k for k, p in INTEGRATOR_PARAMETERS.items() if p in reason]
-        key = f"integrator.{names[0]}" if names else "scene"
-        value = integrator.get(INTEGRATOR_PARAMETERS[names[0]]) if names else scene.spec
-        problems.append(Problem(key, value, f"the FMU refuses it: {reason}"))
-        return problems
-    for a in answers[1:]:
-        if not a["ok"]:
-            problems.append(Problem(a["key"], entries[a["key"]], f"the FMU refuses this wear state: {a['reason']}"))
+    setting_refused = False
+    for a in run_cases(str(fmu), cases):
+        if a["ok"]:
+            continue
+        reason = " ".join(line.strip() for line in a["reason"].splitlines() if line.strip())
+        # A refusal that names a setting (an integrator parameter under its
+        # FMU or its scene name, the scene) is reported once, against that
+        # setting, not against each state.
+        names = [k for k, p in INTEGRATOR_PARAMETERS.items() if f"{p} =" in reason or f"dynamics.{k} =" in reason]
+        if a["key"] == "settings" or names or "sceneFile" in reason or "invalid gear set" in reason:
+            if not setting_refused:
+                key = f"integrator.{names[0]}" if names else "scene"
+                value = integrator.get(INTEGRATOR_PARAMETERS[names[0]]) if names else scene.spec
+                problems.append(Problem(key, value, f"the FMU refuses it: {reason}"))
+                setting_refused = True
+            continue
+        problems.append(Problem(a["key"], entries[a["key"]], f"the FMU refuses this wear state: {reason}"))
     return problems
 
 
