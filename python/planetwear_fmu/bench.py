@@ -33,9 +33,9 @@ REPO = Path(__file__).resolve().parents[2]
 def add_arguments(q):
     q.add_argument("--fmu", default=str(REPO / "fmu" / "planetwear.fmu"))
     q.add_argument("--scene", default="example-2004")
-    q.add_argument("--tasks", type=int, default=8, help="sweeps per run (N sun torques around 750 N·m)")
-    q.add_argument("--from-rpm", type=float, default=2000.0)
-    q.add_argument("--to-rpm", type=float, default=4250.0)
+    q.add_argument("--tasks", type=int, default=6, help="sweeps per run (N sun torques around 750 N·m)")
+    q.add_argument("--from-rpm", type=float, default=1000.0)
+    q.add_argument("--to-rpm", type=float, default=6000.0)
     q.add_argument("--step-rpm", type=float, default=250.0)
     q.add_argument("--workers-list", default="1,2", help="worker counts of the local cluster, comma-separated")
     q.add_argument("--out", help="keep the bench's files here (default: a temporary directory, removed)")
@@ -75,7 +75,8 @@ def run_bench(a):
 def _bench(a, workers_list, root):
     src = root / "bench.toml"
     cores = os.cpu_count()
-    figures = {"cores": cores, "tasks": a.tasks, "runs": []}
+    figures = {"cores": cores, "tasks": a.tasks, "runs": [], "load_average_1min_at_start": os.getloadavg()[0]}
+    print(f"{cores} cores; load average {os.getloadavg()[0]:.2f} at the start (other processes share the cores)")
 
     # One sweep in-process, no Dask: the FMU's own cost per point.
     raw = bench_raw(a, root / "inprocess")
@@ -133,12 +134,18 @@ def _bench(a, workers_list, root):
         if base is None and w == min(workers_list):
             base = per_core
         eff = per_core / base if base else float("nan")
-        task_init = statistics.fmean(t["init_s"] for t in s["tasks"] if t["init_s"] is not None)
+        ran = [t for t in s["tasks"] if t["init_s"] is not None]
+        task_init = statistics.fmean(t["init_s"] for t in ran)
+        cpu = sum(t["cpu_s"] for t in ran)
+        load = os.getloadavg()[0]
         run = {"workers": w, "points": s["computed"], "sweeps": s["sweeps_run"], "wall_s": s["wall_s"],
                "points_per_s": pps, "points_per_s_per_core": per_core, "efficiency": eff,
-               "task_init_s": task_init}
+               "task_init_s": task_init, "task_cpu_s": cpu, "points_per_cpu_s": s["computed"] / cpu,
+               "cpu_share": cpu / (s["wall_s"] * w), "load_average_1min": load}
         figures["runs"].append(run)
         print(f"{w} worker(s): {s['computed']} points ({s['sweeps_run']} sweeps × {len(c.speeds)} speeds) in "
               f"{s['wall_s']:.2f} s: {pps:.2f} points/s, {per_core:.2f} points/s per core, "
-              f"scaling efficiency {eff:.2f}; FMU initialization {task_init:.2f} s per sweep")
+              f"scaling efficiency {eff:.2f}; FMU initialization {task_init:.2f} s per sweep; "
+              f"the sweeps' CPU time {cpu:.1f} s ({s['computed'] / cpu:.2f} points per CPU-second, "
+              f"{100 * run['cpu_share']:.0f} % of {w} core(s) over the run); load average {load:.2f}")
     return figures

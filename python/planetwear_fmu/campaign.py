@@ -223,7 +223,8 @@ def run_campaign(campaign, client=None, scheduler=None, workers=None, progress=T
         tasks.append({"key": s["key"], "points": len(s["speeds"]), "done_before": done_before[s["key"]],
                       "done": after[s["key"]], "resumed_from": r.get("resumed_from"),
                       "restarted": r.get("resumed_from", 0) > done_before[s["key"]],
-                      "init_s": r.get("init_s"), "fmu_step_s": r.get("fmu_step_s"), "wall_s": r.get("wall_s")})
+                      "init_s": r.get("init_s"), "fmu_step_s": r.get("fmu_step_s"), "wall_s": r.get("wall_s"),
+                      "cpu_s": r.get("cpu_s")})
     summary = {
         "campaign": str(campaign.source),
         "output_dir": str(campaign.output_dir),
@@ -324,6 +325,9 @@ def main(argv=None):
     q = sub.add_parser("plot", help="draw the plots of an output directory's results.parquet")
     q.add_argument("output_dir")
     a = p.parse_args(argv)
+    if getattr(a, "out", None):
+        # A directory given on the command line is relative to the working directory.
+        a.out = str(Path(a.out).resolve())
 
     if getattr(a, "workers", None) is not None and a.workers < 1:
         p.error(f"--workers {a.workers}: must be at least 1")
@@ -363,6 +367,13 @@ def main(argv=None):
         return 2
     except CampaignRunError as e:
         print_summary(e.summary, out=sys.stderr)
+        print(e, file=sys.stderr)
+        return 1
+    except RuntimeError as e:
+        from .loop import LoopError
+
+        if not isinstance(e, LoopError):
+            raise
         print(e, file=sys.stderr)
         return 1
     return 0

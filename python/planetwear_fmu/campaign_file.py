@@ -57,7 +57,7 @@ STATE_FORMAT = "planetwear-worn-profile"
 STATE_VERSION = 1
 STATE_FLANKS = ("sun_drive", "sun_coast", "planet_sun_side", "planet_ring_side", "ring_drive", "ring_coast")
 LABEL = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]{0,63}$")
-BUILT_IN_SCENES = ("example-2004", "lumped-benchmark")
+BUILT_IN_SCENES = ("example-2004",)
 
 
 @dataclass(frozen=True)
@@ -304,6 +304,9 @@ def _scene_text(spec, base, fmu_path, bin_value):
 
 def _parse_scene(spec, text, fmu_value, cli_value):
     s = tomllib.loads(text)
+    missing = [t for t in ("sun", "planet", "ring") if not isinstance(s.get(t), dict)]
+    if missing:
+        raise ValueError(f"not a planetary gear set scene (no [{'], ['.join(missing)}] table)")
 
     def base_radius(gear):
         g = s[gear]
@@ -412,7 +415,9 @@ def from_dict(raw, source, output_dir=None, probe=True):
         try:
             text, fmu_value, cli_value = _scene_text(spec, base, fmu, bin_value)
             scene = _parse_scene(spec, text, fmu_value, cli_value)
-        except (ValueError, KeyError, tomllib.TOMLDecodeError) as e:
+        except KeyError as e:
+            bad("scene", spec, f"cannot be read: the key {e} is missing")
+        except (ValueError, tomllib.TOMLDecodeError) as e:
             bad("scene", spec, f"cannot be read: {e}")
         if scene is not None and scene.input != "sun":
             bad("scene", spec, f"operation.input = {scene.input}: the campaign's torque levels are sun torques, "

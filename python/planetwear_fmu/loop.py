@@ -29,6 +29,11 @@ from .sweep import write_atomic
 MAX_STAGES = 200
 
 
+class LoopError(RuntimeError):
+    """The loop could not go on (the wear stepper refused); the finished
+    stages and their manifests are kept."""
+
+
 def _state_record(path):
     data = Path(path).read_bytes()
     content, reason = check_state_document(data.decode("utf-8", errors="replace"))
@@ -105,6 +110,7 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
     all_specs = []
     for _ in range(MAX_STAGES):
         t_stage = time.perf_counter()
+        stage_started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
         rec_in = _state_record(state) if state else {"path": "", "sha256": "", "kappa": 0, "max_wear_um": 0.0}
         kappa = rec_in["kappa"]
         stage_dir = root / f"kappa-{kappa}"
@@ -131,26 +137,45 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
                 cmd += ["--ring"]
             if "dynamic_speed_rpm" in lp:
                 cmd += ["--dynamic-speed", str(lp["dynamic_speed_rpm"])]
-            t0 = time.perf_counter()
+            failure, wall = None, None
             if not out.is_file():
                 states_dir.mkdir(parents=True, exist_ok=True)
+                t0 = time.perf_counter()
                 proc = subprocess.run(cmd, capture_output=True, text=True)
+                wall = time.perf_counter() - t0
                 if proc.returncode != 0:
-                    raise RuntimeError(f"the wear stepper failed at κ = {kappa} ({' '.join(cmd)}): "
-                                       f"{proc.stderr.strip()}")
-            step = {"command": cmd, "wall_s": time.perf_counter() - t0, "state_out": _state_record(out)}
+                    failure = proc.stderr.strip()
+            step = {"command": cmd, "wall_s": wall,
+                    "state_out": _state_record(out) if failure is None else None, "error": failure}
+        this_run = {
+            "started": stage_started,
+            "campaign": {k: summary[k] for k in ("points", "points_done", "computed", "points_before", "wall_s",
+                                                 "points_per_s", "points_per_s_per_core", "workers", "files")},
+            "wear_step_run": step is not None and step["wall_s"] is not None,
+            "wall_s": time.perf_counter() - t_stage,
+        }
+        # A stage run again keeps the record of its earlier runs and of the
+        # wear step that made its output state (not repeated).
+        old = {}
+        if (stage_dir / "manifest.json").is_file():
+            old = json.loads((stage_dir / "manifest.json").read_text())
+        if step is not None and step["wall_s"] is None and old.get("wear_step"):
+            if (old["wear_step"].get("state_out") or {}).get("sha256") == step["state_out"]["sha256"]:
+                step = old["wear_step"]
         manifest = {
             "stage": len(stages),
             "kappa": kappa,
             "campaign_file": {"path": str(stage_file), "sha256": campaign_file.sha256_file(stage_file)},
             "state_in": rec_in,
-            "campaign": {k: summary[k] for k in ("points", "points_done", "computed", "points_before", "wall_s",
-                                                 "points_per_s", "workers", "files")},
+            "points": summary["points"],
             "wear_step": step,
-            "wall_s": time.perf_counter() - t_stage,
+            "runs": old.get("runs", []) + [this_run],
         }
         write_atomic(stage_dir / "manifest.json", json.dumps(manifest, indent=1).encode())
         stages.append(manifest)
+        if step is not None and step["error"]:
+            raise LoopError(f"the wear stepper refused to go on from κ = {kappa} ({' '.join(cmd)}): {step['error']}; "
+                            f"stages up to κ = {kappa} are complete (manifests in {root})")
         if last:
             break
         state = Path(step["state_out"]["path"])
@@ -160,8 +185,9 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
     files = consolidate(root, all_specs, plots=True)
     record = {"campaign": str(campaign.source), "to_kappa": to_kappa, "to_wear_um": to_wear_um,
               "stages": [{"kappa": s["kappa"], "manifest": str(root / f"kappa-{s['kappa']}" / "manifest.json"),
-                          "points": s["campaign"]["points"], "max_wear_um": s["state_in"]["max_wear_um"],
-                          "wall_s": s["wall_s"]} for s in stages],
+                          "points": s["points"], "computed": s["runs"][-1]["campaign"]["computed"],
+                          "max_wear_um": s["state_in"]["max_wear_um"], "wall_s": s["runs"][-1]["wall_s"]}
+                         for s in stages],
             "wall_s": time.perf_counter() - started, "files": files}
     write_atomic(root / "loop.json", json.dumps(record, indent=1).encode())
     return record
@@ -169,7 +195,8 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
 
 def print_loop(record):
     for s in record["stages"]:
-        print(f"κ = {s['kappa']}: deepest wear {s['max_wear_um']:.2f} µm, {s['points']} points, {s['wall_s']:.1f} s "
+        print(f"κ = {s['kappa']}: deepest wear {s['max_wear_um']:.2f} µm, {s['points']} points ({s['computed']} "
+              f"computed now), {s['wall_s']:.1f} s "
               f"({s['manifest']})")
     print(f"loop: {len(record['stages'])} stage(s) in {record['wall_s']:.1f} s; gathered results and plots: "
           f"{', '.join(record['files'][:2])}")

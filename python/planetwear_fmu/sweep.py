@@ -142,12 +142,13 @@ def run_task(spec, on_point=None):
     from fmpy.fmi2 import FMU2Slave
 
     started = time.perf_counter()
+    cpu_started = time.process_time()
     speeds = spec["speeds"]
     store = PointStore(spec["dir"], speeds)
     store.dir.mkdir(parents=True, exist_ok=True)
     k = store.done()
     summary = {"key": spec["key"], "points": len(speeds), "resumed_from": k, "computed": 0, "init_s": 0.0,
-               "fmu_step_s": 0.0, "wall_s": 0.0, "pid": os.getpid(), "host": socket.gethostname()}
+               "fmu_step_s": 0.0, "wall_s": 0.0, "cpu_s": 0.0, "pid": os.getpid(), "host": socket.gethostname()}
     if k == len(speeds):
         summary["wall_s"] = time.perf_counter() - started
         return summary
@@ -235,6 +236,7 @@ def run_task(spec, on_point=None):
     finally:
         slave.freeInstance()
     summary["wall_s"] = time.perf_counter() - started
+    summary["cpu_s"] = time.process_time() - cpu_started
     return summary
 
 

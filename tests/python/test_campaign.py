@@ -306,7 +306,7 @@ def test_the_loop_alternates_campaigns_and_the_wear_stepper_with_manifests(tmp_p
         assert out["sha256"] == hashlib.sha256(Path(out["path"]).read_bytes()).hexdigest()
         assert nxt["state_in"]["sha256"] == out["sha256"] and out["kappa"] == m["kappa"] + 1
         assert abs(out["max_wear_um"] - m["state_in"]["max_wear_um"] - 2.5) < 1e-6
-        assert m["campaign"]["points_done"] == 2
+        assert m["runs"][-1]["campaign"]["points_done"] == 2
     assert manifests[-1]["wear_step"] is None
     for m in manifests:
         assert m["campaign_file"]["sha256"] == campaign_file.sha256_file(m["campaign_file"]["path"])
@@ -317,3 +317,9 @@ def test_the_loop_alternates_campaigns_and_the_wear_stepper_with_manifests(tmp_p
     stepped = Path(manifests[0]["wear_step"]["state_out"]["path"]).read_text()
     assert json.loads(stepped)["checksum"] == json.loads(shipped)["checksum"]
     assert (c.output_dir / "loop" / "plots" / "frms_change_T750.png").stat().st_size > 10_000
+    # Run again: nothing is computed or stepped again, the manifests keep the first run.
+    again = run_loop(c, to_kappa=2, client=client, progress=False)
+    assert [s["computed"] for s in again["stages"]] == [0, 0, 0]
+    for s, m in zip(again["stages"], manifests):
+        m2 = json.loads(Path(s["manifest"]).read_text())
+        assert len(m2["runs"]) == 2 and m2["runs"][0] == m["runs"][0] and m2["wear_step"] == m["wear_step"]
