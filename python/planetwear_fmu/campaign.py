@@ -48,11 +48,12 @@ class CampaignRunError(RuntimeError):
 
 
 def extract_fmu(campaign):
-    """The FMU unpacked once into <output_dir>/.fmu/<sha256 prefix>/ (a
-    temporary directory renamed into place), shared by the tasks."""
+    """The FMU unpacked once into <output_dir>/.fmu/<sha256 prefix>/ (or the
+    campaign's `unpack_dir`; a temporary directory renamed into place),
+    shared by the tasks."""
     from fmpy import extract
 
-    root = campaign.output_dir / ".fmu"
+    root = campaign.unpack_dir or campaign.output_dir / ".fmu"
     target = root / campaign.fmu_sha256[:16]
     if (target / "modelDescription.xml").is_file():
         return target
@@ -207,8 +208,10 @@ def run_campaign(campaign, client=None, scheduler=None, workers=None, progress=T
             spec = futures[f]
             if f.status == "finished":
                 results.append(f.result())
-            else:
+            elif f.status == "error":
                 failed.append({"key": spec["key"], "error": f"{type(f.exception()).__name__}: {f.exception()}"})
+            else:
+                failed.append({"key": spec["key"], "error": f"the task ended {f.status}"})
     finally:
         if bar is not None:
             client.unsubscribe_topic(topic)

@@ -164,6 +164,8 @@ class Campaign:
     output_types: dict  # name → "Real" | "Integer"
     loop: dict
     raw: dict = field(repr=False, default_factory=dict)
+    # Where the FMU is unpacked for the tasks (default <output_dir>/.fmu).
+    unpack_dir: Path | None = None
 
     def tasks(self):
         """The campaign's sweeps: (state, torque, direction) in a fixed order."""

@@ -119,6 +119,7 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
         stage_file = stage_dir / "campaign.toml"
         write_atomic(stage_file, campaign_file.dumps_toml(raw).encode())
         stage = campaign_file.load(stage_file)
+        stage.unpack_dir = root / ".fmu"
         summary = run_campaign(stage, client=client, progress=progress, plots=False)
         print_summary(summary, out=sys.stderr)
         all_specs += task_specs(stage)

@@ -177,9 +177,18 @@ def run_task(spec, on_point=None):
         slave.exitInitializationMode()
         t = 0.0
         if k > 0:
-            saved = slave.deserializeFMUState(store.state(k - 1))
-            slave.setFMUState(saved)
-            slave.freeFMUState(saved)
+            path = store.state_path(k - 1)
+            if not path.is_file():
+                raise RuntimeError(f"{spec['key']}: point {k - 1} has a result but its FMU state {path} is missing; "
+                                   f"remove {store.result_path(k - 1)} (and the points after it) to recompute it")
+            try:
+                saved = slave.deserializeFMUState(path.read_bytes())
+                slave.setFMUState(saved)
+                slave.freeFMUState(saved)
+            except FMICallException as e:
+                raise RuntimeError(f"{spec['key']}: the FMU cannot restore the state {path} ({e}): it was written "
+                                   "by another FMU or with other parameters, or is damaged; remove it and its "
+                                   "result to recompute the point") from None
             t = store.row(k - 1)["time_s"]
         summary["init_s"] = time.perf_counter() - started
         per_rev = spec["mesh_cycles_per_revolution"]
@@ -238,18 +247,6 @@ def run_task(spec, on_point=None):
     summary["wall_s"] = time.perf_counter() - started
     summary["cpu_s"] = time.process_time() - cpu_started
     return summary
-
-
-def read_points(directory):
-    """Every point Parquet file under `directory`, as one table (sorted by
-    label, torque, direction, index)."""
-    files = sorted(Path(directory).glob("points/*/*.parquet"))
-    if not files:
-        return None
-    tables = [pq.read_table(f) for f in files]
-    table = pa.concat_tables(tables, promote_options="default")
-    return table.sort_by([("label", "ascending"), ("sun_torque_nm", "ascending"), ("direction", "ascending"),
-                          ("index", "ascending")])
 
 
 def task_fingerprint(spec):
