@@ -213,11 +213,14 @@ def run_campaign(campaign, client=None, scheduler=None, workers=None, progress=T
             else:
                 failed.append({"key": spec["key"], "error": f"the task ended {f.status}"})
     finally:
+        after = {s["key"]: PointStore(s["dir"], s["speeds"]).done() for s in specs}
         if bar is not None:
             client.unsubscribe_topic(topic)
+            # Events may trail the results: the bar ends on what is on disk.
+            bar.n = sum(after.values())
+            bar.refresh()
             bar.close()
     wall = time.perf_counter() - started
-    after = {s["key"]: PointStore(s["dir"], s["speeds"]).done() for s in specs}
     computed = sum(after.values()) - before
     by_key = {r["key"]: r for r in results}
     tasks = []

@@ -182,13 +182,17 @@ def test_a_killed_campaign_resumes_without_recomputing_a_point(tmp_path, client,
     done = sum(PointStore(s["dir"], s["speeds"]).done() for s in task_specs(c))
     print(f"campaign process killed with {done} of {2 * len(SPEEDS)} points written")
     assert 3 <= done < 2 * len(SPEEDS), "the campaign was not interrupted in the middle"
-    s = run_campaign(c, client=client, progress=False, plots=False)
+    # Continued by the same command, on a running cluster given by its scheduler's address.
+    run = ["run", str(tmp_path / "c.toml"), "--scheduler", client.scheduler.address, "--no-plots"]
+    assert main(run) == 0
+    s = json.loads((out / "summary.json").read_text())
     print(f"resumed: {s['computed']} points computed, {s['points_before']} found done")
     assert s["points_before"] == done
     assert s["computed"] == 2 * len(SPEEDS) - done
     check_exactly_once_and_equal(out, reference)
     # A third run finds everything done and computes nothing.
-    again = run_campaign(c, client=client, progress=False, plots=False)
+    assert main(run) == 0
+    again = json.loads((out / "summary.json").read_text())
     assert again["computed"] == 0 and again["sweeps_run"] == 0
 
 
