@@ -221,6 +221,8 @@ def run_campaign(campaign, client=None, scheduler=None, workers=None, progress=T
             bar.refresh()
             bar.close()
     wall = time.perf_counter() - started
+    # Workers of a running cluster may join while the campaign runs.
+    n_workers = max(n_workers, _workers(client))
     computed = sum(after.values()) - before
     by_key = {r["key"]: r for r in results}
     tasks = []

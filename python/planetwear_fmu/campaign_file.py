@@ -266,16 +266,24 @@ def check_state_document(text):
     return c, None
 
 
-def model_outputs(fmu_path):
-    """{output name: type} of the FMU's model description, and its GUID."""
+# The variables a campaign task sets: an FMU without them is not the planetwear FMU.
+TASK_VARIABLES = ("sceneFile", "wearStateFile", "driveMode", "harmonicWindowCycles", "initialSpeed",
+                  "inputSpeedReference", "sunTorque", "ringTorque", "carrierTorque") + tuple(
+                      INTEGRATOR_PARAMETERS.values())
+
+
+def model_variables(fmu_path):
+    """{output name: type} of the FMU's model description, and the names of
+    all its variables."""
     with zipfile.ZipFile(fmu_path) as z:
         root = ElementTree.fromstring(z.read("modelDescription.xml"))
-    outputs = {}
+    outputs, names = {}, set()
     for v in root.iter("ScalarVariable"):
+        names.add(v.get("name"))
         if v.get("causality") == "output":
             kind = next((c.tag for c in v if c.tag in ("Real", "Integer", "Boolean", "String")), None)
             outputs[v.get("name")] = kind
-    return outputs, root.get("guid")
+    return outputs, names
 
 
 def _scene_text(spec, base, fmu_path, bin_value):
@@ -383,7 +391,7 @@ def from_dict(raw, source, output_dir=None, probe=True):
     # The FMU.
     fmu = None
     fmu_names = set()
-    outputs_md, guid = {}, None
+    outputs_md = {}
     if "fmu" not in raw:
         bad("fmu", "(missing)", "required: the path of the planetwear FMU (.fmu)")
     elif not isinstance(raw["fmu"], str) or not raw["fmu"]:
@@ -398,10 +406,15 @@ def from_dict(raw, source, output_dir=None, probe=True):
             try:
                 with zipfile.ZipFile(fmu) as z:
                     fmu_names = set(z.namelist())
-                outputs_md, guid = model_outputs(fmu)
+                outputs_md, names = model_variables(fmu)
             except (zipfile.BadZipFile, KeyError, ElementTree.ParseError) as e:
                 bad("fmu", raw["fmu"], f"not an FMU (a zip archive with modelDescription.xml): {e}")
                 fmu = None
+            else:
+                missing = [n for n in TASK_VARIABLES if n not in names]
+                if missing:
+                    bad("fmu", raw["fmu"], f"not the planetwear FMU (it has no {', '.join(missing)})")
+                    fmu, outputs_md = None, {}
 
     bin_value = raw.get("planetwear_bin")
     if bin_value is not None and (not isinstance(bin_value, str) or not find_planetwear_bin(bin_value, base)):
