@@ -150,6 +150,7 @@ def test_a_worker_killed_in_the_middle_of_a_campaign(tmp_path, client, reference
                 break
         time.sleep(0.01)
     th.join(timeout=300)
+    assert not th.is_alive(), "the campaign did not complete within 300 s"
     assert "error" not in outcome, outcome.get("error")
     assert killed is not None, "no sweep was caught in the middle: the kill did not happen"
     s = outcome["summary"]
