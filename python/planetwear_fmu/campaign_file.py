@@ -1,0 +1,668 @@
+"""The campaign file (TOML): what a campaign computes, read and checked
+before any work starts.
+
+A campaign is the product wear states × sun torques × directions; each
+element is one continuation sweep over the speed grid (one Dask task).
+Every key is checked here, all problems at once, each naming its key, the
+value and what is allowed (`CampaignError`). The checks that need the FMU
+(a wear state the FMU refuses, an integrator setting it rejects) are made by
+`fmu_check`, which `load` calls last. The format is documented in
+docs/CAMPAIGNS.md; campaigns/example-2004.toml is the example.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import tomllib
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.etree import ElementTree
+
+# Keys allowed in each table, in the order the documentation gives them.
+TOP_KEYS = ("fmu", "scene", "output_dir", "planetwear_bin", "wear", "speeds", "load", "timing", "integrator",
+            "outputs", "loop")
+TABLE_KEYS = {
+    "wear": ("states", "labels"),
+    "speeds": ("from_rpm", "to_rpm", "step_rpm", "values_rpm", "directions"),
+    "load": ("sun_torque_nm",),
+    "timing": ("communication_step", "run_in_cycles", "window_cycles"),
+    "integrator": ("integrator", "steps_per_mesh_cycle", "rho_infinity", "relative_tolerance",
+                   "samples_per_mesh_cycle"),
+    "outputs": ("keep",),
+    "loop": ("threshold_um", "ring", "dynamic_speed_rpm"),
+}
+# Campaign integrator keys → FMU parameters.
+INTEGRATOR_PARAMETERS = {
+    "integrator": "integrator",
+    "steps_per_mesh_cycle": "stepsPerMeshCycle",
+    "rho_infinity": "rhoInfinity",
+    "relative_tolerance": "relativeTolerance",
+    "samples_per_mesh_cycle": "samplesPerMeshCycle",
+}
+# The windowed outputs every campaign keeps (the plots need both F^(rms)).
+REQUIRED_OUTPUTS = ("window.sunMeshFrms", "window.ringMeshFrms")
+DEFAULT_OUTPUTS = tuple(
+    [f"window.{m}Mesh{q}" for m in ("sun", "ring") for q in ("F1", "F2", "F3", "F4", "F5", "F6", "Frms")]
+    + ["window.sunSeparation", "window.ringSeparation", "window.cycles"]
+)
+MAX_SPEEDS = 100_000
+STATE_FORMAT = "planetwear-worn-profile"
+STATE_VERSION = 1
+STATE_FLANKS = ("sun_drive", "sun_coast", "planet_sun_side", "planet_ring_side", "ring_drive", "ring_coast")
+LABEL = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]{0,63}$")
+BUILT_IN_SCENES = ("example-2004",)
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One bad key: its dotted name, the value found and what is allowed."""
+
+    key: str
+    value: object
+    allowed: str
+
+    def __str__(self):
+        value = self.value if isinstance(self.value, str) and len(self.value) < 200 else repr(self.value)[:200]
+        return f"{self.key} = {value}: {self.allowed}"
+
+
+class CampaignError(ValueError):
+    """A campaign file that cannot be run; `problems` lists every bad key."""
+
+    def __init__(self, source, problems):
+        self.source = str(source)
+        self.problems = list(problems)
+        lines = "\n".join(f"  - {p}" for p in self.problems)
+        super().__init__(f"campaign file {self.source}: {len(self.problems)} problem(s)\n{lines}")
+
+
+@dataclass
+class WearState:
+    """One wear state of the campaign."""
+
+    # What the FMU's wearStateFile is set to: an absolute path, a resources/ name, or '' (unworn).
+    fmu_value: str
+    # κ recorded in the state (0 for the unworn set).
+    kappa: int
+    # Label of the state's results (file-name safe, unique in the campaign).
+    label: str
+    # SHA-256 of the state file's bytes ('' for the unworn set).
+    sha256: str
+    # Largest total wear depth recorded in the state [m].
+    max_wear: float
+    # The state file on disk, or None when it is read from the FMU's resources or is the unworn set.
+    path: Path | None = None
+
+
+@dataclass
+class Scene:
+    """The scene the campaign's FMU instances and the wear stepper use."""
+
+    # The campaign file's value: a built-in name or a path.
+    spec: str
+    # What the FMU's sceneFile is set to ('' selects the FMU's built-in example-2004).
+    fmu_value: str
+    # What `planetwear wear step --scene` is given.
+    cli_value: str
+    # The scene's TOML text.
+    text: str
+    sun_teeth: int
+    ring_teeth: int
+    # Face width of the sun [m].
+    face_width: float
+    # Base radii of sun and ring [m] (the balancing torque of the output member).
+    sun_base_radius: float
+    ring_base_radius: float
+    held: str
+    input: str
+
+    def mesh_cycles_per_revolution(self):
+        """Mesh cycles per revolution of the input member (the sun): Z_sun with
+        the carrier held; Z_sun·Z_ring/(Z_sun + Z_ring) with the ring held
+        (Willis: the carrier turns at Z_sun/(Z_sun + Z_ring) of the sun)."""
+        if self.held == "carrier":
+            return float(self.sun_teeth)
+        return self.sun_teeth * self.ring_teeth / (self.sun_teeth + self.ring_teeth)
+
+    def balanced_torques(self, sun_torque):
+        """(sun, ring, carrier) external torques [N·m] balancing `sun_torque`
+        on the sun: T_ring = T_sun r_b,ring/r_b,sun, T_carrier =
+        −T_sun (r_b,sun + r_b,ring)/r_b,sun; the held member's is ignored by
+        the FMU and set to zero."""
+        f = sun_torque / self.sun_base_radius
+        ring = 0.0 if self.held == "ring" else f * self.ring_base_radius
+        carrier = 0.0 if self.held == "carrier" else -f * (self.sun_base_radius + self.ring_base_radius)
+        return sun_torque, ring, carrier
+
+
+@dataclass
+class Campaign:
+    """A checked campaign file (every path absolute)."""
+
+    source: Path
+    fmu: Path
+    fmu_sha256: str
+    scene: Scene
+    output_dir: Path
+    planetwear_bin: str | None
+    states: list
+    speeds: list  # rpm, increasing
+    directions: list  # "up" and/or "down"
+    torques: list  # N·m on the sun
+    communication_step: float | None  # s; None = one mesh cycle
+    run_in_cycles: int
+    window_cycles: int
+    integrator: dict  # FMU parameter name → value
+    outputs: list  # FMU output names, in table order
+    output_types: dict  # name → "Real" | "Integer"
+    loop: dict
+    raw: dict = field(repr=False, default_factory=dict)
+    # Where the FMU is unpacked for the tasks (default <output_dir>/.fmu).
+    unpack_dir: Path | None = None
+
+    def tasks(self):
+        """The campaign's sweeps: (state, torque, direction) in a fixed order."""
+        return [(s, t, d) for s in self.states for t in self.torques for d in self.directions]
+
+    def points(self):
+        return len(self.tasks()) * len(self.speeds)
+
+
+def sha256_file(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def find_planetwear_bin(value=None, base=None):
+    """The `planetwear` binary: the campaign's planetwear_bin, then
+    $PLANETWEAR_BIN, then PATH; None when none is found."""
+    if value:
+        p = Path(value)
+        if not p.is_absolute() and base is not None:
+            p = base / p
+        return str(p) if p.is_file() and os.access(p, os.X_OK) else None
+    env = os.environ.get("PLANETWEAR_BIN")
+    if env:
+        return env if Path(env).is_file() and os.access(env, os.X_OK) else None
+    return shutil.which("planetwear")
+
+
+def _number(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def speed_grid(start, stop, step):
+    """from, from + step, … up to `stop` (included within 1e-9 of a step)."""
+    n = int(math.floor((stop - start) / step + 1e-9)) + 1
+    return [start + step * i for i in range(n)]
+
+
+def max_wear_depth(content):
+    """Largest total wear depth [m] a state records: the last update's
+    total_wear, or the flanks' depths of a state with no update."""
+    history = content.get("history") or []
+    if history and isinstance(history[-1], dict) and history[-1].get("total_wear"):
+        return max(float(w["depth"]) for w in history[-1]["total_wear"])
+    depths = [float(d) for fl in content.get("flanks", {}).values() for s in fl for d in s.get("depth", [])]
+    return max(depths, default=0.0)
+
+
+def check_state_document(text):
+    """Checks a worn-profile state's JSON structure; returns (content, None)
+    or (None, reason). The checksum and the gear set are checked by the FMU."""
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as e:
+        return None, f"not a JSON document ({e.msg} at line {e.lineno}, column {e.colno}): cut short or corrupt"
+    if not isinstance(doc, dict):
+        return None, "not a JSON object: not a worn-profile state"
+    if doc.get("format") != STATE_FORMAT:
+        return None, f"format {doc.get('format')!r}: a worn-profile state has format {STATE_FORMAT!r}"
+    if doc.get("version") != STATE_VERSION:
+        return None, f"version {doc.get('version')!r}: this runner reads version {STATE_VERSION}"
+    if not isinstance(doc.get("checksum"), str) or not re.fullmatch(r"fnv1a64:[0-9a-f]{16}", doc["checksum"]):
+        return None, f"checksum {doc.get('checksum')!r}: expected 'fnv1a64:' and 16 hex digits"
+    c = doc.get("content")
+    if not isinstance(c, dict):
+        return None, "no 'content' object"
+    k = c.get("kappa")
+    if not isinstance(k, int) or isinstance(k, bool) or k < 0:
+        return None, f"content.kappa {k!r}: must be a whole number ≥ 0"
+    gs = c.get("gear_set")
+    if not isinstance(gs, dict) or not isinstance(gs.get("parameters"), dict):
+        return None, "content.gear_set.parameters missing: the state does not say which gear set it belongs to"
+    flanks = c.get("flanks")
+    if not isinstance(flanks, dict) or sorted(flanks) != sorted(STATE_FLANKS):
+        got = sorted(flanks) if isinstance(flanks, dict) else flanks
+        return None, f"content.flanks {got}: expected the six flanks {', '.join(STATE_FLANKS)}"
+    for name, slices in flanks.items():
+        if not isinstance(slices, list) or not slices:
+            return None, f"content.flanks.{name}: expected a list of face slices"
+        for s in slices:
+            if not isinstance(s, dict) or not isinstance(s.get("depth"), list) or not isinstance(s.get("roll"), list):
+                return None, f"content.flanks.{name}: each slice needs 'depth' and 'roll' lists"
+            if len(s["depth"]) != len(s["roll"]):
+                return None, f"content.flanks.{name}: 'depth' and 'roll' differ in length"
+            if not all(_number(v) and math.isfinite(v) for v in s["depth"] + s["roll"]):
+                return None, f"content.flanks.{name}: depths and roll angles must be finite numbers"
+    history = c.get("history", [])
+    if not isinstance(history, list):
+        return None, "content.history: expected a list"
+    for h in history:
+        tw = h.get("total_wear") if isinstance(h, dict) else None
+        if tw is not None and not (isinstance(tw, list) and all(isinstance(w, dict) and _number(w.get("depth"))
+                                                                 for w in tw)):
+            return None, "content.history[].total_wear: expected a list of {flank, depth, …}"
+    return c, None
+
+
+# The variables a campaign task sets: an FMU without them is not the planetwear FMU.
+TASK_VARIABLES = ("sceneFile", "wearStateFile", "driveMode", "harmonicWindowCycles", "initialSpeed",
+                  "inputSpeedReference", "sunTorque", "ringTorque", "carrierTorque") + tuple(
+                      INTEGRATOR_PARAMETERS.values())
+
+
+def model_variables(fmu_path):
+    """{output name: type} of the FMU's model description, and the names of
+    all its variables."""
+    with zipfile.ZipFile(fmu_path) as z:
+        root = ElementTree.fromstring(z.read("modelDescription.xml"))
+    outputs, names = {}, set()
+    for v in root.iter("ScalarVariable"):
+        names.add(v.get("name"))
+        if v.get("causality") == "output":
+            kind = next((c.tag for c in v if c.tag in ("Real", "Integer", "Boolean", "String")), None)
+            outputs[v.get("name")] = kind
+    return outputs, names
+
+
+def _scene_text(spec, base, fmu_path, bin_value):
+    """The scene's TOML text and what the FMU and the wear stepper are given;
+    raises ValueError with the reason."""
+    p = Path(spec)
+    if not p.is_absolute():
+        p = base / p
+    if p.is_file():
+        return p.read_text(), str(p), str(p)
+    if spec in BUILT_IN_SCENES or not spec.endswith(".toml"):
+        exe = find_planetwear_bin(bin_value, base)
+        if exe:
+            out = subprocess.run([exe, "scene", "show", spec], capture_output=True, text=True)
+            if out.returncode == 0:
+                fmu_value = "" if spec == "example-2004" else f"{spec}.toml"
+                return out.stdout, fmu_value, spec
+            raise ValueError(f"neither a file nor a built-in scene ({exe} scene show: {out.stderr.strip()})")
+        # No binary: the FMU ships the built-in scenes in resources/.
+        with zipfile.ZipFile(fmu_path) as z:
+            name = f"resources/{spec}.toml"
+            if name in z.namelist():
+                fmu_value = "" if spec == "example-2004" else f"{spec}.toml"
+                return z.read(name).decode(), fmu_value, spec
+    raise ValueError(f"no such file (relative to the campaign file) and not a built-in scene "
+                     f"({', '.join(BUILT_IN_SCENES)})")
+
+
+def _parse_scene(spec, text, fmu_value, cli_value):
+    s = tomllib.loads(text)
+    missing = [t for t in ("sun", "planet", "ring") if not isinstance(s.get(t), dict)]
+    if missing:
+        raise ValueError(f"not a planetary gear set scene (no [{'], ['.join(missing)}] table)")
+
+    def base_radius(gear):
+        g = s[gear]
+        return g["module_mm"] * 1e-3 * g["teeth"] * math.cos(math.radians(g["pressure_angle_deg"])) / 2
+
+    op = s.get("operation", {})
+    return Scene(spec=spec, fmu_value=fmu_value, cli_value=cli_value, text=text, sun_teeth=int(s["sun"]["teeth"]),
+                 ring_teeth=int(s["ring"]["teeth"]), face_width=s["sun"]["face_width_mm"] * 1e-3,
+                 sun_base_radius=base_radius("sun"), ring_base_radius=base_radius("ring"),
+                 held=op.get("held", "carrier"), input=op.get("input", "sun"))
+
+
+def _resolve_state(entry, base, fmu_path, fmu_names):
+    """(path or None, fmu_value, bytes) of a wear.states entry; raises ValueError."""
+    if entry == "":
+        return None, "", None
+    p = Path(entry)
+    if not p.is_absolute():
+        p = base / p
+    if p.is_file():
+        return p, str(p), p.read_bytes()
+    name = f"resources/{entry}"
+    if name in fmu_names:
+        with zipfile.ZipFile(fmu_path) as z:
+            return None, entry, z.read(name)
+    shipped = sorted(n[len("resources/"):] for n in fmu_names if n.startswith("resources/wear/"))
+    raise ValueError("no such file (relative to the campaign file) and not a resource of the FMU "
+                     f"(the FMU ships: {', '.join(shipped) or 'none'})")
+
+
+def load(path, output_dir=None, probe=True):
+    """Reads and checks a campaign file; returns a `Campaign` or raises
+    `CampaignError` listing every problem. With `probe` the FMU is asked
+    (in a subprocess) whether it accepts each wear state with the campaign's
+    settings, and its logged refusal becomes the problem's reason."""
+    path = Path(path).resolve()
+    try:
+        raw = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise CampaignError(path, [Problem("(file)", str(path), "no such campaign file")]) from None
+    except tomllib.TOMLDecodeError as e:
+        raise CampaignError(path, [Problem("(file)", str(path), f"not valid TOML: {e}")]) from None
+    return from_dict(raw, path, output_dir=output_dir, probe=probe)
+
+
+def from_dict(raw, source, output_dir=None, probe=True):
+    """Checks a campaign given as a dict (as read from TOML); relative paths
+    are taken relative to the directory of `source`."""
+    source = Path(source).resolve()
+    base = source.parent
+    problems = []
+
+    def bad(key, value, allowed):
+        problems.append(Problem(key, value, allowed))
+
+    for k in raw:
+        if k not in TOP_KEYS:
+            bad(k, raw[k], f"unknown key; allowed are {', '.join(TOP_KEYS)}")
+    for table, keys in TABLE_KEYS.items():
+        if table in raw:
+            if not isinstance(raw[table], dict):
+                bad(table, raw[table], "must be a table ([" + table + "])")
+                continue
+            for k in raw[table]:
+                if k not in keys:
+                    bad(f"{table}.{k}", raw[table][k], f"unknown key; allowed are {', '.join(keys)}")
+    for table in ("wear", "speeds", "load"):
+        if table not in raw:
+            bad(table, "(missing)", f"the [{table}] table is required")
+    tab = {t: raw.get(t) if isinstance(raw.get(t), dict) else {} for t in TABLE_KEYS}
+
+    # The FMU.
+    fmu = None
+    fmu_names = set()
+    outputs_md = {}
+    if "fmu" not in raw:
+        bad("fmu", "(missing)", "required: the path of the planetwear FMU (.fmu)")
+    elif not isinstance(raw["fmu"], str) or not raw["fmu"]:
+        bad("fmu", raw["fmu"], "must be the path of an FMU file")
+    else:
+        fmu = Path(raw["fmu"])
+        fmu = (fmu if fmu.is_absolute() else base / fmu).resolve()
+        if not fmu.is_file():
+            bad("fmu", raw["fmu"], f"no such file ({fmu}); build it with `planetwear fmu pack --out {raw['fmu']}`")
+            fmu = None
+        else:
+            try:
+                with zipfile.ZipFile(fmu) as z:
+                    fmu_names = set(z.namelist())
+                outputs_md, names = model_variables(fmu)
+            except (zipfile.BadZipFile, KeyError, ElementTree.ParseError) as e:
+                bad("fmu", raw["fmu"], f"not an FMU (a zip archive with modelDescription.xml): {e}")
+                fmu = None
+            else:
+                missing = [n for n in TASK_VARIABLES if n not in names]
+                if missing:
+                    bad("fmu", raw["fmu"], f"not the planetwear FMU (it has no {', '.join(missing)})")
+                    fmu, outputs_md = None, {}
+
+    bin_value = raw.get("planetwear_bin")
+    if bin_value is not None and (not isinstance(bin_value, str) or not find_planetwear_bin(bin_value, base)):
+        bad("planetwear_bin", bin_value, "must be the path of the planetwear binary (an executable file)")
+        bin_value = None
+
+    # The scene.
+    scene = None
+    spec = raw.get("scene", "example-2004")
+    if not isinstance(spec, str) or not spec:
+        bad("scene", spec, f"must be a built-in scene name ({', '.join(BUILT_IN_SCENES)}) or a scene file")
+    elif fmu is not None:
+        try:
+            text, fmu_value, cli_value = _scene_text(spec, base, fmu, bin_value)
+            scene = _parse_scene(spec, text, fmu_value, cli_value)
+        except KeyError as e:
+            bad("scene", spec, f"cannot be read: the key {e} is missing")
+        except (ValueError, tomllib.TOMLDecodeError) as e:
+            bad("scene", spec, f"cannot be read: {e}")
+        if scene is not None and scene.input != "sun":
+            bad("scene", spec, f"operation.input = {scene.input}: the campaign's torque levels are sun torques, "
+                               "so the scene's input member must be the sun")
+            scene = None
+
+    # The output directory.
+    out = output_dir if output_dir is not None else raw.get("output_dir")
+    if out is None:
+        bad("output_dir", "(missing)", "required: the directory of the results")
+    elif not isinstance(out, (str, os.PathLike)) or not str(out):
+        bad("output_dir", out, "must be a directory path")
+        out = None
+    else:
+        out = Path(out)
+        out = (out if out.is_absolute() else base / out).resolve()
+        if out.exists() and not out.is_dir():
+            bad("output_dir", str(out), "exists and is not a directory")
+
+    # The speed grid.
+    sp = tab["speeds"]
+    speeds = []
+    grid_keys = [k for k in ("from_rpm", "to_rpm", "step_rpm") if k in sp]
+    if "values_rpm" in sp and grid_keys:
+        bad("speeds", "values_rpm and " + ", ".join(grid_keys), "give either values_rpm or from_rpm/to_rpm/step_rpm")
+    elif "values_rpm" in sp:
+        v = sp["values_rpm"]
+        if not isinstance(v, list) or not v:
+            bad("speeds.values_rpm", v, "must be a non-empty list of speeds [rpm]")
+        else:
+            fine = True
+            for i, x in enumerate(v):
+                if not _number(x) or not math.isfinite(x) or x <= 0:
+                    bad(f"speeds.values_rpm[{i}]", x, "must be a positive finite speed [rpm]")
+                    fine = False
+            if fine and any(b <= a for a, b in zip(v, v[1:])):
+                bad("speeds.values_rpm", v, "must be strictly increasing (directions set the sweep order)")
+            elif fine:
+                speeds = [float(x) for x in v]
+    elif "speeds" in raw:
+        ok = True
+        for k in ("from_rpm", "to_rpm", "step_rpm"):
+            x = sp.get(k)
+            if x is None:
+                bad(f"speeds.{k}", "(missing)", "required with from_rpm/to_rpm/step_rpm (or give values_rpm)")
+                ok = False
+            elif not _number(x) or not math.isfinite(x) or x <= 0:
+                bad(f"speeds.{k}", x, "must be a positive finite number [rpm]")
+                ok = False
+        if ok:
+            if sp["to_rpm"] < sp["from_rpm"]:
+                bad("speeds.to_rpm", sp["to_rpm"], f"is below from_rpm = {sp['from_rpm']}: the grid would be empty")
+            elif (sp["to_rpm"] - sp["from_rpm"]) / sp["step_rpm"] + 1 > MAX_SPEEDS:
+                bad("speeds.step_rpm", sp["step_rpm"], f"gives more than {MAX_SPEEDS} speeds")
+            else:
+                speeds = speed_grid(float(sp["from_rpm"]), float(sp["to_rpm"]), float(sp["step_rpm"]))
+    d = sp.get("directions", "both")
+    directions = {"up": ["up"], "down": ["down"], "both": ["up", "down"]}.get(d) if isinstance(d, str) else None
+    if isinstance(d, list) and d and all(x in ("up", "down") for x in d) and len(set(d)) == len(d):
+        directions = list(d)
+    if directions is None:
+        bad("speeds.directions", d, "allowed are up, down, both (or a list of up/down)")
+        directions = []
+
+    # Torques.
+    torques = []
+    tq = tab["load"].get("sun_torque_nm")
+    if "load" in raw:
+        if isinstance(tq, (int, float)) and not isinstance(tq, bool):
+            tq = [tq]
+        if not isinstance(tq, list) or not tq:
+            bad("load.sun_torque_nm", tq, "must be a non-empty list of sun torques [N·m]")
+        else:
+            for i, x in enumerate(tq):
+                if not _number(x) or not math.isfinite(x) or x == 0:
+                    bad(f"load.sun_torque_nm[{i}]", x, "must be a non-zero finite torque [N·m]")
+            if all(_number(x) and math.isfinite(x) and x != 0 for x in tq):
+                if len(set(tq)) != len(tq):
+                    bad("load.sun_torque_nm", tq, "must not repeat a torque")
+                else:
+                    torques = [float(x) for x in tq]
+
+    # Timing.
+    tm = tab["timing"]
+    h = tm.get("communication_step", "mesh cycle")
+    step = None
+    if isinstance(h, str):
+        if h.strip().lower() not in ("mesh cycle", "one mesh cycle"):
+            bad("timing.communication_step", h, "allowed are \"mesh cycle\" or a positive step in seconds")
+    elif not _number(h) or not math.isfinite(h) or h <= 0:
+        bad("timing.communication_step", h, "allowed are \"mesh cycle\" or a positive step in seconds")
+    else:
+        step = float(h)
+    cycles = {}
+    for k, default, least in (("run_in_cycles", 34, 0), ("window_cycles", 68, 1)):
+        x = tm.get(k, default)
+        if not isinstance(x, int) or isinstance(x, bool) or x < least or x > 1_000_000:
+            bad(f"timing.{k}", x, f"must be a whole number of mesh cycles, at least {least}")
+        cycles[k] = x
+
+    # Integrator settings (the FMU checks them once more).
+    integ = {}
+    for k, x in tab["integrator"].items():
+        if k not in INTEGRATOR_PARAMETERS:
+            continue
+        name = INTEGRATOR_PARAMETERS[k]
+        if k == "integrator":
+            if x not in (0, 1) or isinstance(x, bool):
+                bad("integrator.integrator", x, "allowed are 0 (generalized-α) and 1 (Runge-Kutta 5(4))")
+                continue
+        elif k in ("steps_per_mesh_cycle", "samples_per_mesh_cycle"):
+            if not isinstance(x, int) or isinstance(x, bool) or x < 1:
+                bad(f"integrator.{k}", x, "must be a whole number ≥ 1")
+                continue
+        elif k == "rho_infinity":
+            if not _number(x) or not 0 <= x <= 1:
+                bad("integrator.rho_infinity", x, "must be in [0, 1]")
+                continue
+        elif k == "relative_tolerance":
+            if not _number(x) or not (0 < x < 1):
+                bad("integrator.relative_tolerance", x, "must be in (0, 1)")
+                continue
+        integ[name] = x
+
+    # Outputs.
+    keep = tab["outputs"].get("keep", list(DEFAULT_OUTPUTS))
+    outputs, output_types = [], {}
+    if not isinstance(keep, list) or not all(isinstance(x, str) for x in keep):
+        bad("outputs.keep", keep, "must be a list of FMU output names")
+    elif outputs_md:
+        for i, name in enumerate(keep):
+            if name not in outputs_md:
+                close = [n for n in outputs_md if n.lower().startswith(name.lower()[:8])][:6]
+                hint = f" (outputs starting alike: {', '.join(close)})" if close else ""
+                bad(f"outputs.keep[{i}]", name, f"not an output of the FMU's model description{hint}")
+            elif outputs_md[name] not in ("Real", "Integer"):
+                bad(f"outputs.keep[{i}]", name, "only Real and Integer outputs can be kept")
+        for name in list(keep) + list(REQUIRED_OUTPUTS):
+            if name in outputs_md and outputs_md[name] in ("Real", "Integer") and name not in outputs:
+                outputs.append(name)
+                output_types[name] = outputs_md[name]
+
+    # Wear-stepper settings of `campaign loop`.
+    lp = dict(tab["loop"])
+    if "threshold_um" in lp and (not _number(lp["threshold_um"]) or not 0 < lp["threshold_um"] < 1000):
+        bad("loop.threshold_um", lp["threshold_um"], "must be a positive wear depth below 1000 µm")
+    if "ring" in lp and not isinstance(lp["ring"], bool):
+        bad("loop.ring", lp["ring"], "must be true or false")
+    if "dynamic_speed_rpm" in lp and (not _number(lp["dynamic_speed_rpm"]) or not lp["dynamic_speed_rpm"] > 0):
+        bad("loop.dynamic_speed_rpm", lp["dynamic_speed_rpm"], "must be a positive speed [rpm]")
+
+    # Wear states: the JSON structure here, the FMU's verdict below.
+    states = []
+    state_index = {}  # index in wear.states → WearState read from a file or resource
+    wv = tab["wear"].get("states")
+    labels = tab["wear"].get("labels")
+    if "wear" in raw:
+        if not isinstance(wv, list) or not wv or not all(isinstance(x, str) for x in wv):
+            bad("wear.states", wv, "must be a non-empty list of state files or FMU resource names "
+                                   "('' for the unworn set)")
+            wv = []
+        if labels is not None and (not isinstance(labels, list) or len(labels) != len(wv)
+                                   or not all(isinstance(x, str) and LABEL.match(x) for x in labels)):
+            bad("wear.labels", labels, f"must be a list of {len(wv)} labels of letters, digits, '.', '_', '+', '-'")
+            labels = None
+        for i, entry in enumerate(wv if fmu is not None else []):
+            key = f"wear.states[{i}]"
+            try:
+                p, fmu_value, data = _resolve_state(entry, base, fmu, fmu_names)
+            except ValueError as e:
+                bad(key, entry, str(e))
+                continue
+            if data is None:
+                states.append(WearState("", 0, labels[i] if labels else "unworn", "", 0.0, None))
+                state_index[i] = states[-1]
+                continue
+            content, reason = check_state_document(data.decode("utf-8", errors="replace"))
+            if reason:
+                bad(key, entry, f"not a usable worn-profile state: {reason}")
+                continue
+            label = labels[i] if labels else f"kappa-{content['kappa']}"
+            states.append(WearState(fmu_value, content["kappa"], label, hashlib.sha256(data).hexdigest(),
+                                    max_wear_depth(content), p))
+            state_index[i] = states[-1]
+        seen = {}
+        for i, s in state_index.items():
+            if s.label in seen:
+                j = seen[s.label]
+                bad(f"wear.states[{i}]", wv[i], f"its label {s.label} is also that of wear.states[{j}] = {wv[j]}: "
+                                                "give wear.labels to tell them apart")
+            seen.setdefault(s.label, i)
+
+    # The FMU's verdict on the settings and on each state that passed the checks above.
+    if probe and fmu is not None and scene is not None:
+        from . import fmu_check
+
+        problems += fmu_check.check(fmu, scene, integ, cycles["window_cycles"] if isinstance(
+            cycles["window_cycles"], int) and cycles["window_cycles"] >= 1 else 68,
+            speeds[0] if speeds else 3000.0, torques[0] if torques else 750.0,
+            [(i, wv[i], s) for i, s in state_index.items()])
+    if problems:
+        raise CampaignError(source, problems)
+    return Campaign(source=source, fmu=fmu, fmu_sha256=sha256_file(fmu), scene=scene, output_dir=out,
+                    planetwear_bin=bin_value, states=states, speeds=speeds, directions=directions,
+                    torques=torques, communication_step=step, run_in_cycles=cycles["run_in_cycles"],
+                    window_cycles=cycles["window_cycles"], integrator=integ, outputs=outputs,
+                    output_types=output_types, loop=lp, raw=raw)
+
+
+def dumps_toml(data):
+    """A TOML text of a campaign dict (strings, numbers, booleans, lists of
+    them, one level of tables): the stage files of `campaign loop`."""
+
+    def value(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, int):
+            return str(v)
+        if isinstance(v, float):
+            if not math.isfinite(v):
+                raise ValueError(f"{v} cannot be written to a campaign file")
+            return repr(v)
+        if isinstance(v, str):
+            return json.dumps(v, ensure_ascii=False)
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+    lines = [f"{k} = {value(v)}" for k, v in data.items() if not isinstance(v, dict)]
+    for k, v in data.items():
+        if isinstance(v, dict):
+            lines += ["", f"[{k}]"] + [f"{kk} = {value(vv)}" for kk, vv in v.items()]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,100 @@
+"""Plots of a campaign's results: F^(rms) of planet 1's mesh forces against
+speed per mesh (sun–planet, ring–planet) for every wear state and torque,
+and their change relative to κ = 0.
+
+One pair of figures per sun torque: `frms_T<torque>.png` (every κ, sweep up
+solid, down dashed) and `frms_change_T<torque>.png` (100 (F − F_κ0)/F_κ0 at
+the same speed and direction). Files are written atomically.
+"""
+
+from __future__ import annotations
+
+import io
+from collections import defaultdict
+from pathlib import Path
+
+from .sweep import write_atomic
+
+MESHES = (("sun_frms_n_per_mm", "sun–planet mesh"), ("ring_frms_n_per_mm", "ring–planet mesh"))
+
+
+def _curves(rows):
+    """{torque: {(kappa, label, direction): [(speed, sun, ring)] sorted by speed}}."""
+    out = defaultdict(lambda: defaultdict(list))
+    for r in rows:
+        out[r["sun_torque_nm"]][(r["kappa"], r["label"], r["direction"])].append(
+            (r["speed_rpm"], r["sun_frms_n_per_mm"], r["ring_frms_n_per_mm"]))
+    for per in out.values():
+        for v in per.values():
+            v.sort()
+    return out
+
+
+def _save(fig, path):
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    write_atomic(path, buf.getvalue())
+
+
+def plot_results(table, directory):
+    """Draws the figures of a results table (pyarrow) into `directory`;
+    returns the files written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    rows = table.select(["label", "kappa", "sun_torque_nm", "direction", "speed_rpm", "sun_frms_n_per_mm",
+                         "ring_frms_n_per_mm"]).to_pylist()
+    files = []
+    cmap = plt.get_cmap("viridis")
+    for torque, curves in sorted(_curves(rows).items()):
+        kappas = sorted({k for k, _, _ in curves})
+        colour = {k: cmap(i / max(1, len(kappas) - 1) * 0.9) for i, k in enumerate(kappas)}
+        style = {"up": "-", "down": "--"}
+        fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharex=True)
+        for ax, (col, title) in zip(axes, MESHES):
+            j = 1 if col.startswith("sun") else 2
+            for (kappa, label, direction), pts in sorted(curves.items()):
+                ax.plot([p[0] for p in pts], [p[j] for p in pts], style.get(direction, "-"), color=colour[kappa],
+                        marker=".", ms=3, lw=1.2, label=f"{label} {direction}")
+            ax.set_title(f"{title}, {torque:g} N·m on the sun")
+            ax.set_xlabel("input speed [rpm]")
+            ax.set_ylabel("F$^{(rms)}$ of planet 1 [N/mm]")
+            ax.grid(alpha=0.3)
+        axes[1].legend(fontsize=7, ncol=2)
+        fig.tight_layout()
+        path = directory / f"frms_T{torque:g}.png"
+        _save(fig, path)
+        plt.close(fig)
+        files.append(path)
+
+        # Change relative to κ = 0 (the lowest κ when no κ = 0 was run).
+        k0 = 0 if 0 in kappas else kappas[0]
+        base = {(d, p[0]): p for (k, _, d), pts in curves.items() if k == k0 for p in pts}
+        if len(kappas) < 2 or not base:
+            continue
+        fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharex=True)
+        for ax, (col, title) in zip(axes, MESHES):
+            j = 1 if col.startswith("sun") else 2
+            for (kappa, label, direction), pts in sorted(curves.items()):
+                if kappa == k0:
+                    continue
+                xy = [(p[0], 100 * (p[j] - base[(direction, p[0])][j]) / base[(direction, p[0])][j])
+                      for p in pts if (direction, p[0]) in base and base[(direction, p[0])][j] != 0]
+                ax.plot([x for x, _ in xy], [y for _, y in xy], style.get(direction, "-"), color=colour[kappa],
+                        marker=".", ms=3, lw=1.2, label=f"{label} {direction}")
+            ax.axhline(0, color="k", lw=0.6)
+            ax.set_title(f"{title}, {torque:g} N·m: change against κ = {k0}")
+            ax.set_xlabel("input speed [rpm]")
+            ax.set_ylabel(f"F$^{{(rms)}}$ change against κ = {k0} [%]")
+            ax.grid(alpha=0.3)
+        axes[1].legend(fontsize=7, ncol=2)
+        fig.tight_layout()
+        path = directory / f"frms_change_T{torque:g}.png"
+        _save(fig, path)
+        plt.close(fig)
+        files.append(path)
+    return files
