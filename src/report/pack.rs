@@ -11,6 +11,7 @@ use zip::write::SimpleFileOptions;
 use crate::fmi::variables::{Causality, GUID, MODEL_DESCRIPTION_XML, MODEL_IDENTIFIER, VARIABLES};
 use crate::physics::wear::{Limit, WearModel, WearSettings};
 use crate::physics::wear_state::WornState;
+use crate::report::regression::{example_references, CASES, REFERENCE_RELATIVE_TOLERANCE, RESOURCE};
 use crate::scene::lumped::LumpedScene;
 use crate::scene::Scene;
 
@@ -37,6 +38,9 @@ pub enum PackError {
     /// The example's worn-profile states could not be computed.
     #[error("computing the example's worn-profile states: {0}")]
     Wear(String),
+    /// The regression references could not be computed.
+    #[error("computing the regression references: {0}")]
+    References(String),
 }
 
 fn html_escape(s: &str) -> String {
@@ -115,10 +119,18 @@ pub fn pack(library: &Path, out: &Path) -> Result<(), PackError> {
     add("resources/lumped-benchmark.toml", LumpedScene::lumped_benchmark().to_toml().as_bytes())?;
     // The example's worn-profile states κ = 0..6 (the wear model's run,
     // about 5 s), for the wearStateFile parameter.
+    let mut texts = Vec::new();
     for (kappa, state) in example_wear_states()?.iter().enumerate() {
         let text = state.to_json().map_err(|e| PackError::Wear(e.to_string()))?;
         add(&format!("resources/wear/example-2004/kappa-{kappa}.json"), text.as_bytes())?;
+        texts.push(text);
     }
+    // Reference results for regression tests (docs/REGRESSION.md), computed
+    // from the shipped states' text as the FMU reads it.
+    let references = example_references(&texts, &CASES, REFERENCE_RELATIVE_TOLERANCE)
+        .and_then(|r| r.to_json())
+        .map_err(|e| PackError::References(e.to_string()))?;
+    add(RESOURCE, references.as_bytes())?;
     add("documentation/index.html", documentation().as_bytes())?;
     zip.finish()?;
     std::fs::rename(&tmp, out).map_err(io(out))?;
