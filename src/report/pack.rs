@@ -1,5 +1,6 @@
 //! Assembling the FMU archive: `modelDescription.xml` at the root, the
-//! shared library as `binaries/linux64/planetwear.so`, the built-in scenes in
+//! shared library as `binaries/linux64/planetwear.so`, the built-in scenes,
+//! the example's worn-profile states and its regression references in
 //! `resources/`, and `documentation/index.html` generated from the same
 //! variable table. Written to a temporary file and renamed into place.
 
@@ -11,7 +12,9 @@ use zip::write::SimpleFileOptions;
 use crate::fmi::variables::{Causality, GUID, MODEL_DESCRIPTION_XML, MODEL_IDENTIFIER, VARIABLES};
 use crate::physics::wear::{Limit, WearModel, WearSettings};
 use crate::physics::wear_state::WornState;
-use crate::report::regression::{example_references, CASES, REFERENCE_RELATIVE_TOLERANCE, RESOURCE};
+use crate::report::regression::{
+    example_references, CASES, REFERENCE_RELATIVE_TOLERANCE, RESOURCE, STEPS_PER_MESH_CYCLE,
+};
 use crate::scene::lumped::LumpedScene;
 use crate::scene::Scene;
 
@@ -54,6 +57,7 @@ pub fn documentation() -> String {
     );
     h.push_str("<h1>planetwear</h1>\n<p>Nonlinear tooth-by-tooth dynamics of a spur planetary gear set (sun, ring, carrier, up to 8 planets) with time-varying mesh stiffness, tooth separation, back-flank contact and tip-corner contact, in Lin &amp; Parker's transverse-torsional or the torsional model. FMI 2.0 co-simulation; internal time integration by generalized-alpha or adaptive Runge-Kutta 5(4).</p>\n");
     h.push_str(&format!("<p>GUID {GUID}. The parameters default to the automatic-transmission planetary set of a 2004 tooth-wear study (sun 34, planet 18, ring 70 teeth, module 1.5 mm, 4 planets, carrier held, 750 N·m on the sun). With <code>sceneFile</code> empty every parameter defines the set; with a scene file (a path or a file in resources/), only the parameters the importer sets override it. <code>wearStateFile</code> names a worn-profile state written by <code>planetwear wear</code> (a path, or a file in resources/): the example's states after 0 to 6 wear updates are shipped as <code>wear/example-2004/kappa-0.json</code> … <code>kappa-6.json</code>; a state of another gear set is refused.</p>\n"));
+    h.push_str(&format!("<p>Regression references: <code>{RESOURCE}</code> holds, for a few speeds and worn states of the example, the values of the <code>window.*</code> outputs that a run through the protocol stated in the file (RK 5(4) at relative tolerance 3e-6, {STEPS_PER_MESH_CYCLE} internal steps per mesh cycle, torques held, doStep of one mesh period) reproduces within the tolerance given per output; the Python package planetwear-fmu (<code>planetwear_fmu.regression</code>, pytest fixture <code>planetwear_reference</code>) runs and checks them.</p>\n"));
     for (title, causality) in
         [("Parameters", Causality::Parameter), ("Inputs", Causality::Input), ("Outputs", Causality::Output)]
     {
