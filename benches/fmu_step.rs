@@ -1,6 +1,8 @@
 //! Cost of fmi2DoStep at 3000 rpm: communication steps of one mesh cycle and
 //! of 1 ms, the overhead of the FMI layer against the native `Simulation`,
-//! and the real-time factor, for both fidelity levels.
+//! and the real-time factor, for both fidelity levels and both integrators
+//! (the default RK 5(4) at its tolerance, and generalized-α at its steps per
+//! mesh cycle).
 //! Run: `cargo bench --bench fmu_step` (docs/PERFORMANCE.md records the figures).
 
 use std::ffi::CString;
@@ -12,9 +14,9 @@ use planetwear::fmi::variables::{vr, GUID};
 use planetwear::physics::dynamics::PlanetaryDynamics;
 use planetwear::physics::ltca::SetModel;
 use planetwear::physics::simulation::Simulation;
-use planetwear::scene::{Fidelity, Scene};
+use planetwear::scene::{Fidelity, IntegratorKind, Scene};
 
-fn fmu_run(fidelity: i32, h: f64, span: f64) -> f64 {
+fn fmu_run(fidelity: i32, integrator: i32, h: f64, span: f64) -> f64 {
     let guid = CString::new(GUID).expect("no NUL");
     let c = fmi2Instantiate(
         c"bench".as_ptr(),
@@ -27,6 +29,7 @@ fn fmu_run(fidelity: i32, h: f64, span: f64) -> f64 {
     );
     assert!(!c.is_null());
     assert_eq!(fmi2SetInteger(c, &vr::FIDELITY, 1, &fidelity), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetInteger(c, &vr::INTEGRATOR, 1, &integrator), fmi2Status_fmi2OK);
     assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2Status_fmi2OK);
     assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
     assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
@@ -43,9 +46,10 @@ fn fmu_run(fidelity: i32, h: f64, span: f64) -> f64 {
     wall / n as f64
 }
 
-fn native_run(fidelity: Fidelity, h: f64, span: f64) -> f64 {
+fn native_run(fidelity: Fidelity, integrator: IntegratorKind, h: f64, span: f64) -> f64 {
     let mut s = Scene::example_2004();
     s.dynamics.fidelity = fidelity;
+    s.dynamics.integrator = integrator;
     let set = s.validate().expect("valid");
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
     let mut sim = Simulation::new(&set, model, 0.0, 3000.0 * std::f64::consts::PI / 30.0).expect("sim");
@@ -61,36 +65,43 @@ fn main() {
     let fm = 34.0 * 3000.0 / 60.0;
     let span = 0.05;
     let d = Scene::example_2004().dynamics;
-    let integrator = match d.integrator {
-        planetwear::scene::IntegratorKind::GeneralizedAlpha => {
-            format!(
-                "generalized-alpha rho_inf {} at {} steps per mesh cycle",
-                d.rho_infinity, d.steps_per_mesh_cycle
-            )
-        }
-        planetwear::scene::IntegratorKind::Rk45 => format!(
-            "RK 5(4) at relative tolerance {:e}, landing on {} internal steps per mesh cycle",
-            d.relative_tolerance, d.steps_per_mesh_cycle
-        ),
-    };
-    println!("fmi2DoStep at 3000 rpm (f_m = {fm} Hz), {span} s simulated, default integrator: {integrator}");
-    println!(
-        "  {:<22} {:>12} {:>14} {:>14} {:>12} {:>10}",
-        "fidelity", "step", "FMU per step", "native/step", "overhead", "real time"
+    println!("fmi2DoStep at 3000 rpm (f_m = {fm} Hz), {span} s simulated");
+    let mut kinds = vec![d.integrator];
+    kinds.extend(
+        [IntegratorKind::Rk45, IntegratorKind::GeneralizedAlpha].into_iter().filter(|k| *k != d.integrator),
     );
-    for (name, code, fidelity) in
-        [("torsional", 0, Fidelity::Torsional), ("transverse-torsional", 1, Fidelity::TransverseTorsional)]
-    {
-        for (label, h) in [("1 mesh cycle", 1.0 / fm), ("1 ms", 1e-3)] {
-            let f = fmu_run(code, h, span);
-            let n = native_run(fidelity, h, span);
-            println!(
-                "  {name:<22} {label:>12} {:>11.1} µs {:>11.1} µs {:>11.1} % {:>9.3}×",
-                f * 1e6,
-                n * 1e6,
-                100.0 * (f / n - 1.0),
-                h / f
-            );
+    for kind in kinds {
+        let (code, integrator) = match kind {
+            IntegratorKind::GeneralizedAlpha => (
+                0,
+                format!(
+                    "generalized-alpha rho_inf {} at {} steps per mesh cycle",
+                    d.rho_infinity, d.steps_per_mesh_cycle
+                ),
+            ),
+            IntegratorKind::Rk45 => (1, format!("RK 5(4) at relative tolerance {:e}", d.relative_tolerance)),
+        };
+        let default = if kind == d.integrator { " (the default)" } else { "" };
+        println!("integrator {code}: {integrator}{default}");
+        println!(
+            "  {:<22} {:>12} {:>14} {:>14} {:>12} {:>10}",
+            "fidelity", "step", "FMU per step", "native/step", "overhead", "real time"
+        );
+        for (name, fid_code, fidelity) in [
+            ("torsional", 0, Fidelity::Torsional),
+            ("transverse-torsional", 1, Fidelity::TransverseTorsional),
+        ] {
+            for (label, h) in [("1 mesh cycle", 1.0 / fm), ("1 ms", 1e-3)] {
+                let f = fmu_run(fid_code, code, h, span);
+                let n = native_run(fidelity, kind, h, span);
+                println!(
+                    "  {name:<22} {label:>12} {:>11.1} µs {:>11.1} µs {:>11.1} % {:>9.3}×",
+                    f * 1e6,
+                    n * 1e6,
+                    100.0 * (f / n - 1.0),
+                    h / f
+                );
+            }
         }
     }
 }

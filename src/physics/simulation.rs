@@ -32,6 +32,30 @@ pub enum SimulationError {
         /// What is allowed.
         reason: String,
     },
+    /// The step needed more work than its budget
+    /// ([`WORK_PER_INTERNAL_STEP`] force evaluations per internal step at the
+    /// nominal speed, plus [`WORK_BASE`]): the response has left the range the
+    /// step was sized for (for example a run-away speed in an unstable
+    /// coupling), and going on would take without bound.
+    #[error(
+        "step from t = {t} s stopped at t = {reached} s: the adaptive integrator used more than {budget} \
+         force evaluations ({internal} internal steps of the nominal speed {nominal_speed} rad/s); \
+         the input member turns at {speed} rad/s"
+    )]
+    WorkBudget {
+        /// Start of the step [s].
+        t: f64,
+        /// Time reached [s].
+        reached: f64,
+        /// The budget [force evaluations].
+        budget: u64,
+        /// Internal steps of the communication step at the nominal speed.
+        internal: u64,
+        /// The speed the internal step was sized for [rad/s].
+        nominal_speed: f64,
+        /// The input member's speed when the budget ran out [rad/s].
+        speed: f64,
+    },
     /// The integrator could not complete the step.
     #[error("step from t = {t} s failed: {source}")]
     Integration {
@@ -41,6 +65,15 @@ pub enum SimulationError {
         source: SolverError,
     },
 }
+
+/// Work budget of one communication step with the adaptive integrator:
+/// force evaluations allowed per internal step at the nominal speed. The
+/// default setting needs 10 to 80 (7 per step, 90 to 1300 steps per mesh
+/// cycle against 120 internal steps), so this is a margin of 25 at least.
+pub const WORK_PER_INTERNAL_STEP: u64 = 2000;
+/// Force evaluations every communication step may use besides
+/// [`WORK_PER_INTERNAL_STEP`] (short steps, restarts after input changes).
+pub const WORK_BASE: u64 = 100_000;
 
 /// A restorable snapshot of a simulation (plain data, no pointers).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -351,22 +384,80 @@ impl Simulation {
         let start = t;
         let end = start + h;
         let mut f = vec![0.0; self.model.dim()];
+        let n = self.model.dim();
+        let (mut q_dense, mut v_dense) = (vec![0.0; n], vec![0.0; n]);
+        let budget = WORK_BASE + WORK_PER_INTERNAL_STEP * steps;
+        let nominal_speed = 1.0
+            / (self.nominal_step
+                * self.set.dynamics.steps_per_mesh_cycle as f64
+                * self.model.mesh_frequency_per_input_speed);
+        let work_start = match &self.stepper {
+            Stepper::Rk(r) => r.stats().rhs_evaluations,
+            Stepper::Alpha(_) => 0,
+        };
         for k in 1..=steps {
             // Internal step ends from integer counts; the last is exactly t + h.
             let tk = if k == steps { end } else { start + h * (k as f64) / (steps as f64) };
-            if let Err(source) = self.stepper.advance(&mut self.model, tk, 1) {
+            let advanced = match &mut self.stepper {
+                // The adaptive method takes its own steps up to the
+                // communication point; the internal grid times inside them
+                // are read from its dense output (forcing step ends onto
+                // them would cost steps and change nothing it controls). Its
+                // work is bounded per communication step.
+                Stepper::Rk(r) => {
+                    let mut result = Ok(());
+                    while r.time() < tk {
+                        let used = r.stats().rhs_evaluations - work_start;
+                        if used > budget {
+                            let reached = r.time();
+                            let speed = r.v()[self.model.input_index] / self.model.input_lever;
+                            self.time = reached;
+                            self.refresh(&mut f);
+                            return Err(SimulationError::WorkBudget {
+                                t,
+                                reached,
+                                budget,
+                                internal: steps,
+                                nominal_speed,
+                                speed,
+                            });
+                        }
+                        result = r.step(&mut self.model, end);
+                        if result.is_err() {
+                            break;
+                        }
+                    }
+                    result.and_then(|()| {
+                        if r.time() == tk {
+                            q_dense.copy_from_slice(r.q());
+                            v_dense.copy_from_slice(r.v());
+                            Ok(())
+                        } else {
+                            r.dense_at(tk, &mut q_dense, &mut v_dense)
+                        }
+                    })
+                }
+                stepper => stepper.advance(&mut self.model, tk, 1).map(|()| {
+                    let (q, v) = stepper.state();
+                    q_dense.copy_from_slice(q);
+                    v_dense.copy_from_slice(v);
+                }),
+            };
+            if let Err(source) = advanced {
                 // Keep the last good state's time and mesh outputs.
                 self.time = self.stepper_time();
                 self.refresh(&mut f);
                 return Err(SimulationError::Integration { t: self.time, source });
             }
-            self.refresh(&mut f);
+            self.model.force(tk, &q_dense, &v_dense, &mut f);
             let m = &self.model.meshes;
             if m.len() >= 2 {
                 self.window.push(m[0].position, m[0].force, m[1].force);
             }
         }
         self.time = end;
+        // The outputs read the accepted state at the communication point.
+        self.refresh(&mut f);
         Ok(())
     }
 
