@@ -1,7 +1,7 @@
 //! Order-tracked harmonics (src/physics/order_tracking.rs), the measure of
 //! the regression references: the FMU's window (Simulation) converges to it
-//! as the internal steps per mesh cycle grow, at the second order of its
-//! linear interpolation between step ends.
+//! as the internal grid points per mesh cycle grow, at the second order of
+//! its linear interpolation between them.
 
 use planetwear::physics::dynamics::PlanetaryDynamics;
 use planetwear::physics::gear::{IntegratorKind, MeshKind};

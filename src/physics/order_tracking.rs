@@ -4,11 +4,12 @@
 //! The FMU's window ([`super::simulation::Simulation`]) takes a sample of
 //! planet 1's sun–planet and ring–planet mesh force each time the sun mesh's
 //! travel s crosses a multiple of p_b / S (p_b the sun's base pitch, S the
-//! samples per mesh cycle), interpolating linearly between its internal step
-//! ends; over W mesh cycles the S·W samples give the order spectrum of the
-//! forces (F^(1..6), F^(rms), the mean, and the separation fraction, the
-//! share of samples at zero force). That estimate converges like 1/steps²
-//! as the internal steps per mesh cycle grow (docs/REGRESSION.md).
+//! samples per mesh cycle), interpolating linearly between the points of its
+//! internal grid (`stepsPerMeshCycle` per mesh cycle); over W mesh cycles the
+//! S·W samples give the order spectrum of the forces (F^(1..6), F^(rms), the
+//! mean, and the separation fraction, the share of samples at zero force).
+//! That estimate converges like 1/n² as the grid's n points per mesh cycle
+//! grow (docs/REGRESSION.md).
 //!
 //! Here the same samples are taken without interpolation error: the
 //! adaptive Runge–Kutta 5(4) method takes its own steps, and in each step

@@ -42,19 +42,20 @@ pub const RESOURCE: &str = "resources/regression/example-2004.json";
 /// E_h of RK 5(4) at relative tolerance 3e-6, the largest over the eight
 /// operating points of the work-precision study (docs/ACCURACY.md).
 pub const INTEGRATOR_ERROR: f64 = 7.0e-4;
-/// The window's linear interpolation between internal steps at
-/// [`STEPS_PER_MESH_CYCLE`]: the largest E_h of the FMU at that setting
-/// against these references over every case and the communication steps
-/// of one mesh period, 0.822 and 0.37 of it (4.96e-4, high speed), rounded
-/// up (docs/REGRESSION.md; tests/python/test_regression.py checks it).
+/// The window's linear interpolation between internal grid points at
+/// [`STEPS_PER_MESH_CYCLE`]: the largest E_h of the FMU at the protocol's
+/// setting against these references over every case and the communication
+/// steps of one mesh period, 0.822 and 0.37 of it (5.11e-4, high speed, the
+/// integrator's share included), rounded up (docs/REGRESSION.md,
+/// scripts/regression_budget.py; tests/python/test_regression.py checks it).
 pub const WINDOW_INTERPOLATION_ERROR: f64 = 6.0e-4;
 /// Safety factor on the error budget: a driver with another communication
-/// step puts the internal step ends elsewhere relative to the samples.
+/// step puts the internal grid elsewhere relative to the samples.
 pub const MARGIN: f64 = 1.5;
 
 /// The protocol's integrator: RK 5(4) (the FMU's `integrator` = 1).
 pub const PROTOCOL_RELATIVE_TOLERANCE: f64 = 3e-6;
-/// Internal step ends per mesh cycle in the protocol (`stepsPerMeshCycle`).
+/// Internal grid points per mesh cycle in the protocol (`stepsPerMeshCycle`).
 pub const STEPS_PER_MESH_CYCLE: u32 = 1920;
 /// Run-in before the window [mesh cycles]: three input revolutions.
 pub const RUN_IN_CYCLES: usize = 102;
@@ -372,7 +373,7 @@ pub fn example_references(
         reference: ReferenceMethod {
             description: "The same initial-value problem (balanced torques), integrated by RK 5(4) at a tight \
                           tolerance; each sample taken at the exact crossing of the sun mesh's travel with the \
-                          window's grid on the dense output (no interpolation between step ends): the value \
+                          window's grid on the dense output (no interpolation between grid points): the value \
                           the FMU's window converges to as stepsPerMeshCycle grows."
                 .into(),
             integrator: "rk45".into(),

@@ -10,6 +10,7 @@ import dataclasses
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 import zipfile
@@ -72,20 +73,23 @@ def test_every_shipped_case_is_reproduced_by_the_fmu_at_the_protocol(planetwear_
     assert not failures, "\n".join(failures)
 
 
-def test_a_driver_with_another_communication_step_stays_within_the_interpolation_budget(
+def test_a_driver_with_another_communication_step_stays_within_the_measured_budget(
         planetwear_reference, unzipdir):
     """A communication step that is not a fraction of the mesh period
-    (0.822 of it, 1e-4 s at 14 500 rpm) moves the internal step ends against
-    the window's samples: at the high-speed case, where the ring mesh's F1
-    is small, this is the largest error of the window's interpolation, and
-    the budget's interpolation term must cover it."""
+    (0.822 of it, 1e-4 s at 14 500 rpm) moves the internal grid against the
+    window's samples: at the high-speed case, where the ring mesh's F1 is
+    small, this gives the largest error of the window's interpolation, and
+    the budget's measured terms (integrator and interpolation, without the
+    drift and the margin) must cover it."""
     case = max(planetwear_reference.cases, key=lambda c: c.speed_rpm)
     measured = planetwear_reference.run(case, unzipdir=unzipdir,
                                         communication_step=0.822 / case.mesh_frequency_hz)
     result = compare(case, measured)
     print(f"{case.name} at 0.822 mesh periods per doStep: E_h {result.worst_fraction_of_f1():.2e} "
-          f"(interpolation budget {case.budget['window_interpolation']:.1e})")
-    assert result.worst_fraction_of_f1() <= case.budget["window_interpolation"], result.report()
+          f"(integrator and interpolation terms {case.budget['integrator']:.1e} + "
+          f"{case.budget['window_interpolation']:.1e})")
+    budget = case.budget["integrator"] + case.budget["window_interpolation"]
+    assert result.worst_fraction_of_f1() <= budget, result.report()
     result.assert_ok()
 
 
@@ -247,11 +251,9 @@ def test_the_window_is_order_tracked_and_its_time_sampled_counterpart_is_the_nat
     exe = os.environ.get("PLANETWEAR_BIN", str(REPO / "target" / "release" / "planetwear"))
     scene = subprocess.run([exe, "scene", "show", "example-2004"], capture_output=True, text=True,
                            check=True).stdout
-    for old, new in [('integrator = "generalized_alpha"', 'integrator = "rk45"'),
-                     ("relative_tolerance = 0.000003", "relative_tolerance = 1e-8"),
-                     ("steady_tolerance = 0.00001", "steady_tolerance = 0.0")]:
-        assert old in scene, old
-        scene = scene.replace(old, new)
+    for key, value in [("integrator", '"rk45"'), ("relative_tolerance", "1e-8"), ("steady_tolerance", "0.0")]:
+        scene, count = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", scene)
+        assert count == 1, key
     (tmp_path / "scene.toml").write_text(scene)
     subprocess.run([exe, "sweep", "--scene", str(tmp_path / "scene.toml"), "--from", "3000", "--to", "3000",
                     "--step", "1", "--direction", "up", "--out", str(tmp_path / "sweep")], check=True,
