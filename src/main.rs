@@ -237,6 +237,16 @@ enum FmuAction {
         #[arg(long)]
         library: Option<PathBuf>,
     },
+    /// The regression references the FMU ships (resources/regression/example-2004.json),
+    /// computed alone, e.g. at another tolerance to check their own accuracy.
+    References {
+        /// Output file (JSON, written atomically).
+        #[arg(long)]
+        out: PathBuf,
+        /// Relative tolerance of the references' RK 5(4) run (at most 1e-6).
+        #[arg(long, default_value_t = planetwear::report::regression::REFERENCE_RELATIVE_TOLERANCE)]
+        relative_tolerance: f64,
+    },
     /// modelDescription.xml, generated from modelDescription/variables.toml.
     Xml {
         /// Write it to this file (atomically) instead of standard output.
@@ -656,6 +666,33 @@ fn run(cli: Cli) -> Result<()> {
             };
             planetwear::report::pack::pack(&library, &out)?;
             println!("wrote {} (library {})", out.display(), library.display());
+        }
+        Command::Fmu { action: FmuAction::References { out, relative_tolerance } } => {
+            use planetwear::report::regression::{example_references, CASES};
+            let started = std::time::Instant::now();
+            let mut texts = Vec::new();
+            for state in planetwear::report::pack::example_wear_states()? {
+                texts.push(state.to_json()?);
+            }
+            let refs = example_references(&texts, &CASES, relative_tolerance)?;
+            write_atomic(&out, refs.to_json()?.as_bytes())?;
+            for c in &refs.cases {
+                println!(
+                    "{:<18} sun F1 {:9.3} N  ring F1 {:9.3} N  drift {:.2e}  tolerance {:.1e} of F1  ({} steps)",
+                    c.name,
+                    c.values["window.sunMeshF1"],
+                    c.values["window.ringMeshF1"],
+                    c.budget.drift,
+                    c.budget.fraction_of_f1,
+                    c.work.steps
+                );
+            }
+            println!(
+                "wrote {} ({} cases, {:.1} s)",
+                out.display(),
+                refs.cases.len(),
+                started.elapsed().as_secs_f64()
+            );
         }
         Command::Fmu { action: FmuAction::Xml { out } } => {
             let xml = planetwear::fmi::variables::MODEL_DESCRIPTION_XML;

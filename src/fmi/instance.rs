@@ -518,7 +518,8 @@ impl Instance {
             sim.window_harmonics(m).map_or(0.0, |(h, sep)| match k {
                 0..=5 => h.amplitude[k],
                 6 => h.rms,
-                _ => sep,
+                7 => sep,
+                _ => h.mean,
             })
         };
         Ok(match v {
@@ -546,6 +547,8 @@ impl Instance {
             263..=270 => sim.bearing_force(Bearing::Planet((v - 263) as usize)),
             280..=287 => window(MeshKind::SunPlanet, (v - 280) as usize),
             290..=297 => window(MeshKind::RingPlanet, (v - 290) as usize),
+            288 => window(MeshKind::SunPlanet, 8),
+            289 => window(MeshKind::RingPlanet, 8),
             _ => return Err(Refusal::error(format!("{} has no value in this version", info.name))),
         })
     }

@@ -12,6 +12,7 @@ pub mod ltca;
 pub mod lumped;
 pub mod mesh;
 pub mod modes;
+pub mod order_tracking;
 pub mod profile;
 pub mod response;
 pub mod separation;

@@ -6,6 +6,7 @@ pub mod accuracy;
 pub mod ltca;
 pub mod pack;
 pub mod plot;
+pub mod regression;
 pub mod sweep;
 pub mod wear;
 

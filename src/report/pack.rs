@@ -1,5 +1,6 @@
 //! Assembling the FMU archive: `modelDescription.xml` at the root, the
-//! shared library as `binaries/linux64/planetwear.so`, the built-in scenes in
+//! shared library as `binaries/linux64/planetwear.so`, the built-in scenes,
+//! the example's worn-profile states and its regression references in
 //! `resources/`, and `documentation/index.html` generated from the same
 //! variable table. Written to a temporary file and renamed into place.
 
@@ -11,6 +12,9 @@ use zip::write::SimpleFileOptions;
 use crate::fmi::variables::{Causality, GUID, MODEL_DESCRIPTION_XML, MODEL_IDENTIFIER, VARIABLES};
 use crate::physics::wear::{Limit, WearModel, WearSettings};
 use crate::physics::wear_state::WornState;
+use crate::report::regression::{
+    example_references, CASES, REFERENCE_RELATIVE_TOLERANCE, RESOURCE, STEPS_PER_MESH_CYCLE,
+};
 use crate::scene::lumped::LumpedScene;
 use crate::scene::Scene;
 
@@ -37,6 +41,9 @@ pub enum PackError {
     /// The example's worn-profile states could not be computed.
     #[error("computing the example's worn-profile states: {0}")]
     Wear(String),
+    /// The regression references could not be computed.
+    #[error("computing the regression references: {0}")]
+    References(String),
 }
 
 fn html_escape(s: &str) -> String {
@@ -50,6 +57,7 @@ pub fn documentation() -> String {
     );
     h.push_str("<h1>planetwear</h1>\n<p>Nonlinear tooth-by-tooth dynamics of a spur planetary gear set (sun, ring, carrier, up to 8 planets) with time-varying mesh stiffness, tooth separation, back-flank contact and tip-corner contact, in Lin &amp; Parker's transverse-torsional or the torsional model. FMI 2.0 co-simulation; internal time integration by generalized-alpha or adaptive Runge-Kutta 5(4).</p>\n");
     h.push_str(&format!("<p>GUID {GUID}. The parameters default to the automatic-transmission planetary set of a 2004 tooth-wear study (sun 34, planet 18, ring 70 teeth, module 1.5 mm, 4 planets, carrier held, 750 N·m on the sun). With <code>sceneFile</code> empty every parameter defines the set; with a scene file (a path or a file in resources/), only the parameters the importer sets override it. <code>wearStateFile</code> names a worn-profile state written by <code>planetwear wear</code> (a path, or a file in resources/): the example's states after 0 to 6 wear updates are shipped as <code>wear/example-2004/kappa-0.json</code> … <code>kappa-6.json</code>; a state of another gear set is refused.</p>\n"));
+    h.push_str(&format!("<p>Regression references: <code>{RESOURCE}</code> holds, for a few speeds and worn states of the example, the values of the <code>window.*</code> outputs that a run through the protocol stated in the file (RK 5(4) at relative tolerance 3e-6, {STEPS_PER_MESH_CYCLE} internal grid points per mesh cycle, torques held, doStep of one mesh period) reproduces within the tolerance given per output; the Python package planetwear-fmu (<code>planetwear_fmu.regression</code>, pytest fixture <code>planetwear_reference</code>) runs and checks them.</p>\n"));
     for (title, causality) in
         [("Parameters", Causality::Parameter), ("Inputs", Causality::Input), ("Outputs", Causality::Output)]
     {
@@ -115,10 +123,18 @@ pub fn pack(library: &Path, out: &Path) -> Result<(), PackError> {
     add("resources/lumped-benchmark.toml", LumpedScene::lumped_benchmark().to_toml().as_bytes())?;
     // The example's worn-profile states κ = 0..6 (the wear model's run,
     // about 5 s), for the wearStateFile parameter.
+    let mut texts = Vec::new();
     for (kappa, state) in example_wear_states()?.iter().enumerate() {
         let text = state.to_json().map_err(|e| PackError::Wear(e.to_string()))?;
         add(&format!("resources/wear/example-2004/kappa-{kappa}.json"), text.as_bytes())?;
+        texts.push(text);
     }
+    // Reference results for regression tests (docs/REGRESSION.md), computed
+    // from the shipped states' text as the FMU reads it.
+    let references = example_references(&texts, &CASES, REFERENCE_RELATIVE_TOLERANCE)
+        .and_then(|r| r.to_json())
+        .map_err(|e| PackError::References(e.to_string()))?;
+    add(RESOURCE, references.as_bytes())?;
     add("documentation/index.html", documentation().as_bytes())?;
     zip.finish()?;
     std::fs::rename(&tmp, out).map_err(io(out))?;
