@@ -279,6 +279,15 @@ fn a_speed_step_moves_the_rigid_body_speed_and_keeps_the_elastic_state() {
     assert!((mean_sun / (2.0 * OMEGA) - 1.0).abs() < 0.01, "sun speed {mean_sun}");
 }
 
+/// Steps both simulations ten times by `h` and asserts bit-identical states.
+fn assert_same_continuation(a: &mut Simulation, b: &mut Simulation, h: f64) {
+    for _ in 0..10 {
+        a.do_step(a.time(), h).unwrap();
+        b.do_step(b.time(), h).unwrap();
+    }
+    assert_eq!(a.snapshot(), b.snapshot());
+}
+
 #[test]
 fn a_snapshot_after_speed_steps_continues_bit_identically() {
     let (set, model) = speed_steps_setup();
@@ -291,11 +300,7 @@ fn a_snapshot_after_speed_steps_continues_bit_identically() {
     let snap = a.snapshot();
     let mut b = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
     b.restore(&snap).unwrap();
-    for _ in 0..10 {
-        a.do_step(a.time(), h).unwrap();
-        b.do_step(b.time(), h).unwrap();
-    }
-    assert_eq!(a.snapshot(), b.snapshot());
+    assert_same_continuation(&mut a, &mut b, h);
 }
 
 /// A torque change reaches the adaptive default at once: the run continues
@@ -318,11 +323,7 @@ fn a_torque_change_continues_as_a_restart_with_the_new_torques() {
     let mut b = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
     b.set_torques(sun, ring, t[2]).unwrap();
     b.restore(&snap).unwrap();
-    for _ in 0..10 {
-        a.do_step(a.time(), h).unwrap();
-        b.do_step(b.time(), h).unwrap();
-    }
-    assert_eq!(a.snapshot(), b.snapshot());
+    assert_same_continuation(&mut a, &mut b, h);
 }
 
 /// An unstable explicit coupling (a motor droop of 20 N·m·s/rad on the sun,

@@ -368,6 +368,10 @@ def main(argv=None):
             from .plots import plot_results
 
             d = Path(a.output_dir)
+            if not (d / "results.parquet").is_file():
+                print(f"plot: output_dir = {d}: no results.parquet there; give the output directory of a "
+                      "finished campaign (the campaign file's output_dir)", file=sys.stderr)
+                return 2
             for f in plot_results(pq.read_table(d / "results.parquet"), d / "plots"):
                 print(f)
     except CampaignError as e:

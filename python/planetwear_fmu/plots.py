@@ -54,21 +54,9 @@ def plot_results(table, directory):
         kappas = sorted({k for k, _, _ in curves})
         colour = {k: cmap(i / max(1, len(kappas) - 1) * 0.9) for i, k in enumerate(kappas)}
         style = {"up": "-", "down": "--"}
-        fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharex=True)
-        for ax, (col, title) in zip(axes, MESHES):
-            j = 1 if col.startswith("sun") else 2
-            for (kappa, label, direction), pts in sorted(curves.items()):
-                ax.plot([p[0] for p in pts], [p[j] for p in pts], style.get(direction, "-"), color=colour[kappa],
-                        marker=".", ms=3, lw=1.2, label=f"{label} {direction}")
-            ax.set_title(f"{title}, {torque:g} N·m on the sun")
-            ax.set_xlabel("input speed [rpm]")
-            ax.set_ylabel("F$^{(rms)}$ of planet 1 [N/mm]")
-            ax.grid(alpha=0.3)
-        axes[1].legend(fontsize=7, ncol=2)
-        fig.tight_layout()
         path = directory / f"frms_T{torque:g}.png"
-        _save(fig, path)
-        plt.close(fig)
+        _two_meshes(curves, colour, style, lambda pts, j, d: [(p[0], p[j]) for p in pts],
+                    lambda title: f"{title}, {torque:g} N·m on the sun", "F$^{(rms)}$ of planet 1 [N/mm]", path)
         files.append(path)
 
         # Change relative to κ = 0 (the lowest κ when no κ = 0 was run).
@@ -76,25 +64,38 @@ def plot_results(table, directory):
         base = {(d, p[0]): p for (k, _, d), pts in curves.items() if k == k0 for p in pts}
         if len(kappas) < 2 or not base:
             continue
-        fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharex=True)
-        for ax, (col, title) in zip(axes, MESHES):
-            j = 1 if col.startswith("sun") else 2
-            for (kappa, label, direction), pts in sorted(curves.items()):
-                if kappa == k0:
-                    continue
-                xy = [(p[0], 100 * (p[j] - base[(direction, p[0])][j]) / base[(direction, p[0])][j])
-                      for p in pts if (direction, p[0]) in base and base[(direction, p[0])][j] != 0]
-                ax.plot([x for x, _ in xy], [y for _, y in xy], style.get(direction, "-"), color=colour[kappa],
-                        marker=".", ms=3, lw=1.2, label=f"{label} {direction}")
-            ax.axhline(0, color="k", lw=0.6)
-            ax.set_title(f"{title}, {torque:g} N·m: change against κ = {k0}")
-            ax.set_xlabel("input speed [rpm]")
-            ax.set_ylabel(f"F$^{{(rms)}}$ change against κ = {k0} [%]")
-            ax.grid(alpha=0.3)
-        axes[1].legend(fontsize=7, ncol=2)
-        fig.tight_layout()
+
+        def change(pts, j, direction, base=base):
+            return [(p[0], 100 * (p[j] - base[(direction, p[0])][j]) / base[(direction, p[0])][j])
+                    for p in pts if (direction, p[0]) in base and base[(direction, p[0])][j] != 0]
+
         path = directory / f"frms_change_T{torque:g}.png"
-        _save(fig, path)
-        plt.close(fig)
+        _two_meshes({key: pts for key, pts in curves.items() if key[0] != k0}, colour, style, change,
+                    lambda title: f"{title}, {torque:g} N·m: change against κ = {k0}",
+                    f"F$^{{(rms)}}$ change against κ = {k0} [%]", path, zero_line=True)
         files.append(path)
     return files
+
+
+def _two_meshes(curves, colour, style, series, title, ylabel, path, zero_line=False):
+    """One figure, a panel per mesh (sun–planet, ring–planet), a line per
+    (κ, direction): `series(points, column, direction)` gives its (x, y)."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharex=True)
+    for ax, (col, mesh_title) in zip(axes, MESHES):
+        j = 1 if col.startswith("sun") else 2
+        for (kappa, label, direction), pts in sorted(curves.items()):
+            xy = series(pts, j, direction)
+            ax.plot([x for x, _ in xy], [y for _, y in xy], style.get(direction, "-"), color=colour[kappa],
+                    marker=".", ms=3, lw=1.2, label=f"{label} {direction}")
+        if zero_line:
+            ax.axhline(0, color="k", lw=0.6)
+        ax.set_title(title(mesh_title))
+        ax.set_xlabel("input speed [rpm]")
+        ax.set_ylabel(ylabel)
+        ax.grid(alpha=0.3)
+    axes[1].legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    _save(fig, path)
+    plt.close(fig)
