@@ -168,3 +168,38 @@ fn an_invalid_parameter_makes_initialization_fail() {
     fmi2FreeInstance(c);
     fmi2FreeInstance(c2);
 }
+
+#[test]
+fn a_scene_or_wear_state_file_that_is_a_pipe_a_device_or_a_directory_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifo");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success());
+    assert!(made, "mkfifo {}", fifo.display());
+    let fifo = fifo.to_str().unwrap().to_string();
+    let directory = dir.path().to_str().unwrap().to_string();
+    for (v, path) in [
+        (vr::SCENE_FILE, fifo.clone()),
+        (vr::SCENE_FILE, "/dev/zero".to_string()),
+        (vr::SCENE_FILE, directory),
+        (vr::WEAR_STATE_FILE, fifo),
+        (vr::WEAR_STATE_FILE, "/dev/zero".to_string()),
+    ] {
+        // In a thread: a regression blocks on the pipe (or reads /dev/zero
+        // until memory runs out) instead of returning.
+        let (tx, rx) = std::sync::mpsc::channel();
+        let p = path.clone();
+        std::thread::spawn(move || {
+            let c = instantiate(GUID, c"pipe");
+            let text = CString::new(p).unwrap();
+            assert_eq!(fmi2SetString(c, &v, 1, &text.as_ptr()), fmi2Status_fmi2OK);
+            assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+            let status = fmi2ExitInitializationMode(c);
+            fmi2FreeInstance(c);
+            let _ = tx.send(status);
+        });
+        let status = rx
+            .recv_timeout(std::time::Duration::from_secs(30))
+            .unwrap_or_else(|_| panic!("fmi2ExitInitializationMode with {v} = {path} did not return"));
+        assert_eq!(status, fmi2Status_fmi2Error, "{v} = {path}");
+    }
+}

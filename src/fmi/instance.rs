@@ -203,8 +203,11 @@ impl Instance {
                     path = r.join(&file);
                 }
             }
-            let text = std::fs::read_to_string(&path).map_err(|e| {
+            let bytes = crate::files::read_input(&path).map_err(|e| {
                 Refusal::error(format!("sceneFile = {file}: cannot read {} ({e})", path.display()))
+            })?;
+            let text = String::from_utf8(bytes).map_err(|_| {
+                Refusal::error(format!("sceneFile = {file}: {} is not UTF-8 text", path.display()))
             })?;
             Scene::from_toml(&text).map_err(|e| Refusal::error(format!("sceneFile = {file}: {e}")))?
         };
