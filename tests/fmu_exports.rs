@@ -203,3 +203,20 @@ fn a_scene_or_wear_state_file_that_is_a_pipe_a_device_or_a_directory_is_refused_
         assert_eq!(status, fmi2Status_fmi2Error, "{v} = {path}");
     }
 }
+
+#[test]
+fn a_communication_step_of_more_internal_steps_than_the_bound_is_refused_at_once() {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let c = instantiate(GUID, c"long");
+        assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2Status_fmi2OK);
+        assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+        // No stop time: 1e20 s would be ~1e28 internal steps.
+        let huge = fmi2DoStep(c, 0.0, 1e20, 1);
+        fmi2FreeInstance(c);
+        let _ = tx.send(huge);
+    });
+    let status = rx.recv_timeout(std::time::Duration::from_secs(60)).expect("fmi2DoStep(h = 1e20) returns");
+    assert_eq!(status, fmi2Status_fmi2Error);
+}

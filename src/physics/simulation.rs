@@ -175,6 +175,12 @@ pub struct Simulation {
 
 const TIME_TOLERANCE: f64 = 1e-9;
 
+/// Most internal steps one communication step may take: about a minute of
+/// work at the default settings, hundreds of thousands of mesh cycles. A
+/// longer step (1e20 s, or any step at an absurd speed or step count) is
+/// refused at once instead of running for ever.
+pub const MAX_INTERNAL_STEPS: u64 = 10_000_000;
+
 impl Simulation {
     /// Starts at time `t0` [s] from the static deflection with the input
     /// member turning at `input_speed` [rad/s]; internal steps follow the
@@ -378,7 +384,22 @@ impl Simulation {
                 reason: format!("must be the current time {} s", self.time),
             });
         }
-        let steps = ((h / self.nominal_step) - 1e-9).ceil().max(1.0) as u64;
+        let steps = ((h / self.nominal_step) - 1e-9).ceil().max(1.0);
+        // Also catches a non-finite or zero nominal step (NaN fails the test).
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(steps <= MAX_INTERNAL_STEPS as f64) {
+            return Err(SimulationError::InvalidInput {
+                name: "communicationStepSize".into(),
+                value: h.to_string(),
+                reason: format!(
+                    "needs {steps:.3e} internal steps of {:.3e} s, more than the {MAX_INTERNAL_STEPS} one \
+                     communication step may take: take steps of at most {:.3e} s",
+                    self.nominal_step,
+                    self.nominal_step * MAX_INTERNAL_STEPS as f64
+                ),
+            });
+        }
+        let steps = steps as u64;
         // The caller's communication point is the time base (it was checked
         // to be the current time), so no rounding accumulates across steps.
         let start = t;
