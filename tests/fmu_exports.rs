@@ -220,3 +220,33 @@ fn a_communication_step_of_more_internal_steps_than_the_bound_is_refused_at_once
     let status = rx.recv_timeout(std::time::Duration::from_secs(60)).expect("fmi2DoStep(h = 1e20) returns");
     assert_eq!(status, fmi2Status_fmi2Error);
 }
+
+#[test]
+fn deserializing_into_a_held_state_overwrites_it_in_place() {
+    let c = initialized();
+    let h = 1e-6;
+    assert_eq!(fmi2DoStep(c, 0.0, h, 1), fmi2Status_fmi2OK);
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    let mut size = 0usize;
+    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), fmi2Status_fmi2OK);
+    let mut bytes = vec![0 as fmi2Byte; size];
+    assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr(), size), fmi2Status_fmi2OK);
+    let mut before = 0.0;
+    assert_eq!(fmi2GetReal(c, &vr::SUN_ANGLE, 1, &mut before), fmi2Status_fmi2OK);
+    // A later state in the same handle, then the earlier bytes into it: the
+    // handle is kept (a new one would leave the old allocation unreachable).
+    assert_eq!(fmi2DoStep(c, h, h, 1), fmi2Status_fmi2OK);
+    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    let held = state;
+    assert_eq!(fmi2DeSerializeFMUstate(c, bytes.as_ptr(), size, &mut state), fmi2Status_fmi2OK);
+    assert_eq!(state, held);
+    assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
+    let mut after = 0.0;
+    assert_eq!(fmi2GetReal(c, &vr::SUN_ANGLE, 1, &mut after), fmi2Status_fmi2OK);
+    assert_eq!(before.to_bits(), after.to_bits(), "the state is the deserialized one");
+    // A NULL out-pointer is refused before anything is allocated.
+    assert_eq!(fmi2DeSerializeFMUstate(c, bytes.as_ptr(), size, std::ptr::null_mut()), fmi2Status_fmi2Error);
+    assert_eq!(fmi2FreeFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    fmi2FreeInstance(c);
+}

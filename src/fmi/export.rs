@@ -734,9 +734,23 @@ pub extern "C" fn fmi2DeSerializeFMUstate(
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
     guard(c, Call::FmuState, "fmi2DeSerializeFMUstate", |comp| {
+        if state.is_null() {
+            return Err(Refusal { status: Status::Error, message: "FMUstate is NULL".into() });
+        }
         let data = slice(bytes as *const u8, size, "serializedState")?;
         let s = comp.instance.deserialize(data)?;
-        write_out(state, Box::into_raw(Box::new(s)) as fmi2FMUstate, "FMUstate")
+        // SAFETY: state is non-null; a non-null *state came from this FMU
+        // (a leaked Box<SavedState>) and is overwritten in place, as
+        // fmi2GetFMUstate does, so the importer's handle stays the one it holds.
+        unsafe {
+            let old = *state;
+            if old.is_null() {
+                *state = Box::into_raw(Box::new(s)) as fmi2FMUstate;
+            } else {
+                *(old as *mut SavedState) = s;
+            }
+        }
+        Ok(())
     })
 }
 
