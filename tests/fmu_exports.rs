@@ -250,3 +250,28 @@ fn deserializing_into_a_held_state_overwrites_it_in_place() {
     assert_eq!(fmi2FreeFMUstate(c, &mut state), fmi2Status_fmi2OK);
     fmi2FreeInstance(c);
 }
+
+#[test]
+fn a_step_under_a_huge_finite_torque_ends_promptly_without_a_nan() {
+    // Newton iterates under a ring torque of 6.3e190 N·m put the mesh travel
+    // beyond 2^53 pitches, where a loop stepped by k += 1 never ended; now
+    // the step is discarded (or refused) at once, and the outputs stay finite.
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let c = initialized();
+        let refs = [vr::SUN_TORQUE, vr::RING_TORQUE, vr::CARRIER_TORQUE];
+        let torques = [1023.1, 6.289697328524668e190, 0.0];
+        assert_eq!(fmi2SetReal(c, refs.as_ptr(), 3, torques.as_ptr()), fmi2Status_fmi2OK);
+        let status = fmi2DoStep(c, 0.0, 1e-7, 0);
+        let mut out = [f64::NAN; 2];
+        let read = fmi2GetReal(c, [vr::SUN_SPEED, vr::PLANET_1_SUN_MESH_FORCE].as_ptr(), 2, out.as_mut_ptr());
+        fmi2FreeInstance(c);
+        let _ = tx.send((status, read, out));
+    });
+    let (status, read, out) =
+        rx.recv_timeout(std::time::Duration::from_secs(60)).expect("fmi2DoStep returns");
+    assert!(status == fmi2Status_fmi2Discard || status == fmi2Status_fmi2Error, "{status}");
+    if read == fmi2Status_fmi2OK {
+        assert!(out.iter().all(|x| x.is_finite()), "{out:?}");
+    }
+}

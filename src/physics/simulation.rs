@@ -126,18 +126,29 @@ impl Window {
                 self.ring.push_back(fr0 + w * (fr - fr0));
                 self.collected += 1;
             };
+            // Only the last `cap` crossings can stay in the window: a jump
+            // over more (a huge travel in one step) adds just those, so the
+            // loop is bounded whatever the travel.
+            let cap = self.cycles * self.samples_per_cycle;
+            let bounded = |first: f64, last: f64| {
+                let n = last - first + 1.0;
+                if n >= 1.0 && n.is_finite() {
+                    (first.max(last - (cap as f64 - 1.0)), n.min(cap as f64) as usize)
+                } else {
+                    (first, 0)
+                }
+            };
             if s > s0 {
-                let (a, b) = ((s0 / d).floor() as i64 + 1, (s / d).floor() as i64);
-                for m in a..=b {
-                    add(m as f64 * d);
+                let (a, n) = bounded((s0 / d).floor() + 1.0, (s / d).floor());
+                for j in 0..n {
+                    add((a + j as f64) * d);
                 }
             } else if s < s0 {
-                let (a, b) = ((s0 / d).ceil() as i64 - 1, (s / d).ceil() as i64);
-                for m in (b..=a).rev() {
-                    add(m as f64 * d);
+                let (b, n) = bounded(-((s0 / d).ceil() - 1.0), -(s / d).ceil());
+                for j in 0..n {
+                    add(-(b + j as f64) * d);
                 }
             }
-            let cap = self.cycles * self.samples_per_cycle;
             while self.sun.len() > cap {
                 self.sun.pop_front();
                 self.ring.pop_front();
