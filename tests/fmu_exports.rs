@@ -275,3 +275,68 @@ fn a_step_under_a_huge_finite_torque_ends_promptly_without_a_nan() {
         assert!(out.iter().all(|x| x.is_finite()), "{out:?}");
     }
 }
+
+/// Replaces the f64 at `at` in a serialized state and recomputes its FNV-1a
+/// checksum (the format of src/physics/state_format.rs), as a forger would.
+fn forge(bytes: &[fmi2Byte], at: usize, value: f64) -> Vec<fmi2Byte> {
+    let mut b: Vec<u8> = bytes.iter().map(|x| *x as u8).collect();
+    b[at..at + 8].copy_from_slice(&value.to_le_bytes());
+    let n = b.len();
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for x in &b[..n - 8] {
+        h ^= u64::from(*x);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    b[n - 8..].copy_from_slice(&h.to_le_bytes());
+    b.into_iter().map(|x| x as fmi2Byte).collect()
+}
+
+#[test]
+fn a_forged_state_with_a_valid_checksum_never_brings_a_nan_or_an_infinity() {
+    let c = instantiate(GUID, c"forged");
+    let one = 1;
+    assert_eq!(fmi2SetInteger(c, &vr::HARMONIC_WINDOW_CYCLES, 1, &one), fmi2Status_fmi2OK);
+    assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+    // Two mesh cycles (f_m ≈ 1.7 kHz): the one-cycle window is full.
+    let h = 1e-4;
+    for k in 0..12 {
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+    }
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    let mut size = 0usize;
+    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), fmi2Status_fmi2OK);
+    let mut bytes = vec![0 as fmi2Byte; size];
+    assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr(), size), fmi2Status_fmi2OK);
+    let u32_at = |i: usize| u32::from_le_bytes(std::array::from_fn(|j| bytes[i + j] as u8)) as usize;
+    let time = 16 + u32_at(12);
+    let lens: Vec<usize> = (0..7).map(|j| u32_at(time + 8 + 4 * j)).collect();
+    let array = |k: usize| time + 36 + 8 * lens[..k].iter().sum::<usize>();
+    assert!(lens[3] > 0, "the window holds samples");
+    let window_outputs = [vr::WINDOW_SUN_MESH_F1, vr::WINDOW_SUN_MESH_FRMS];
+    for (what, at, value) in [
+        ("time", time, f64::NAN),
+        ("integrator state", array(2), f64::INFINITY),
+        ("window sample", array(3), f64::NAN),
+        ("speed drive or last window point", array(5), f64::NEG_INFINITY),
+    ] {
+        let forged = forge(&bytes, at, value);
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        assert_eq!(fmi2DeSerializeFMUstate(c, forged.as_ptr(), size, &mut s), fmi2Status_fmi2OK, "{what}");
+        assert_eq!(fmi2SetFMUstate(c, s), fmi2Status_fmi2Error, "{what} = {value} is refused");
+        assert_eq!(fmi2FreeFMUstate(c, &mut s), fmi2Status_fmi2OK);
+        assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
+    }
+    // A finite but huge sample: accepted, but its square overflows the RMS,
+    // which is then refused rather than returned as inf.
+    let forged = forge(&bytes, array(3), 1e300);
+    let mut s: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2DeSerializeFMUstate(c, forged.as_ptr(), size, &mut s), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetFMUstate(c, s), fmi2Status_fmi2OK);
+    let mut out = [0.0; 2];
+    assert_eq!(fmi2GetReal(c, window_outputs.as_ptr(), 2, out.as_mut_ptr()), fmi2Status_fmi2Error);
+    assert_eq!(fmi2FreeFMUstate(c, &mut s), fmi2Status_fmi2OK);
+    assert_eq!(fmi2FreeFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    fmi2FreeInstance(c);
+}

@@ -506,7 +506,8 @@ impl Instance {
         self.sim.as_ref().ok_or_else(|| Refusal::error("no simulation"))
     }
 
-    /// fmi2GetReal for one variable.
+    /// fmi2GetReal for one variable. An output that is not finite (a state
+    /// driven to overflow) is refused, never returned.
     pub fn get_real(&mut self, v: u32) -> Result<f64, Refusal> {
         let info = find(Kind::Real, v).ok_or_else(|| {
             Refusal::error(format!("value reference {v} is not a Real variable of this FMU"))
@@ -514,6 +515,17 @@ impl Instance {
         if info.causality != Causality::Output {
             return Ok(self.real(v));
         }
+        let x = self.output(v, info.name)?;
+        if !x.is_finite() {
+            return Err(Refusal::error(format!(
+                "{} = {x} is not finite: the simulation state has overflowed; reset or restore an earlier FMU state",
+                info.name
+            )));
+        }
+        Ok(x)
+    }
+
+    fn output(&mut self, v: u32, name: &str) -> Result<f64, Refusal> {
         let sim = self.sim()?;
         let planet = |base: u32| ((v - base) / 2) as usize;
         let mesh = |base: u32| if (v - base) % 2 == 0 { MeshKind::SunPlanet } else { MeshKind::RingPlanet };
@@ -549,7 +561,7 @@ impl Instance {
             263..=270 => sim.bearing_force(Bearing::Planet((v - 263) as usize)),
             280..=287 => window(MeshKind::SunPlanet, (v - 280) as usize),
             290..=297 => window(MeshKind::RingPlanet, (v - 290) as usize),
-            _ => return Err(Refusal::error(format!("{} has no value in this version", info.name))),
+            _ => return Err(Refusal::error(format!("{name} has no value in this version"))),
         })
     }
 

@@ -664,14 +664,29 @@ impl Simulation {
                 reason: format!("must hold {n} finite coordinates and velocities of this model"),
             });
         }
-        self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
-        if !s.speed_reference.is_finite() {
-            return Err(SimulationError::InvalidInput {
-                name: "snapshot".into(),
-                value: s.speed_reference.to_string(),
-                reason: "the speed reference must be finite".into(),
-            });
+        // Every number is checked before anything changes: a snapshot read
+        // from bytes (a forged or damaged blob with a valid checksum) must not
+        // bring a NaN or an infinity into the state.
+        let parts: [(&str, &[f64]); 8] = [
+            ("time", std::slice::from_ref(&s.time)),
+            ("integrator state", &s.integrator),
+            ("torques", &s.torques),
+            ("speed reference", std::slice::from_ref(&s.speed_reference)),
+            ("harmonic window (sun mesh)", &s.window_sun),
+            ("harmonic window (ring mesh)", &s.window_ring),
+            ("harmonic window (last point)", &s.window_last),
+            ("speed drive state", &s.drive),
+        ];
+        for (part, values) in parts {
+            if let Some((i, x)) = values.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                return Err(SimulationError::InvalidInput {
+                    name: "snapshot".into(),
+                    value: format!("{part}[{i}] = {x}"),
+                    reason: "every number of a state must be finite".into(),
+                });
+            }
         }
+        self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
         self.speed_reference = s.speed_reference;
         self.model.set_drive_state(&s.drive);
         if self.set.dynamics.drive != Drive::Torque {
