@@ -12,7 +12,8 @@
 //! beside this program) or `--fmu PATH` (a packed FMU, unpacked with its
 //! resources), `--calls N`, `--seed S` (the environment variable
 //! `PLANETWEAR_FUZZ_SEED` overrides it), `--builds N` (calls allowed to
-//! build a simulation from valid parameters), `--leak-cycles N` (0: no leak
+//! build a simulation from valid parameters), `--torsional P` (the share of
+//! those builds made torsional, default 0.7), `--leak-cycles N` (0: no leak
 //! check), `--hang-seconds N`. Exit status 0 when every invariant held, 2
 //! when one broke (the report names it and the calls before it).
 
@@ -30,6 +31,7 @@ struct Args {
     calls: u64,
     seed: u64,
     builds: u32,
+    torsional: f64,
     leak_cycles: usize,
     hang_seconds: u64,
 }
@@ -50,6 +52,7 @@ fn parse() -> Result<Args, String> {
         calls: 20_000,
         seed: harness::DEFAULT_SEED,
         builds: 10,
+        torsional: 0.7,
         leak_cycles: 10_000,
         hang_seconds: 120,
     };
@@ -63,6 +66,14 @@ fn parse() -> Result<Args, String> {
             "--builds" => {
                 a.builds =
                     u32::try_from(parse_number(&flag, it.next())?).map_err(|e| format!("--builds: {e}"))?
+            }
+            "--torsional" => {
+                let v = it.next().ok_or("--torsional needs a value")?;
+                a.torsional = v
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| (0.0..=1.0).contains(x))
+                    .ok_or_else(|| format!("--torsional = {v}: must be a share between 0 and 1"))?;
             }
             "--leak-cycles" => a.leak_cycles = parse_number(&flag, it.next())? as usize,
             "--hang-seconds" => a.hang_seconds = parse_number(&flag, it.next())?,
@@ -85,6 +96,7 @@ fn run() -> Result<bool, String> {
         seed: a.seed,
         calls: a.calls,
         builds: a.builds,
+        torsional: a.torsional,
         hang_after: Duration::from_secs(a.hang_seconds),
     };
     match harness::fuzz(&fmu, &cfg) {

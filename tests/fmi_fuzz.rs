@@ -7,9 +7,18 @@
 #[path = "fmi_fuzz/harness.rs"]
 mod harness;
 
+use std::sync::{Mutex, MutexGuard};
 use std::time::Duration;
 
 use harness::{Fmu, FuzzConfig};
+
+/// The allocator's live bytes and the log recorder are process-wide: the
+/// tests run one at a time.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+fn serial() -> MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
 
 fn fmu() -> Fmu {
     let library = Fmu::built_library().unwrap_or_else(|e| panic!("{e}"));
@@ -18,12 +27,13 @@ fn fmu() -> Fmu {
 
 #[test]
 fn random_call_sequences_never_crash_and_every_refusal_is_logged() {
+    let _serial = serial();
     let seed = harness::seed_from_env(harness::DEFAULT_SEED).unwrap_or_else(|e| panic!("{e}"));
     let calls = std::env::var("PLANETWEAR_FUZZ_CALLS")
         .ok()
         .map(|v| v.parse().unwrap_or_else(|_| panic!("PLANETWEAR_FUZZ_CALLS = {v}: must be an integer")))
         .unwrap_or(100_000);
-    let cfg = FuzzConfig { seed, calls, builds: 30, hang_after: Duration::from_secs(120) };
+    let cfg = FuzzConfig { seed, calls, builds: 30, torsional: 0.7, hang_after: Duration::from_secs(120) };
     let fmu = fmu();
     println!(
         "fmi fuzz: {}, seed {seed:#x} (PLANETWEAR_FUZZ_SEED overrides), {calls} calls",
@@ -40,6 +50,7 @@ fn random_call_sequences_never_crash_and_every_refusal_is_logged() {
 
 #[test]
 fn ten_thousand_instantiate_free_cycles_keep_memory_flat() {
+    let _serial = serial();
     let figures = harness::leak_instantiate(&fmu(), 10_000).unwrap_or_else(|e| panic!("{e}"));
     println!("{figures}");
     harness::check_flat(&figures).unwrap_or_else(|e| panic!("{e}"));
@@ -47,6 +58,7 @@ fn ten_thousand_instantiate_free_cycles_keep_memory_flat() {
 
 #[test]
 fn ten_thousand_state_serialize_free_cycles_keep_memory_flat() {
+    let _serial = serial();
     let figures = harness::leak_states(&fmu(), 10_000).unwrap_or_else(|e| panic!("{e}"));
     println!("{figures}");
     harness::check_flat(&figures).unwrap_or_else(|e| panic!("{e}"));

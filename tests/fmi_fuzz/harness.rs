@@ -438,6 +438,9 @@ struct StateRec {
     sim: bool,
     poisoned: bool,
     dirty: bool,
+    /// Holds huge finite inputs: its next step runs the integrator's whole
+    /// work budget (seconds), so rollbacks mostly pick other states.
+    hostile: bool,
     time: f64,
     /// Forged with a non-finite number and a valid checksum: setting it must fail.
     non_finite: bool,
@@ -447,6 +450,7 @@ struct StateRec {
 #[derive(Clone)]
 struct Blob {
     bytes: Vec<u8>,
+    hostile: bool,
 }
 
 struct Inst {
@@ -465,6 +469,8 @@ struct Inst {
     /// Whether a parameter was set since instantiation or reset (a build
     /// then mostly fails early, so build tokens go mostly to clean ones).
     dirty: bool,
+    /// An input was set to a huge finite value (see [`StateRec::hostile`]).
+    hostile: bool,
     start: f64,
     time: f64,
     states: Vec<StateRec>,
@@ -535,6 +541,10 @@ pub struct FuzzConfig {
     /// builds the contact tables, about 0.8 s natively and 20 s under
     /// valgrind); beyond, the harness makes the parameters fail early.
     pub builds: u32,
+    /// Share of those builds the harness makes torsional (`fidelity` 0,
+    /// force evaluations about 10 times cheaper: a run-away step that uses
+    /// its whole work budget costs 0.2 s instead of 2 s).
+    pub torsional: f64,
     /// A call that takes longer than this is reported as a hang.
     pub hang_after: Duration,
 }
@@ -550,6 +560,8 @@ pub struct FuzzReport {
     pub statuses: [u64; 5],
     /// Statuses per function.
     pub per_function: BTreeMap<&'static str, [u64; 5]>,
+    /// Time spent in each function [s], and its slowest call [s].
+    pub time: BTreeMap<&'static str, (f64, f64)>,
     /// Instances created (fmi2Instantiate returned non-NULL).
     pub instances: u64,
     /// fmi2Instantiate calls refused (NULL) as the harness expected.
@@ -594,9 +606,14 @@ impl fmt::Display for FuzzReport {
             "refusals logged {}, silent with logging off or category disabled {}, messages {}, reals checked finite {}",
             self.refusals_logged, self.refusals_silent, self.messages, self.reals_checked
         )?;
-        writeln!(f, "per function (OK/Warning/Discard/Error/Fatal):")?;
+        writeln!(f, "per function (OK/Warning/Discard/Error/Fatal, time [s], slowest call [s]):")?;
         for (name, c) in &self.per_function {
-            writeln!(f, "  {name:<30} {:>7} {:>5} {:>5} {:>7} {:>3}", c[0], c[1], c[2], c[3], c[4])?;
+            let (t, slowest) = self.time.get(name).copied().unwrap_or_default();
+            writeln!(
+                f,
+                "  {name:<30} {:>7} {:>5} {:>5} {:>7} {:>3} {t:>8.2} {slowest:>7.3}",
+                c[0], c[1], c[2], c[3], c[4]
+            )?;
         }
         Ok(())
     }
@@ -960,6 +977,7 @@ struct Engine<'a> {
     calls: u64,
     builds: u32,
     tokens: u32,
+    torsional: f64,
     report: FuzzReport,
     files: Files,
     /// States of instances that ended in fmi2Fatal: the standard allows no
@@ -985,6 +1003,7 @@ pub fn fuzz(fmu: &Fmu, cfg: &FuzzConfig) -> Result<FuzzReport, Box<Failure>> {
         calls: cfg.calls,
         builds: cfg.builds,
         tokens: cfg.builds,
+        torsional: cfg.torsional,
         report: FuzzReport { seed: cfg.seed, ..FuzzReport::default() },
         files,
         stranded: Vec::new(),
@@ -1118,10 +1137,13 @@ impl Engine<'_> {
             Phase::Fatal => &[(Free, 3.0), (DoStep, 0.3), (GetReal, 0.3), (Reset, 0.3)],
         };
         let held = !i.states.is_empty();
+        let hostile = i.hostile;
         let weights: Vec<(Op, f64)> = table
             .iter()
             .map(|&(op, w)| match op {
                 SetState if !held => (op, 0.1),
+                // A step with huge inputs runs the integrator's work budget.
+                DoStep if hostile => (op, 0.3),
                 _ => (op, w),
             })
             .collect();
@@ -1174,8 +1196,16 @@ impl Engine<'_> {
         take_messages();
         let api = &self.fmu.api;
         self.watchdog.enter(&line);
+        let started = Instant::now();
         let status = f(api);
+        let took = started.elapsed().as_secs_f64();
         self.watchdog.leave();
+        let spent = self.report.time.entry(name).or_default();
+        spent.0 += took;
+        spent.1 = spent.1.max(took);
+        if self.verbose && took > 0.1 {
+            eprintln!("slow ({took:.2} s): {line}");
+        }
         let messages = take_messages();
         self.report.calls += 1;
         self.report.messages += messages.len() as u64;
@@ -1247,9 +1277,12 @@ impl Engine<'_> {
         }
         if let Some((category, level)) = status_category(status) {
             if now.shows(category) {
-                if !messages.iter().any(|m| m.level == level && m.text.contains(name)) {
+                // The message names the function and says why: more than the name.
+                let explained =
+                    |m: &Message| m.level == level && m.text.contains(name) && m.text.len() > name.len() + 8;
+                if !messages.iter().any(explained) {
                     return Err(format!(
-                        "{line} returned {} with {category} enabled, but logged no message naming {name}: {messages:?}",
+                        "{line} returned {} with {category} enabled, but logged no message naming {name} and the reason: {messages:?}",
                         STATUS_NAMES[status as usize]
                     ));
                 }
@@ -1371,6 +1404,7 @@ impl Engine<'_> {
             sim: false,
             poisoned: false,
             dirty: false,
+            hostile: false,
             start: 0.0,
             time: 0.0,
             states: Vec::new(),
@@ -1409,9 +1443,14 @@ impl Engine<'_> {
     /// Makes the parameters fail before the contact tables are built
     /// (`fidelity` = 99 is refused by the first check of a build).
     fn poison(&mut self, k: usize) -> Check {
+        self.set_fidelity(k, 99, "harness: no builds left")
+    }
+
+    /// Sets `fidelity` (0: torsional, cheap steps; 99: fails every build).
+    fn set_fidelity(&mut self, k: usize, x: i32, why: &str) -> Check {
         let c = self.c(k);
-        let (v, x) = (vr::FIDELITY, 99);
-        let desc = format!("{}, [fidelity], [99] (harness: no builds left)", self.describe(k));
+        let v = vr::FIDELITY;
+        let desc = format!("{}, [fidelity], [{x}] ({why})", self.describe(k));
         let status = self.call(
             Some(k),
             "fmi2SetInteger",
@@ -1420,14 +1459,14 @@ impl Engine<'_> {
             |a| ffi!(a, fmi2SetInteger(c, &v, 1, &x)),
             |e, s| {
                 if s == fmi2Status_fmi2OK {
-                    e.insts[k].poisoned = true;
+                    e.insts[k].poisoned = x == 99;
                     e.insts[k].sim = false;
                 }
             },
         )?;
         if status != fmi2Status_fmi2OK {
             return Err(format!(
-                "setting fidelity = 99 before initialization returned {}",
+                "setting fidelity = {x} before initialization returned {}",
                 STATUS_NAMES[status as usize]
             ));
         }
@@ -1435,20 +1474,28 @@ impl Engine<'_> {
     }
 
     /// Whether a call that may build the simulation from parameters
-    /// (`poisoned` tells whether those fail early) may go ahead.
-    fn may_build(&mut self, k: usize, poisoned: bool, dirty: bool, can_poison: bool) -> Result<bool, String> {
+    /// (`poisoned` tells whether those fail early) may go ahead: with a
+    /// build token (spread over the run, mostly for parameters left at
+    /// their start values), most of them made torsional; without, the
+    /// parameters are made to fail early where they can be set, else the
+    /// call is skipped.
+    fn may_build(&mut self, k: usize, poisoned: bool, dirty: bool, settable: bool) -> Result<bool, String> {
         if poisoned {
             return Ok(true);
         }
         let worth = !dirty || self.rng.chance(0.3);
-        // The builds are spread evenly over the run.
         let spent = f64::from(self.builds - self.tokens);
         let due = self.report.calls as f64 / self.calls.max(1) as f64 * f64::from(self.builds);
+        let settable =
+            settable && matches!(self.insts[k].phase, Phase::Instantiated | Phase::InitializationMode);
         if worth && self.tokens > 0 && spent <= due + 1.0 {
             self.tokens -= 1;
+            if settable && self.rng.chance(self.torsional) {
+                self.set_fidelity(k, 0, "harness: a cheap build")?;
+            }
             return Ok(true);
         }
-        if can_poison && matches!(self.insts[k].phase, Phase::Instantiated | Phase::InitializationMode) {
+        if settable {
             self.poison(k)?;
             return Ok(true);
         }
@@ -1489,6 +1536,7 @@ impl Engine<'_> {
                         i.sim = false;
                         i.poisoned = false;
                         i.dirty = false;
+                        i.hostile = false;
                         i.start = 0.0;
                         i.time = 0.0;
                     }
@@ -1556,6 +1604,7 @@ impl Engine<'_> {
             sim: true,
             poisoned: i.poisoned,
             dirty: i.dirty,
+            hostile: i.hostile,
             time: i.time,
             non_finite: false,
         };
@@ -1724,7 +1773,7 @@ impl Engine<'_> {
             // A read of an output builds the simulation: only with a token
             // or failing parameters, and then with every reference valid so
             // the model knows whether it was built.
-            if self.may_build(k, poisoned, dirty, false)? {
+            if self.may_build(k, poisoned, dirty, true)? {
                 refs.retain(|r| planetwear::fmi::variables::find(kind, *r).is_some());
             } else {
                 refs.retain(|r| planetwear::fmi::variables::find(kind, *r).is_some() && !is_output(r));
@@ -1880,6 +1929,10 @@ impl Engine<'_> {
         // the simulation before initialization ends; fidelity poisons.
         let touches_params =
             refs.iter().any(|r| info(*r).is_some_and(|v| v.causality == Causality::Parameter));
+        let hostile_input = kind == Kind::Real
+            && refs.iter().zip(&reals).any(|(r, x)| {
+                info(*r).is_some_and(|v| v.causality == Causality::Input) && x.is_finite() && x.abs() > 1e5
+            });
         let fidelity_set: Option<i32> =
             refs.iter().position(|r| kind == Kind::Integer && *r == vr::FIDELITY).map(|p| ints[p]);
         let vr_ptr = if null_refs { std::ptr::null() } else { refs.as_ptr() };
@@ -1938,6 +1991,9 @@ impl Engine<'_> {
                 if touches_params || kind == Kind::String || kind == Kind::Integer {
                     i.dirty = true;
                 }
+                if hostile_input {
+                    i.hostile = true;
+                }
                 if let Some(f) = fidelity_set {
                     // Unsure whether it was applied unless the call succeeded.
                     i.poisoned = s == fmi2Status_fmi2OK && !(0..=1).contains(&f);
@@ -1953,7 +2009,7 @@ impl Engine<'_> {
         let c = self.c(k);
         let i = &self.insts[k];
         // The checkpoint may be renewed from a running simulation.
-        let renew = i.checkpoint && i.phase == Phase::StepComplete && i.sim;
+        let renew = i.checkpoint && i.phase == Phase::StepComplete && i.sim && !i.hostile;
         let spare = if renew { 0..i.states.len() } else { i.spare() };
         let variant = if self.rng.chance(0.08) {
             2
@@ -1988,6 +2044,7 @@ impl Engine<'_> {
                 sim: i.sim,
                 poisoned: i.poisoned,
                 dirty: i.dirty,
+                hostile: i.hostile,
                 time: i.time,
                 non_finite: false,
             };
@@ -2020,7 +2077,10 @@ impl Engine<'_> {
         }
         // Mostly a state that continues a simulation.
         let good: Vec<usize> = (0..held)
-            .filter(|&s| self.insts[k].states[s].sim && self.insts[k].states[s].phase == Phase::StepComplete)
+            .filter(|&s| {
+                let r = &self.insts[k].states[s];
+                r.sim && r.phase == Phase::StepComplete && !r.hostile
+            })
             .collect();
         let p = if self.insts[k].sim { 0.97 } else { 0.8 };
         let slot =
@@ -2037,8 +2097,8 @@ impl Engine<'_> {
         }
         let i = &self.insts[k];
         let s = &i.states[slot];
-        let (handle, phase, sim, poisoned, dirty, time) =
-            (s.handle, s.phase, s.sim, s.poisoned, s.dirty, s.time);
+        let (handle, phase, sim, poisoned, dirty, hostile, time) =
+            (s.handle, s.phase, s.sim, s.poisoned, s.dirty, s.hostile, s.time);
         let invalid = s.non_finite.then(|| "the state holds a forged non-finite number".to_string());
         let desc = format!("{}, state {slot} ({phase:?}, t = {time:e})", self.describe(k));
         self.call(
@@ -2054,11 +2114,13 @@ impl Engine<'_> {
                     i.sim = sim;
                     i.poisoned = poisoned;
                     i.dirty = dirty;
+                    i.hostile = hostile;
                     i.time = time;
                 } else {
                     i.sim = i.sim && sim;
                     i.poisoned = i.poisoned && poisoned;
                     i.dirty = i.dirty || dirty;
+                    i.hostile = i.hostile || hostile;
                 }
             },
         )?;
@@ -2138,6 +2200,7 @@ impl Engine<'_> {
         let held = self.insts[k].states.len();
         let slot = (held > 0 && !self.rng.chance(0.08)).then(|| self.rng.below(held));
         let handle = slot.map_or(std::ptr::null_mut(), |s| self.insts[k].states[s].handle);
+        let hostile = slot.is_some_and(|s| self.insts[k].states[s].hostile);
         let null_size = self.rng.chance(0.05);
         let mut size = usize::MAX;
         let size_ptr: *mut usize = if null_size { std::ptr::null_mut() } else { &mut size };
@@ -2198,7 +2261,7 @@ impl Engine<'_> {
             if i.blobs.len() >= 4 {
                 i.blobs.remove(0);
             }
-            i.blobs.push(Blob { bytes });
+            i.blobs.push(Blob { bytes, hostile });
         }
         Ok(())
     }
@@ -2209,8 +2272,13 @@ impl Engine<'_> {
         let other = self.rng.below(self.insts.len());
         let source = if self.rng.chance(0.85) || self.insts[other].blobs.is_empty() { k } else { other };
         let blobs = &self.insts[source].blobs;
-        let original =
-            if blobs.is_empty() { Vec::new() } else { blobs[self.rng.below(blobs.len())].bytes.clone() };
+        let (original, blob_hostile) = if blobs.is_empty() {
+            (Vec::new(), false)
+        } else {
+            let b = &blobs[self.rng.below(blobs.len())];
+            // Another instance's inputs are unknown here.
+            (b.bytes.clone(), b.hostile || source != k)
+        };
         let (bytes, forgery, how) = if original.is_empty() {
             (Vec::new(), Forgery::Refused, "empty")
         } else {
@@ -2266,6 +2334,7 @@ impl Engine<'_> {
                 sim: true,
                 poisoned: i.poisoned,
                 dirty: i.dirty,
+                hostile: blob_hostile || forgery == Forgery::Hostile,
                 time: blob_time(&bytes),
                 non_finite: forgery == Forgery::NonFinite,
             };
