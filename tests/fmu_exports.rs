@@ -340,3 +340,45 @@ fn a_forged_state_with_a_valid_checksum_never_brings_a_nan_or_an_infinity() {
     assert_eq!(fmi2FreeFMUstate(c, &mut state), fmi2Status_fmi2OK);
     fmi2FreeInstance(c);
 }
+
+#[test]
+fn a_state_restored_after_the_parameters_changed_continues_with_its_own_parameters() {
+    let h = 1e-5;
+    let force_after_step = |c: fmi2Component, t: f64| {
+        assert_eq!(fmi2DoStep(c, t, h, 1), fmi2Status_fmi2OK);
+        let mut f = 0.0;
+        assert_eq!(fmi2GetReal(c, &vr::PLANET_1_SUN_MESH_FORCE, 1, &mut f), fmi2Status_fmi2OK);
+        f
+    };
+    let c = initialized();
+    for k in 0..5 {
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+    }
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    let reference = force_after_step(c, 5.0 * h);
+    let mut width = 0.0;
+    assert_eq!(fmi2GetReal(c, &vr::FACE_WIDTH, 1, &mut width), fmi2Status_fmi2OK);
+    // The same instance rebuilt with another face width (same degrees of
+    // freedom, other mesh stiffness), then the earlier state set back: it
+    // must continue with the parameters it was saved with.
+    assert_eq!(fmi2Reset(c), fmi2Status_fmi2OK);
+    let narrower = 0.8 * width;
+    assert_eq!(fmi2SetReal(c, &vr::FACE_WIDTH, 1, &narrower), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2Status_fmi2OK);
+    assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
+    let mut restored_width = 0.0;
+    assert_eq!(fmi2GetReal(c, &vr::FACE_WIDTH, 1, &mut restored_width), fmi2Status_fmi2OK);
+    assert_eq!(restored_width, width);
+    let again = force_after_step(c, 5.0 * h);
+    assert_eq!(again.to_bits(), reference.to_bits(), "{again} N against {reference} N");
+    // An input set between saving and restoring: the state's torque comes back.
+    let torque = 500.0;
+    assert_eq!(fmi2SetReal(c, &vr::SUN_TORQUE, 1, &torque), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
+    assert_eq!(force_after_step(c, 5.0 * h).to_bits(), reference.to_bits());
+    assert_eq!(fmi2FreeFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    fmi2FreeInstance(c);
+}
