@@ -606,7 +606,11 @@ impl fmt::Display for FuzzReport {
             "refusals logged {}, silent with logging off or category disabled {}, messages {}, reals checked finite {}",
             self.refusals_logged, self.refusals_silent, self.messages, self.reals_checked
         )?;
-        writeln!(f, "per function (OK/Warning/Discard/Error/Fatal, time [s], slowest call [s]):")?;
+        writeln!(
+            f,
+            "per function (OK/Warning/Discard/Error/Fatal, time [s], slowest call [s]; fmi2Instantiate: \
+             an instance as OK, NULL as Error):"
+        )?;
         for (name, c) in &self.per_function {
             let (t, slowest) = self.time.get(name).copied().unwrap_or_default();
             writeln!(
@@ -1362,14 +1366,21 @@ impl Engine<'_> {
         let ptr = |s: &Option<CString>| s.as_ref().map_or(std::ptr::null(), |s| s.as_ptr());
         let cb_ptr = cb.as_ref().map_or(std::ptr::null(), |b| &**b as *const fmi2CallbackFunctions);
         self.watchdog.enter(&line);
+        let started = Instant::now();
         let c = ffi!(
             self.fmu.api,
             fmi2Instantiate(ptr(&name), kind, ptr(&guid), ptr(&uri_c), cb_ptr, visible, logging_on)
         );
+        let took = started.elapsed().as_secs_f64();
         self.watchdog.leave();
         let messages = take_messages();
         self.report.calls += 1;
         self.report.messages += messages.len() as u64;
+        // In the table an instance counts as OK, a NULL as Error.
+        self.report.per_function.entry("fmi2Instantiate").or_default()[if c.is_null() { 3 } else { 0 }] += 1;
+        let spent = self.report.time.entry("fmi2Instantiate").or_default();
+        spent.0 += took;
+        spent.1 = spent.1.max(took);
         if c.is_null() {
             if expected {
                 return Err(format!("{line}: NULL for valid arguments: {messages:?}"));
