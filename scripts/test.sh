@@ -15,6 +15,11 @@ cargo build --release --quiet
 target/release/planetwear fmu pack --out fmu/planetwear.fmu
 echo "== cargo test: the packed FMU under the fmi crate"
 cargo test --release --test fmu_import -- --include-ignored
+echo "== fuzz under valgrind: the packed FMU's C interface, memcheck and leak check (docs/FUZZING.md)"
+cargo build --release --quiet --example fmi_fuzz
+valgrind --error-exitcode=1 --leak-check=full --errors-for-leak-kinds=definite --show-leak-kinds=definite \
+    target/release/examples/fmi_fuzz --fmu fmu/planetwear.fmu --calls 30000 --builds 6 --torsional 1 \
+    --leak-cycles 1000 --hang-seconds 900
 echo "== pytest"
 PLANETWEAR_BIN="$PWD/target/release/planetwear" PYTHONDONTWRITEBYTECODE=1 \
     .venv/bin/python -m pytest -p no:cacheprovider -s tests/python

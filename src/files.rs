@@ -86,10 +86,41 @@ pub fn write_worn_state(path: &Path, state: &WornState) -> Result<(), StateFileE
     write_durable(path, text.as_bytes())
 }
 
+/// Largest input file the library reads [bytes]: a scene or a worn-profile
+/// state is kilobytes to a few megabytes.
+pub const MAX_INPUT_BYTES: u64 = 64 << 20;
+
+/// Reads a whole input file, refusing what is not a regular file (a
+/// directory, a device such as `/dev/zero`, a pipe, which would block or
+/// never end) and a file larger than [`MAX_INPUT_BYTES`].
+pub fn read_input(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::{Error, ErrorKind, Read};
+    let not_regular =
+        || Error::new(ErrorKind::InvalidInput, "not a regular file (a directory, a device or a pipe)");
+    // Checked before opening: opening a pipe for reading blocks until a
+    // writer comes.
+    if !fs::metadata(path)?.is_file() {
+        return Err(not_regular());
+    }
+    let file = File::open(path)?;
+    if !file.metadata()?.is_file() {
+        return Err(not_regular());
+    }
+    let mut bytes = Vec::new();
+    file.take(MAX_INPUT_BYTES + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(Error::new(
+            ErrorKind::InvalidData,
+            format!("larger than {} MiB: not a scene or state file", MAX_INPUT_BYTES >> 20),
+        ));
+    }
+    Ok(bytes)
+}
+
 /// Reads the worn-profile state at `path` for the gear set `set`, with every
-/// check of [`WornState::from_json`].
+/// check of [`WornState::from_json`] (through [`read_input`]).
 pub fn read_worn_state(path: &Path, set: &GearSet) -> Result<WornState, StateFileError> {
-    let bytes = fs::read(path).map_err(io(path))?;
+    let bytes = read_input(path).map_err(io(path))?;
     let text = String::from_utf8_lossy(&bytes);
     WornState::from_json(&text, set)
         .map_err(|source| StateFileError::State { path: path.to_path_buf(), source: Box::new(source) })

@@ -168,3 +168,217 @@ fn an_invalid_parameter_makes_initialization_fail() {
     fmi2FreeInstance(c);
     fmi2FreeInstance(c2);
 }
+
+#[test]
+fn a_scene_or_wear_state_file_that_is_a_pipe_a_device_or_a_directory_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifo");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success());
+    assert!(made, "mkfifo {}", fifo.display());
+    let fifo = fifo.to_str().unwrap().to_string();
+    let directory = dir.path().to_str().unwrap().to_string();
+    for (v, path) in [
+        (vr::SCENE_FILE, fifo.clone()),
+        (vr::SCENE_FILE, "/dev/zero".to_string()),
+        (vr::SCENE_FILE, directory),
+        (vr::WEAR_STATE_FILE, fifo),
+        (vr::WEAR_STATE_FILE, "/dev/zero".to_string()),
+    ] {
+        // In a thread: a regression blocks on the pipe (or reads /dev/zero
+        // until memory runs out) instead of returning.
+        let (tx, rx) = std::sync::mpsc::channel();
+        let p = path.clone();
+        std::thread::spawn(move || {
+            let c = instantiate(GUID, c"pipe");
+            let text = CString::new(p).unwrap();
+            assert_eq!(fmi2SetString(c, &v, 1, &text.as_ptr()), fmi2Status_fmi2OK);
+            assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+            let status = fmi2ExitInitializationMode(c);
+            fmi2FreeInstance(c);
+            let _ = tx.send(status);
+        });
+        let status = rx
+            .recv_timeout(std::time::Duration::from_secs(30))
+            .unwrap_or_else(|_| panic!("fmi2ExitInitializationMode with {v} = {path} did not return"));
+        assert_eq!(status, fmi2Status_fmi2Error, "{v} = {path}");
+    }
+}
+
+#[test]
+fn a_communication_step_of_more_internal_steps_than_the_bound_is_refused_at_once() {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let c = instantiate(GUID, c"long");
+        assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2Status_fmi2OK);
+        assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+        // No stop time: 1e20 s would be ~1e28 internal steps.
+        let huge = fmi2DoStep(c, 0.0, 1e20, 1);
+        fmi2FreeInstance(c);
+        let _ = tx.send(huge);
+    });
+    let status = rx.recv_timeout(std::time::Duration::from_secs(60)).expect("fmi2DoStep(h = 1e20) returns");
+    assert_eq!(status, fmi2Status_fmi2Error);
+}
+
+#[test]
+fn deserializing_into_a_held_state_overwrites_it_in_place() {
+    let c = initialized();
+    let h = 1e-6;
+    assert_eq!(fmi2DoStep(c, 0.0, h, 1), fmi2Status_fmi2OK);
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    let mut size = 0usize;
+    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), fmi2Status_fmi2OK);
+    let mut bytes = vec![0 as fmi2Byte; size];
+    assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr(), size), fmi2Status_fmi2OK);
+    let mut before = 0.0;
+    assert_eq!(fmi2GetReal(c, &vr::SUN_ANGLE, 1, &mut before), fmi2Status_fmi2OK);
+    // A later state in the same handle, then the earlier bytes into it: the
+    // handle is kept (a new one would leave the old allocation unreachable).
+    assert_eq!(fmi2DoStep(c, h, h, 1), fmi2Status_fmi2OK);
+    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    let held = state;
+    assert_eq!(fmi2DeSerializeFMUstate(c, bytes.as_ptr(), size, &mut state), fmi2Status_fmi2OK);
+    assert_eq!(state, held);
+    assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
+    let mut after = 0.0;
+    assert_eq!(fmi2GetReal(c, &vr::SUN_ANGLE, 1, &mut after), fmi2Status_fmi2OK);
+    assert_eq!(before.to_bits(), after.to_bits(), "the state is the deserialized one");
+    // A NULL out-pointer is refused before anything is allocated.
+    assert_eq!(fmi2DeSerializeFMUstate(c, bytes.as_ptr(), size, std::ptr::null_mut()), fmi2Status_fmi2Error);
+    assert_eq!(fmi2FreeFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    fmi2FreeInstance(c);
+}
+
+#[test]
+fn a_step_under_a_huge_finite_torque_ends_promptly_without_a_nan() {
+    // Newton iterates under a ring torque of 6.3e190 N·m put the mesh travel
+    // beyond 2^53 pitches, where a loop stepped by k += 1 never ended; now
+    // the step is discarded (or refused) at once, and the outputs stay finite.
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let c = initialized();
+        let refs = [vr::SUN_TORQUE, vr::RING_TORQUE, vr::CARRIER_TORQUE];
+        let torques = [1023.1, 6.289697328524668e190, 0.0];
+        assert_eq!(fmi2SetReal(c, refs.as_ptr(), 3, torques.as_ptr()), fmi2Status_fmi2OK);
+        let status = fmi2DoStep(c, 0.0, 1e-7, 0);
+        let mut out = [f64::NAN; 2];
+        let read = fmi2GetReal(c, [vr::SUN_SPEED, vr::PLANET_1_SUN_MESH_FORCE].as_ptr(), 2, out.as_mut_ptr());
+        fmi2FreeInstance(c);
+        let _ = tx.send((status, read, out));
+    });
+    let (status, read, out) =
+        rx.recv_timeout(std::time::Duration::from_secs(60)).expect("fmi2DoStep returns");
+    assert!(status == fmi2Status_fmi2Discard || status == fmi2Status_fmi2Error, "{status}");
+    if read == fmi2Status_fmi2OK {
+        assert!(out.iter().all(|x| x.is_finite()), "{out:?}");
+    }
+}
+
+/// Replaces the f64 at `at` in a serialized state and recomputes its FNV-1a
+/// checksum (the format of src/physics/state_format.rs), as a forger would.
+fn forge(bytes: &[fmi2Byte], at: usize, value: f64) -> Vec<fmi2Byte> {
+    let mut b: Vec<u8> = bytes.iter().map(|x| *x as u8).collect();
+    b[at..at + 8].copy_from_slice(&value.to_le_bytes());
+    let n = b.len();
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for x in &b[..n - 8] {
+        h ^= u64::from(*x);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    b[n - 8..].copy_from_slice(&h.to_le_bytes());
+    b.into_iter().map(|x| x as fmi2Byte).collect()
+}
+
+#[test]
+fn a_forged_state_with_a_valid_checksum_never_brings_a_nan_or_an_infinity() {
+    let c = instantiate(GUID, c"forged");
+    let one = 1;
+    assert_eq!(fmi2SetInteger(c, &vr::HARMONIC_WINDOW_CYCLES, 1, &one), fmi2Status_fmi2OK);
+    assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+    // Two mesh cycles (f_m ≈ 1.7 kHz): the one-cycle window is full.
+    let h = 1e-4;
+    for k in 0..12 {
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+    }
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    let mut size = 0usize;
+    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), fmi2Status_fmi2OK);
+    let mut bytes = vec![0 as fmi2Byte; size];
+    assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr(), size), fmi2Status_fmi2OK);
+    let u32_at = |i: usize| u32::from_le_bytes(std::array::from_fn(|j| bytes[i + j] as u8)) as usize;
+    let time = 16 + u32_at(12);
+    let lens: Vec<usize> = (0..7).map(|j| u32_at(time + 8 + 4 * j)).collect();
+    let array = |k: usize| time + 36 + 8 * lens[..k].iter().sum::<usize>();
+    assert!(lens[3] > 0, "the window holds samples");
+    let window_outputs = [vr::WINDOW_SUN_MESH_F1, vr::WINDOW_SUN_MESH_FRMS];
+    for (what, at, value) in [
+        ("time", time, f64::NAN),
+        ("integrator state", array(2), f64::INFINITY),
+        ("window sample", array(3), f64::NAN),
+        ("speed drive or last window point", array(5), f64::NEG_INFINITY),
+    ] {
+        let forged = forge(&bytes, at, value);
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        assert_eq!(fmi2DeSerializeFMUstate(c, forged.as_ptr(), size, &mut s), fmi2Status_fmi2OK, "{what}");
+        assert_eq!(fmi2SetFMUstate(c, s), fmi2Status_fmi2Error, "{what} = {value} is refused");
+        assert_eq!(fmi2FreeFMUstate(c, &mut s), fmi2Status_fmi2OK);
+        assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
+    }
+    // A finite but huge sample: accepted, but its square overflows the RMS,
+    // which is then refused rather than returned as inf.
+    let forged = forge(&bytes, array(3), 1e300);
+    let mut s: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2DeSerializeFMUstate(c, forged.as_ptr(), size, &mut s), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetFMUstate(c, s), fmi2Status_fmi2OK);
+    let mut out = [0.0; 2];
+    assert_eq!(fmi2GetReal(c, window_outputs.as_ptr(), 2, out.as_mut_ptr()), fmi2Status_fmi2Error);
+    assert_eq!(fmi2FreeFMUstate(c, &mut s), fmi2Status_fmi2OK);
+    assert_eq!(fmi2FreeFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    fmi2FreeInstance(c);
+}
+
+#[test]
+fn a_state_restored_after_the_parameters_changed_continues_with_its_own_parameters() {
+    let h = 1e-5;
+    let force_after_step = |c: fmi2Component, t: f64| {
+        assert_eq!(fmi2DoStep(c, t, h, 1), fmi2Status_fmi2OK);
+        let mut f = 0.0;
+        assert_eq!(fmi2GetReal(c, &vr::PLANET_1_SUN_MESH_FORCE, 1, &mut f), fmi2Status_fmi2OK);
+        f
+    };
+    let c = initialized();
+    for k in 0..5 {
+        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+    }
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    let reference = force_after_step(c, 5.0 * h);
+    let mut width = 0.0;
+    assert_eq!(fmi2GetReal(c, &vr::FACE_WIDTH, 1, &mut width), fmi2Status_fmi2OK);
+    // The same instance rebuilt with another face width (same degrees of
+    // freedom, other mesh stiffness), then the earlier state set back: it
+    // must continue with the parameters it was saved with.
+    assert_eq!(fmi2Reset(c), fmi2Status_fmi2OK);
+    let narrower = 0.8 * width;
+    assert_eq!(fmi2SetReal(c, &vr::FACE_WIDTH, 1, &narrower), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2Status_fmi2OK);
+    assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
+    let mut restored_width = 0.0;
+    assert_eq!(fmi2GetReal(c, &vr::FACE_WIDTH, 1, &mut restored_width), fmi2Status_fmi2OK);
+    assert_eq!(restored_width, width);
+    let again = force_after_step(c, 5.0 * h);
+    assert_eq!(again.to_bits(), reference.to_bits(), "{again} N against {reference} N");
+    // An input set between saving and restoring: the state's torque comes back.
+    let torque = 500.0;
+    assert_eq!(fmi2SetReal(c, &vr::SUN_TORQUE, 1, &torque), fmi2Status_fmi2OK);
+    assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
+    assert_eq!(force_after_step(c, 5.0 * h).to_bits(), reference.to_bits());
+    assert_eq!(fmi2FreeFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    fmi2FreeInstance(c);
+}

@@ -330,26 +330,29 @@ pub extern "C" fn fmi2SetDebugLogging(
 ) -> fmi2Status {
     guard(c, Call::SetDebugLogging, "fmi2SetDebugLogging", |comp| {
         let names = slice(categories, n, "categories")?;
-        comp.logging_on = loggingOn != 0;
-        if n == 0 {
-            comp.enabled = LOG_CATEGORIES.iter().map(|(n, _)| *n).collect();
-            return Ok(());
-        }
-        comp.enabled.clear();
+        // Every name is checked before anything changes: a call naming an
+        // undeclared category leaves the settings as they were, so its
+        // warning is logged under the settings the importer had.
+        let mut enabled = BTreeSet::new();
         for p in names {
             let wanted = c_str(*p).unwrap_or_default();
             match LOG_CATEGORIES.iter().find(|(n, _)| *n == wanted) {
                 Some((n, _)) => {
-                    comp.enabled.insert(n);
+                    enabled.insert(*n);
                 }
                 None => {
                     return Err(Refusal {
                         status: Status::Warning,
-                        message: format!("log category {wanted} is not declared in <LogCategories>"),
-                    })
+                        message: format!(
+                            "log category '{wanted}' is not declared in <LogCategories> (declared: {}); the logging settings are unchanged",
+                            LOG_CATEGORIES.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+                        ),
+                    });
                 }
             }
         }
+        comp.logging_on = loggingOn != 0;
+        comp.enabled = if n == 0 { LOG_CATEGORIES.iter().map(|(n, _)| *n).collect() } else { enabled };
         Ok(())
     })
 }
@@ -731,9 +734,23 @@ pub extern "C" fn fmi2DeSerializeFMUstate(
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
     guard(c, Call::FmuState, "fmi2DeSerializeFMUstate", |comp| {
+        if state.is_null() {
+            return Err(Refusal { status: Status::Error, message: "FMUstate is NULL".into() });
+        }
         let data = slice(bytes as *const u8, size, "serializedState")?;
         let s = comp.instance.deserialize(data)?;
-        write_out(state, Box::into_raw(Box::new(s)) as fmi2FMUstate, "FMUstate")
+        // SAFETY: state is non-null; a non-null *state came from this FMU
+        // (a leaked Box<SavedState>) and is overwritten in place, as
+        // fmi2GetFMUstate does, so the importer's handle stays the one it holds.
+        unsafe {
+            let old = *state;
+            if old.is_null() {
+                *state = Box::into_raw(Box::new(s)) as fmi2FMUstate;
+            } else {
+                *(old as *mut SavedState) = s;
+            }
+        }
+        Ok(())
     })
 }
 
@@ -761,6 +778,27 @@ mod tests {
         let status = guard(c, Call::SetupExperiment, "test", |_| panic!("forced"));
         assert_eq!(status, fmi2Status_fmi2Fatal);
         assert_eq!(fmi2Reset(c), fmi2Status_fmi2Error, "nothing but fmi2FreeInstance after a fatal error");
+        fmi2FreeInstance(c);
+    }
+
+    fn component<'a>(c: fmi2Component) -> &'a Component {
+        // SAFETY: a live component from fmi2Instantiate in this test.
+        unsafe { &*(c as *const Component) }
+    }
+
+    #[test]
+    fn an_undeclared_log_category_is_a_warning_and_changes_no_setting() {
+        let guid = CString::new(GUID).unwrap();
+        let c = instantiate(&guid);
+        let before = component(c).enabled.clone();
+        let names = [c"logCalls".as_ptr(), c"logNothing".as_ptr()];
+        assert_eq!(fmi2SetDebugLogging(c, 1, 2, names.as_ptr()), fmi2Status_fmi2Warning);
+        assert!(!component(c).logging_on, "instantiated with logging off, and still off");
+        assert_eq!(component(c).enabled, before);
+        let names = [c"logCalls".as_ptr(), c"logStatusError".as_ptr()];
+        assert_eq!(fmi2SetDebugLogging(c, 1, 2, names.as_ptr()), fmi2Status_fmi2OK);
+        assert!(component(c).logging_on);
+        assert_eq!(component(c).enabled, ["logCalls", "logStatusError"].into_iter().collect());
         fmi2FreeInstance(c);
     }
 

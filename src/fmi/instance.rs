@@ -70,6 +70,7 @@ pub struct SavedState {
     reals: BTreeMap<u32, f64>,
     integers: BTreeMap<u32, i32>,
     strings: BTreeMap<u32, String>,
+    explicitly_set: BTreeSet<u32>,
     snapshot: Option<Snapshot>,
     terminated: bool,
     last_successful_time: f64,
@@ -90,6 +91,8 @@ pub struct Instance {
     start_time: f64,
     stop_time: Option<f64>,
     sim: Option<Simulation>,
+    /// The parameters `sim` was built from ([`Instance::build_key`]).
+    built_from: String,
     /// Set when a step was discarded and the simulation cannot go on.
     pub terminated: bool,
     /// Time of the last completed step [s].
@@ -120,6 +123,7 @@ impl Instance {
             start_time: 0.0,
             stop_time: None,
             sim: None,
+            built_from: String::new(),
             terminated: false,
             last_successful_time: 0.0,
         };
@@ -203,8 +207,11 @@ impl Instance {
                     path = r.join(&file);
                 }
             }
-            let text = std::fs::read_to_string(&path).map_err(|e| {
+            let bytes = crate::files::read_input(&path).map_err(|e| {
                 Refusal::error(format!("sceneFile = {file}: cannot read {} ({e})", path.display()))
+            })?;
+            let text = String::from_utf8(bytes).map_err(|_| {
+                Refusal::error(format!("sceneFile = {file}: {} is not UTF-8 text", path.display()))
             })?;
             Scene::from_toml(&text).map_err(|e| Refusal::error(format!("sceneFile = {file}: {e}")))?
         };
@@ -404,6 +411,7 @@ impl Instance {
         sim.set_window(cycles, set.dynamics.samples_per_mesh_cycle)
             .map_err(|e| Refusal::error(e.to_string()))?;
         self.sim = Some(sim);
+        self.built_from = self.build_key();
         self.push_inputs()
     }
 
@@ -503,7 +511,8 @@ impl Instance {
         self.sim.as_ref().ok_or_else(|| Refusal::error("no simulation"))
     }
 
-    /// fmi2GetReal for one variable.
+    /// fmi2GetReal for one variable. An output that is not finite (a state
+    /// driven to overflow) is refused, never returned.
     pub fn get_real(&mut self, v: u32) -> Result<f64, Refusal> {
         let info = find(Kind::Real, v).ok_or_else(|| {
             Refusal::error(format!("value reference {v} is not a Real variable of this FMU"))
@@ -511,6 +520,17 @@ impl Instance {
         if info.causality != Causality::Output {
             return Ok(self.real(v));
         }
+        let x = self.output(v, info.name)?;
+        if !x.is_finite() {
+            return Err(Refusal::error(format!(
+                "{} = {x} is not finite: the simulation state has overflowed; reset or restore an earlier FMU state",
+                info.name
+            )));
+        }
+        Ok(x)
+    }
+
+    fn output(&mut self, v: u32, name: &str) -> Result<f64, Refusal> {
         let sim = self.sim()?;
         let planet = |base: u32| ((v - base) / 2) as usize;
         let mesh = |base: u32| if (v - base) % 2 == 0 { MeshKind::SunPlanet } else { MeshKind::RingPlanet };
@@ -549,7 +569,7 @@ impl Instance {
             290..=297 => window(MeshKind::RingPlanet, (v - 290) as usize),
             288 => window(MeshKind::SunPlanet, 8),
             289 => window(MeshKind::RingPlanet, 8),
-            _ => return Err(Refusal::error(format!("{} has no value in this version", info.name))),
+            _ => return Err(Refusal::error(format!("{name} has no value in this version"))),
         })
     }
 
@@ -629,6 +649,7 @@ impl Instance {
             reals: self.reals.clone(),
             integers: self.integers.clone(),
             strings: self.strings.clone(),
+            explicitly_set: self.explicitly_set.clone(),
             snapshot: self.sim.as_ref().map(Simulation::snapshot),
             terminated: self.terminated,
             last_successful_time: self.last_successful_time,
@@ -640,9 +661,14 @@ impl Instance {
         self.reals = s.reals.clone();
         self.integers = s.integers.clone();
         self.strings = s.strings.clone();
+        self.explicitly_set = s.explicitly_set.clone();
         match &s.snapshot {
             Some(snap) => {
-                if self.sim.is_none() {
+                // A simulation built from other parameters (the instance was
+                // reset and set up again since the state was saved) is
+                // rebuilt from the state's.
+                if self.sim.is_none() || self.built_from != self.build_key() {
+                    self.sim = None;
                     self.build()?;
                 }
                 if let Some(sim) = &mut self.sim {
@@ -657,6 +683,19 @@ impl Instance {
         self.terminated = s.terminated;
         self.last_successful_time = s.last_successful_time;
         Ok(())
+    }
+
+    /// The parameters a build reads: every value, and which ones the
+    /// importer set (with a scene file only those override it). Inputs are
+    /// left out: setting one between saving and restoring a state must not
+    /// rebuild the simulation.
+    fn build_key(&self) -> String {
+        let set: Vec<&u32> = self
+            .explicitly_set
+            .iter()
+            .filter(|v| VARIABLES.iter().any(|x| x.vr == **v && x.causality == Causality::Parameter))
+            .collect();
+        format!("{}|set: {set:?}", self.fingerprint())
     }
 
     /// Fingerprint of a serialized state: the GUID and every parameter value.
@@ -692,5 +731,31 @@ impl Instance {
         saved.snapshot = Some(snap);
         saved.terminated = false;
         Ok(saved)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parameters_change_the_build_key_and_inputs_do_not() {
+        // A restore rebuilds the simulation when the key differs: never for
+        // an input (a sweep sets inputs between states), always for a
+        // parameter (the simulation would not match the state's parameters).
+        let mut i = Instance::new("key", None);
+        let unset = i.build_key();
+        i.set_real(vr::SUN_TORQUE, 500.0).unwrap();
+        i.set_real(vr::INPUT_SPEED_REFERENCE, 400.0).unwrap();
+        assert_eq!(i.build_key(), unset);
+        i.set_real(vr::FACE_WIDTH, 0.02).unwrap();
+        let narrower = i.build_key();
+        assert_ne!(narrower, unset);
+        // Setting a parameter to the value it had still counts: with a scene
+        // file, only the parameters the importer set override it.
+        let mut j = Instance::new("key", None);
+        let width = j.real(vr::FACE_WIDTH);
+        j.set_real(vr::FACE_WIDTH, width).unwrap();
+        assert_ne!(j.build_key(), unset);
     }
 }

@@ -319,11 +319,13 @@ impl MeshModel {
         let per_pitch = self.path().base_pitch * inv_step;
         let k_lo = (-x0 / per_pitch).ceil();
         let k_hi = ((last - x0) / per_pitch).floor();
+        // Counted, not stepped by k += 1: at a travel beyond 2^53 pitches
+        // (a diverging iterate) k + 1 == k and a stepped loop never ends.
+        let pairs = if k_hi >= k_lo { ((k_hi - k_lo) as usize + 1).min(last as usize + 2) } else { 0 };
         let (mut f, mut kd, mut ks) = (0.0, 0.0, 0.0);
-        let mut k = k_lo;
-        while k <= k_hi {
+        for j in 0..pairs {
+            let k = k_lo + j as f64;
             let x = (x0 + k * per_pitch).clamp(0.0, last);
-            k += 1.0;
             let i = (x as usize).min(g.len() - 2);
             let t = x - i as f64;
             let (a, b) = (g[i], g[i + 1]);

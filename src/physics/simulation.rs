@@ -126,18 +126,29 @@ impl Window {
                 self.ring.push_back(fr0 + w * (fr - fr0));
                 self.collected += 1;
             };
+            // Only the last `cap` crossings can stay in the window: a jump
+            // over more (a huge travel in one step) adds just those, so the
+            // loop is bounded whatever the travel.
+            let cap = self.cycles * self.samples_per_cycle;
+            let bounded = |first: f64, last: f64| {
+                let n = last - first + 1.0;
+                if n >= 1.0 && n.is_finite() {
+                    (first.max(last - (cap as f64 - 1.0)), n.min(cap as f64) as usize)
+                } else {
+                    (first, 0)
+                }
+            };
             if s > s0 {
-                let (a, b) = ((s0 / d).floor() as i64 + 1, (s / d).floor() as i64);
-                for m in a..=b {
-                    add(m as f64 * d);
+                let (a, n) = bounded((s0 / d).floor() + 1.0, (s / d).floor());
+                for j in 0..n {
+                    add((a + j as f64) * d);
                 }
             } else if s < s0 {
-                let (a, b) = ((s0 / d).ceil() as i64 - 1, (s / d).ceil() as i64);
-                for m in (b..=a).rev() {
-                    add(m as f64 * d);
+                let (b, n) = bounded(-((s0 / d).ceil() - 1.0), -(s / d).ceil());
+                for j in 0..n {
+                    add(-(b + j as f64) * d);
                 }
             }
-            let cap = self.cycles * self.samples_per_cycle;
             while self.sun.len() > cap {
                 self.sun.pop_front();
                 self.ring.pop_front();
@@ -174,6 +185,12 @@ pub struct Simulation {
 }
 
 const TIME_TOLERANCE: f64 = 1e-9;
+
+/// Most internal steps one communication step may take: about a minute of
+/// work at the default settings, hundreds of thousands of mesh cycles. A
+/// longer step (1e20 s, or any step at an absurd speed or step count) is
+/// refused at once instead of running for ever.
+pub const MAX_INTERNAL_STEPS: u64 = 10_000_000;
 
 impl Simulation {
     /// Starts at time `t0` [s] from the static deflection with the input
@@ -378,7 +395,22 @@ impl Simulation {
                 reason: format!("must be the current time {} s", self.time),
             });
         }
-        let steps = ((h / self.nominal_step) - 1e-9).ceil().max(1.0) as u64;
+        let steps = ((h / self.nominal_step) - 1e-9).ceil().max(1.0);
+        // Also catches a non-finite or zero nominal step (NaN fails the test).
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(steps <= MAX_INTERNAL_STEPS as f64) {
+            return Err(SimulationError::InvalidInput {
+                name: "communicationStepSize".into(),
+                value: h.to_string(),
+                reason: format!(
+                    "needs {steps:.3e} internal steps of {:.3e} s, more than the {MAX_INTERNAL_STEPS} one \
+                     communication step may take: take steps of at most {:.3e} s",
+                    self.nominal_step,
+                    self.nominal_step * MAX_INTERNAL_STEPS as f64
+                ),
+            });
+        }
+        let steps = steps as u64;
         // The caller's communication point is the time base (it was checked
         // to be the current time), so no rounding accumulates across steps.
         let start = t;
@@ -632,14 +664,29 @@ impl Simulation {
                 reason: format!("must hold {n} finite coordinates and velocities of this model"),
             });
         }
-        self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
-        if !s.speed_reference.is_finite() {
-            return Err(SimulationError::InvalidInput {
-                name: "snapshot".into(),
-                value: s.speed_reference.to_string(),
-                reason: "the speed reference must be finite".into(),
-            });
+        // Every number is checked before anything changes: a snapshot read
+        // from bytes (a forged or damaged blob with a valid checksum) must not
+        // bring a NaN or an infinity into the state.
+        let parts: [(&str, &[f64]); 8] = [
+            ("time", std::slice::from_ref(&s.time)),
+            ("integrator state", &s.integrator),
+            ("torques", &s.torques),
+            ("speed reference", std::slice::from_ref(&s.speed_reference)),
+            ("harmonic window (sun mesh)", &s.window_sun),
+            ("harmonic window (ring mesh)", &s.window_ring),
+            ("harmonic window (last point)", &s.window_last),
+            ("speed drive state", &s.drive),
+        ];
+        for (part, values) in parts {
+            if let Some((i, x)) = values.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                return Err(SimulationError::InvalidInput {
+                    name: "snapshot".into(),
+                    value: format!("{part}[{i}] = {x}"),
+                    reason: "every number of a state must be finite".into(),
+                });
+            }
         }
+        self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
         self.speed_reference = s.speed_reference;
         self.model.set_drive_state(&s.drive);
         if self.set.dynamics.drive != Drive::Torque {
