@@ -5,7 +5,8 @@
 # run as root, and the Python virtual environment .venv with the
 # test and co-simulation packages (pinned in tests/python/requirements.txt)
 # and the project's Python package python/planetwear_fmu (editable).
-# Sourced by scripts/study.sh and scripts/test.sh; safe to run again.
+# Run by scripts/study.sh and by scripts/test.sh (with --tests: valgrind is
+# needed only by the tests); safe to run again.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -19,7 +20,7 @@ if ! compgen -G '/usr/lib/llvm-*/lib/libclang.so' >/dev/null && ! compgen -G '/u
     fi
 fi
 
-if ! command -v valgrind >/dev/null; then
+if [ "${1:-}" = --tests ] && ! command -v valgrind >/dev/null; then
     if [ "$(id -u)" = 0 ]; then
         echo "installing valgrind (the test command fuzzes the FMU under memcheck)"
         apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq valgrind >/dev/null

@@ -3,7 +3,7 @@
 # physics laws, published values, CLI) and the Python suites (peer check).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --tests
 echo "== cargo fmt --check"
 cargo fmt --check
 echo "== cargo clippy"
