@@ -28,6 +28,18 @@ fn initialized() -> fmi2Component {
     c
 }
 
+/// fmi2GetFMUstate, then its serialized bytes (fmi2SerializedFMUstateSize,
+/// fmi2SerializeFMUstate), each asserted OK.
+fn get_and_serialize(c: fmi2Component) -> (fmi2FMUstate, Vec<fmi2Byte>) {
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
+    let mut size = 0usize;
+    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), fmi2Status_fmi2OK);
+    let mut bytes = vec![0 as fmi2Byte; size];
+    assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr(), size), fmi2Status_fmi2OK);
+    (state, bytes)
+}
+
 #[test]
 fn the_full_life_cycle() {
     // SAFETY: both return pointers to static NUL-terminated strings.
@@ -122,12 +134,7 @@ fn states_get_set_and_round_trip_through_bytes() {
     for k in 0..10 {
         assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
     }
-    let mut state: fmi2FMUstate = std::ptr::null_mut();
-    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
-    let mut size = 0usize;
-    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), fmi2Status_fmi2OK);
-    let mut bytes = vec![0 as fmi2Byte; size];
-    assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr(), size), fmi2Status_fmi2OK);
+    let (mut state, bytes) = get_and_serialize(c);
     let mut after = [0.0; 1];
     for k in 10..15 {
         assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
@@ -142,7 +149,7 @@ fn states_get_set_and_round_trip_through_bytes() {
     assert_eq!(fmi2GetReal(c, &vr::PLANET_1_RING_MESH_FORCE, 1, again.as_mut_ptr()), fmi2Status_fmi2OK);
     assert_eq!(after[0].to_bits(), again[0].to_bits());
     let mut restored: fmi2FMUstate = std::ptr::null_mut();
-    assert_eq!(fmi2DeSerializeFMUstate(c, bytes.as_ptr(), size, &mut restored), fmi2Status_fmi2OK);
+    assert_eq!(fmi2DeSerializeFMUstate(c, bytes.as_ptr(), bytes.len(), &mut restored), fmi2Status_fmi2OK);
     assert_eq!(fmi2SetFMUstate(c, restored), fmi2Status_fmi2OK);
     for k in 10..15 {
         assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
@@ -226,12 +233,7 @@ fn deserializing_into_a_held_state_overwrites_it_in_place() {
     let c = initialized();
     let h = 1e-6;
     assert_eq!(fmi2DoStep(c, 0.0, h, 1), fmi2Status_fmi2OK);
-    let mut state: fmi2FMUstate = std::ptr::null_mut();
-    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
-    let mut size = 0usize;
-    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), fmi2Status_fmi2OK);
-    let mut bytes = vec![0 as fmi2Byte; size];
-    assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr(), size), fmi2Status_fmi2OK);
+    let (mut state, bytes) = get_and_serialize(c);
     let mut before = 0.0;
     assert_eq!(fmi2GetReal(c, &vr::SUN_ANGLE, 1, &mut before), fmi2Status_fmi2OK);
     // A later state in the same handle, then the earlier bytes into it: the
@@ -239,14 +241,17 @@ fn deserializing_into_a_held_state_overwrites_it_in_place() {
     assert_eq!(fmi2DoStep(c, h, h, 1), fmi2Status_fmi2OK);
     assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
     let held = state;
-    assert_eq!(fmi2DeSerializeFMUstate(c, bytes.as_ptr(), size, &mut state), fmi2Status_fmi2OK);
+    assert_eq!(fmi2DeSerializeFMUstate(c, bytes.as_ptr(), bytes.len(), &mut state), fmi2Status_fmi2OK);
     assert_eq!(state, held);
     assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
     let mut after = 0.0;
     assert_eq!(fmi2GetReal(c, &vr::SUN_ANGLE, 1, &mut after), fmi2Status_fmi2OK);
     assert_eq!(before.to_bits(), after.to_bits(), "the state is the deserialized one");
     // A NULL out-pointer is refused before anything is allocated.
-    assert_eq!(fmi2DeSerializeFMUstate(c, bytes.as_ptr(), size, std::ptr::null_mut()), fmi2Status_fmi2Error);
+    assert_eq!(
+        fmi2DeSerializeFMUstate(c, bytes.as_ptr(), bytes.len(), std::ptr::null_mut()),
+        fmi2Status_fmi2Error
+    );
     assert_eq!(fmi2FreeFMUstate(c, &mut state), fmi2Status_fmi2OK);
     fmi2FreeInstance(c);
 }
@@ -303,12 +308,7 @@ fn a_forged_state_with_a_valid_checksum_never_brings_a_nan_or_an_infinity() {
     for k in 0..12 {
         assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
     }
-    let mut state: fmi2FMUstate = std::ptr::null_mut();
-    assert_eq!(fmi2GetFMUstate(c, &mut state), fmi2Status_fmi2OK);
-    let mut size = 0usize;
-    assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), fmi2Status_fmi2OK);
-    let mut bytes = vec![0 as fmi2Byte; size];
-    assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr(), size), fmi2Status_fmi2OK);
+    let (mut state, bytes) = get_and_serialize(c);
     let u32_at = |i: usize| u32::from_le_bytes(std::array::from_fn(|j| bytes[i + j] as u8)) as usize;
     let time = 16 + u32_at(12);
     let lens: Vec<usize> = (0..7).map(|j| u32_at(time + 8 + 4 * j)).collect();
@@ -323,7 +323,11 @@ fn a_forged_state_with_a_valid_checksum_never_brings_a_nan_or_an_infinity() {
     ] {
         let forged = forge(&bytes, at, value);
         let mut s: fmi2FMUstate = std::ptr::null_mut();
-        assert_eq!(fmi2DeSerializeFMUstate(c, forged.as_ptr(), size, &mut s), fmi2Status_fmi2OK, "{what}");
+        assert_eq!(
+            fmi2DeSerializeFMUstate(c, forged.as_ptr(), forged.len(), &mut s),
+            fmi2Status_fmi2OK,
+            "{what}"
+        );
         assert_eq!(fmi2SetFMUstate(c, s), fmi2Status_fmi2Error, "{what} = {value} is refused");
         assert_eq!(fmi2FreeFMUstate(c, &mut s), fmi2Status_fmi2OK);
         assert_eq!(fmi2SetFMUstate(c, state), fmi2Status_fmi2OK);
@@ -332,7 +336,7 @@ fn a_forged_state_with_a_valid_checksum_never_brings_a_nan_or_an_infinity() {
     // which is then refused rather than returned as inf.
     let forged = forge(&bytes, array(3), 1e300);
     let mut s: fmi2FMUstate = std::ptr::null_mut();
-    assert_eq!(fmi2DeSerializeFMUstate(c, forged.as_ptr(), size, &mut s), fmi2Status_fmi2OK);
+    assert_eq!(fmi2DeSerializeFMUstate(c, forged.as_ptr(), forged.len(), &mut s), fmi2Status_fmi2OK);
     assert_eq!(fmi2SetFMUstate(c, s), fmi2Status_fmi2OK);
     let mut out = [0.0; 2];
     assert_eq!(fmi2GetReal(c, window_outputs.as_ptr(), 2, out.as_mut_ptr()), fmi2Status_fmi2Error);

@@ -7,6 +7,9 @@ use planetwear::physics::ltca::{mesh_ltca, set_ltca, MeshModel, SetModel};
 use planetwear::physics::separation::MeshFlanks;
 use planetwear::scene::Scene;
 
+#[path = "support/in_phase.rs"]
+mod in_phase;
+
 fn example() -> GearSet {
     Scene::example_2004().validate().unwrap()
 }
@@ -125,18 +128,7 @@ fn planets_share_the_load_equally_on_average_and_loads_add_up() {
 fn in_phase_planets_share_the_load_equally_at_every_position() {
     // Z_sun / n = 36 / 4 and Z_ring / n = 72 / 4 are integers: all four
     // sun meshes (and all four ring meshes) are in phase.
-    let mut s = Scene::example_2004();
-    s.name = "in-phase".into();
-    s.sun.teeth = 36;
-    s.sun.tip_radius_mm = 27.87;
-    s.sun.root_radius_mm = 24.5;
-    s.sun.bore_radius_mm = 13.0;
-    s.ring.teeth = 72;
-    s.ring.minor_radius_mm = 53.225;
-    s.ring.root_radius_mm = 56.5;
-    s.ring.rim_radius_mm = 60.45;
-    s.centre_distance_mm = 40.5;
-    let set = s.validate().unwrap_or_else(|e| panic!("{e}"));
+    let set = in_phase::in_phase_scene().validate().unwrap_or_else(|e| panic!("{e}"));
     let r = set_ltca(&set, &SetModel::new(&set), 50);
     let total = set.input_torque / set.sun.base_radius();
     for i in 0..r.travel.len() {

@@ -12,6 +12,9 @@ use planetwear::physics::wear_state::WornState;
 use planetwear::scene::Scene;
 use proptest::prelude::*;
 
+#[path = "support/in_phase.rs"]
+mod in_phase;
+
 fn example() -> GearSet {
     Scene::example_2004().validate().unwrap()
 }
@@ -20,18 +23,7 @@ fn example() -> GearSet {
 /// every planet carries exactly a quarter of the load at every position,
 /// so in the single-pair zone a pair's load is constant (tests/ltca.rs).
 fn in_phase() -> GearSet {
-    let mut s = Scene::example_2004();
-    s.name = "in-phase".into();
-    s.sun.teeth = 36;
-    s.sun.tip_radius_mm = 27.87;
-    s.sun.root_radius_mm = 24.5;
-    s.sun.bore_radius_mm = 13.0;
-    s.ring.teeth = 72;
-    s.ring.minor_radius_mm = 53.225;
-    s.ring.root_radius_mm = 56.5;
-    s.ring.rim_radius_mm = 60.45;
-    s.centre_distance_mm = 40.5;
-    s.validate().unwrap_or_else(|e| panic!("{e}"))
+    in_phase::in_phase_scene().validate().unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn cycle_of(set: &GearSet, settings: WearSettings) -> (WearModel, WornState, CycleWear) {

@@ -13,6 +13,9 @@ use planetwear::scene::Scene;
 use proptest::prelude::*;
 use serde_json::Value;
 
+#[path = "support/in_phase.rs"]
+mod in_phase;
+
 fn example() -> GearSet {
     Scene::example_2004().validate().unwrap()
 }
@@ -153,18 +156,7 @@ fn an_altered_value_fails_the_checksum() {
 #[test]
 fn a_state_of_another_gear_set_is_refused_with_what_differs() {
     let text = worn().to_json().unwrap();
-    let mut other = Scene::example_2004();
-    other.sun.teeth = 36;
-    other.sun.tip_radius_mm = 27.87;
-    other.sun.root_radius_mm = 24.5;
-    other.sun.bore_radius_mm = 13.0;
-    other.ring.teeth = 72;
-    other.ring.minor_radius_mm = 53.225;
-    other.ring.root_radius_mm = 56.5;
-    other.ring.rim_radius_mm = 60.45;
-    other.centre_distance_mm = 40.5;
-    other.name = "in-phase".into();
-    let other = other.validate().unwrap();
+    let other = in_phase::in_phase_scene().validate().unwrap();
     match WornState::from_json(&text, &other) {
         Err(e @ WornStateError::Foreign { .. }) => {
             let m = e.to_string();

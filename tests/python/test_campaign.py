@@ -27,6 +27,7 @@ from planetwear_fmu import campaign_file
 from planetwear_fmu.campaign import dask_client, main, run_campaign, task_specs
 from planetwear_fmu.campaign_file import CampaignError
 from planetwear_fmu.sweep import TIMING_COLUMNS, PointStore, run_task
+from wear_states import write_foreign_state
 
 REPO = Path(__file__).resolve().parents[2]
 FMU = REPO / "fmu" / "planetwear.fmu"
@@ -198,13 +199,7 @@ def test_a_killed_campaign_resumes_without_recomputing_a_point(tmp_path, client,
 
 
 def _foreign_state(tmp_path):
-    scene = subprocess.run([EXE, "scene", "show", "example-2004"], capture_output=True, text=True, check=True).stdout
-    other = scene.replace("rim_radius_mm = 58.95", "rim_radius_mm = 60.0")
-    assert other != scene
-    (tmp_path / "other.toml").write_text(other)
-    subprocess.run([EXE, "wear", "step", "--scene", str(tmp_path / "other.toml"), "--revolutions", "1000",
-                    "--out", str(tmp_path / "foreign.json")], check=True, capture_output=True)
-    return "foreign.json"
+    return write_foreign_state(EXE, tmp_path).name
 
 
 def _shipped_state(tmp_path, kappa=1):

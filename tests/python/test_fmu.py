@@ -15,6 +15,7 @@ from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
+from wear_states import write_foreign_state
 
 REPO = Path(__file__).resolve().parents[2]
 FMU = REPO / "fmu" / "planetwear.fmu"
@@ -327,12 +328,7 @@ def test_the_shipped_worn_states_load_and_change_the_static_transmission_error(f
 def test_a_foreign_or_corrupt_wear_state_is_refused_with_the_reason(fmu, tmp_path):
     import os
     exe = os.environ.get("PLANETWEAR_BIN", str(REPO / "target" / "release" / "planetwear"))
-    scene = subprocess.run([exe, "scene", "show", "example-2004"], capture_output=True, text=True, check=True).stdout
-    other = scene.replace("rim_radius_mm = 58.95", "rim_radius_mm = 60.0")
-    assert other != scene
-    (tmp_path / "other.toml").write_text(other)
-    subprocess.run([exe, "wear", "step", "--scene", str(tmp_path / "other.toml"), "--revolutions", "1000",
-                    "--out", str(tmp_path / "foreign.json")], check=True, capture_output=True)
+    write_foreign_state(exe, tmp_path)
     good = unzipdir_state = Path(fmu[1]) / "resources" / "wear" / "example-2004" / "kappa-1.json"
     text = good.read_text()
     (tmp_path / "cut.json").write_text(text[: len(text) // 2])
