@@ -173,11 +173,7 @@ impl MeshModel {
             return;
         }
         // The same cell and weights as the summed law of `pair`.
-        let inv_step = 1.0 / grid.step;
-        let last = grid.values.len() - 1;
-        let x = ((pos - grid.start) * inv_step).clamp(0.0, last as f64);
-        let i = (x as usize).min(last - 1);
-        let t = x - i as f64;
+        let (i, t) = grid.cell(pos);
         let lerp = |v: &[f64]| v[i] + t * (v[i + 1] - v[i]);
         let fraction = 1.0 / self.slices.len() as f64;
         for slice in &self.slices {
@@ -204,10 +200,7 @@ impl MeshModel {
     fn pair(&self, pos: f64, delta: f64) -> PairLaw {
         let grid = &self.separation.drive;
         let inv_step = 1.0 / grid.step;
-        let last = grid.values.len() - 1;
-        let x = ((pos - grid.start) * inv_step).clamp(0.0, last as f64);
-        let i = (x as usize).min(last - 1);
-        let t = x - i as f64;
+        let (i, t) = grid.cell(pos);
         let lerp = |v: &[f64]| v[i] + t * (v[i + 1] - v[i]);
         let slope = |v: &[f64]| (v[i + 1] - v[i]) * inv_step;
         let fraction = 1.0 / self.slices.len() as f64;

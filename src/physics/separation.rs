@@ -67,6 +67,18 @@ impl SeparationTable {
         self.values[i] + t * (self.values[i + 1] - self.values[i])
     }
 
+    /// The interpolation cell of position `s` [m], clamped to the table: the
+    /// index i of its left sample and the fraction t across it. Tables that
+    /// share this grid (the contact law's separations and stiffnesses) are
+    /// all read with the same (i, t).
+    #[inline(always)]
+    pub fn cell(&self, s: f64) -> (usize, f64) {
+        let last = self.values.len() - 1;
+        let x = ((s - self.start) * (1.0 / self.step)).clamp(0.0, last as f64);
+        let i = (x as usize).min(last - 1);
+        (i, x - i as f64)
+    }
+
     /// Slope d(separation)/ds [-] of the interpolant at `s`; zero outside.
     pub fn slope_at(&self, s: f64) -> f64 {
         let x = (s - self.start) / self.step;
