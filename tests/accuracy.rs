@@ -2,6 +2,10 @@
 //! `planetwear work-precision`, docs/ACCURACY.md): generalized-α is second
 //! order where no tooth separates, the adaptive method's error falls with its
 //! tolerance, and the reference agrees with an integrator of another code.
+//!
+//! The cases run on the uncalibrated reading of the example
+//! (`Scene::example_2004_annulus`), whose figures they pin; the calibrated
+//! example's own laws and figures: tests/calibrated_example.rs.
 
 #[path = "support/independent.rs"]
 mod independent;
@@ -16,7 +20,7 @@ use planetwear::scene::{Fidelity, Scene};
 
 /// The torsional example at 3000 rpm (no separation), a short run.
 fn case() -> (GearSet, PlanetaryDynamics, Protocol) {
-    let mut scene = Scene::example_2004();
+    let mut scene = Scene::example_2004_annulus();
     scene.dynamics.fidelity = Fidelity::Torsional;
     let set = scene.validate().unwrap();
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();

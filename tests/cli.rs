@@ -79,7 +79,10 @@ fn bad_input_gets_a_clear_error() {
     let out = planetwear(&["ltca", "--scene", "no-such-scene"]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("neither a built-in scene (example-2004) nor an existing file"), "{err}");
+    assert!(
+        err.contains("neither a built-in scene (example-2004, example-2004-annulus) nor an existing file"),
+        "{err}"
+    );
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bad.toml");
     let text = planetwear::scene::Scene::example_2004().to_toml().replace("count = 4", "count = 3");
@@ -116,7 +119,7 @@ fn a_small_sweep_writes_its_tables_plots_and_summary() {
     let out = planetwear(&[
         "sweep",
         "--scene",
-        "example-2004",
+        "example-2004-annulus",
         "--from",
         "4900",
         "--to",
@@ -142,7 +145,8 @@ fn a_small_sweep_writes_its_tables_plots_and_summary() {
     assert_eq!(csv.lines().count(), 4, "{csv}");
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("sweep.json")).unwrap()).unwrap();
-    // The peak at 5000 rpm: the second harmonic meets the first rotational mode.
+    // The peak at 5000 rpm: the second harmonic meets the first rotational
+    // mode of the uncalibrated reading (14.3 kHz).
     let peaks = summary["peaks"].as_array().unwrap();
     assert!(peaks
         .iter()

@@ -1,6 +1,10 @@
 //! Wear driven by the tooth loads of a dynamic run: the low-speed limit, the
 //! resonant speed of the example, the load balance of a passage, and the
 //! option's bookkeeping.
+//!
+//! The cases run on the uncalibrated reading of the example
+//! (`Scene::example_2004_annulus`), whose figures they pin; the calibrated
+//! example's own laws and figures: tests/calibrated_example.rs.
 
 use planetwear::physics::dynamic_wear::{compare_sources, dynamic_cycle, SourceComparison};
 use planetwear::physics::gear::{GearSet, MeshKind};
@@ -11,13 +15,13 @@ use planetwear::physics::wear::{
 use planetwear::scene::{Fidelity, Scene};
 
 fn example() -> GearSet {
-    Scene::example_2004().validate().unwrap()
+    Scene::example_2004_annulus().validate().unwrap()
 }
 
 /// The example with the torsional dynamic model: its statics hold the
 /// central members on their axes, as the quasi-static LTCA does.
 fn torsional() -> GearSet {
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     s.dynamics.fidelity = Fidelity::Torsional;
     s.validate().unwrap()
 }

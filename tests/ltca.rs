@@ -144,7 +144,7 @@ mod deviations_and_slices {
     use planetwear::physics::profile::ProfileDeviation;
 
     fn uniform(depth: f64) -> ProfileDeviation {
-        ProfileDeviation { roll: vec![0.0, 1.0], depth: vec![depth, depth] }
+        ProfileDeviation::new(vec![0.0, 1.0], vec![depth, depth])
     }
 
     #[test]

@@ -1,4 +1,8 @@
 //! The time-domain simulation the FMU drives.
+//!
+//! The cases run on the uncalibrated reading of the example
+//! (`Scene::example_2004_annulus`), whose figures they pin; the calibrated
+//! example's own laws and figures: tests/calibrated_example.rs.
 
 use planetwear::physics::dynamics::PlanetaryDynamics;
 use planetwear::physics::gear::{GearSet, Member, MeshKind};
@@ -10,7 +14,7 @@ use planetwear::solver::SecondOrderSystem;
 const OMEGA: f64 = 3000.0 * std::f64::consts::PI / 30.0;
 
 fn setup(fidelity: Fidelity) -> (GearSet, PlanetaryDynamics) {
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     s.dynamics.fidelity = fidelity;
     let set = s.validate().unwrap();
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
@@ -29,7 +33,7 @@ fn nominal_step(model: &PlanetaryDynamics, set: &GearSet) -> f64 {
 #[test]
 fn communication_steps_that_are_multiples_of_the_internal_step_give_one_trajectory() {
     for (integrator, bound) in [(IntegratorKind::GeneralizedAlpha, 1e-9), (IntegratorKind::Rk45, 1e-3)] {
-        let mut s = Scene::example_2004();
+        let mut s = Scene::example_2004_annulus();
         s.dynamics.fidelity = Fidelity::Torsional;
         s.dynamics.integrator = integrator;
         let set = s.validate().unwrap();
@@ -238,7 +242,7 @@ mod outputs {
 }
 
 fn speed_steps_setup() -> (GearSet, PlanetaryDynamics) {
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     s.dynamics.drive = planetwear::scene::Drive::SpeedSteps;
     let set = s.validate().unwrap();
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();

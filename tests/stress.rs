@@ -2,6 +2,10 @@
 //! response is finite and bounded and, where a reference exists, that it
 //! converges under refinement or obeys a law; impossible requests end in a
 //! clear error, never in NaN or a hang.
+//!
+//! The cases run on the uncalibrated reading of the example
+//! (`Scene::example_2004_annulus`), whose figures they pin; the calibrated
+//! example's own laws and figures: tests/calibrated_example.rs.
 
 use planetwear::physics::dynamics::PlanetaryDynamics;
 use planetwear::physics::gear::{GearSet, Member, MeshKind};
@@ -67,7 +71,7 @@ fn refine(scene: &Scene, rpm: f64) -> (f64, f64, SteadyState) {
 fn very_soft_planet_bearings_against_stiff_meshes_stay_finite_and_converge() {
     // Planet bearings 3e5 N/m, a thousandth of the default and 5000 times
     // softer than a mesh: widely separated time scales (the stiff case).
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     s.supports.planet_bearing_n_per_m = 3.0e5;
     let (d1, d2, r) = refine(&s, 3000.0);
     eprintln!("soft planet bearings: E_h 120→240 {d1:.2e}, 240→480 {d2:.2e}, peak {:.0} N", peak(&r));
@@ -78,10 +82,10 @@ fn very_soft_planet_bearings_against_stiff_meshes_stay_finite_and_converge() {
 
 #[test]
 fn thirty_thousand_rpm_stays_bounded_and_converges() {
-    let (d1, d2, r) = refine(&Scene::example_2004(), 30000.0);
+    let (d1, d2, r) = refine(&Scene::example_2004_annulus(), 30000.0);
     eprintln!("30000 rpm: E_h 120→240 {d1:.2e}, 240→480 {d2:.2e}, peak {:.0} N", peak(&r));
     assert!(d2 < d1, "no convergence under refinement: {d1:e}, {d2:e}");
-    let (set, _) = build(&Scene::example_2004());
+    let (set, _) = build(&Scene::example_2004_annulus());
     // The mean tooth force still balances the torque at 30 000 rpm.
     let f = set.mesh_load_per_planet();
     assert!((r.meshes[0].harmonics.mean / f - 1.0).abs() < 0.02, "{} vs {f}", r.meshes[0].harmonics.mean);
@@ -90,7 +94,7 @@ fn thirty_thousand_rpm_stays_bounded_and_converges() {
 
 #[test]
 fn reversed_torque_loads_the_back_flanks_and_mirrors_the_mean_load() {
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     s.operation.input_torque_nm = -750.0;
     let (set, mut model) = build(&s);
     let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
@@ -109,7 +113,7 @@ fn reversed_torque_loads_the_back_flanks_and_mirrors_the_mean_load() {
 fn zero_torque_rattle_across_the_backlash_stays_bounded_and_loses_energy() {
     // No load, the sun kicked by 50 rad/s against the train: the teeth fly
     // across the backlash and hit drive and back flanks in turn.
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     s.operation.input_torque_nm = 0.0;
     s.dynamics.fidelity = Fidelity::Torsional;
     let (set, mut model) = build(&s);
@@ -155,7 +159,7 @@ fn zero_torque_rattle_across_the_backlash_stays_bounded_and_loses_energy() {
 /// and smallest energy-balance residual E − E0 − W (W: work of the external
 /// torques and of the time-varying stiffness) over the largest contact energy.
 fn undamped_run(rho: f64, steps: u64, cycles: u64) -> (f64, f64, f64) {
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     s.dynamics.fidelity = Fidelity::Torsional;
     s.dynamics.mesh_damping_ratio = 0.0;
     s.supports.bearing_damping_ratio = 0.0;
@@ -227,7 +231,7 @@ fn undamped_over_two_thousand_mesh_cycles_generalized_alpha_stays_bounded_where_
 /// |E − E0 − W| so far over the largest contact energy.
 fn undamped_default_run(samples: u64, checkpoints: &[u64]) -> Vec<(f64, f64)> {
     let cycles = *checkpoints.last().unwrap();
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     s.dynamics.fidelity = Fidelity::Torsional;
     s.dynamics.mesh_damping_ratio = 0.0;
     s.supports.bearing_damping_ratio = 0.0;
@@ -304,7 +308,7 @@ fn undamped_over_two_thousand_mesh_cycles_the_default_stays_bounded_and_drifts_s
 
 #[test]
 fn a_step_in_input_torque_settles_to_the_new_load() {
-    let (set, model) = build(&Scene::example_2004());
+    let (set, model) = build(&Scene::example_2004_annulus());
     let omega = 3000.0 * RPM;
     let mut sim = Simulation::new(&set, model, 0.0, omega).unwrap();
     let fm = sim_mesh_frequency(&set, omega);
@@ -346,14 +350,14 @@ fn fifty_micrometres_of_wear_and_pairs_that_never_touch() {
     // The sun's dedendum worn 50 µm deep at the start of active profile,
     // tapering to nothing at the pitch point; the pairs in the deepest zone
     // never touch under the example's load, and the rest carry it.
-    let (set0, _) = build(&Scene::example_2004());
+    let (set0, _) = build(&Scene::example_2004_annulus());
     let sp = SetModel::new(&set0);
     let path = sp.sun_planet.path().clone();
     let roll_start = path.start / set0.sun.base_radius();
     let roll_pitch = path.tangency_distance * set0.sun.base_radius()
         / (set0.sun.base_radius() + set0.planet.base_radius())
         / set0.sun.base_radius();
-    let worn = ProfileDeviation { roll: vec![roll_start, roll_pitch], depth: vec![50e-6, 0.0] };
+    let worn = ProfileDeviation::new(vec![roll_start, roll_pitch], vec![50e-6, 0.0]);
     let flanks = MeshFlanks { gear1_drive: worn, ..MeshFlanks::default() };
     let model_set = SetModel::with_flanks(&set0, &[flanks], &[MeshFlanks::default()]);
     // Static check: at the start of contact a pair under the full mesh load does not touch.
@@ -378,7 +382,7 @@ fn fifty_micrometres_of_wear_and_pairs_that_never_touch() {
 /// The example scaled by `f` in every length; torque ∝ f³ (same contact
 /// stress), bearing stiffness ∝ f, speed ∝ 1/f (same frequency ratios).
 fn scaled(f: f64) -> Scene {
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     for g in [&mut s.sun, &mut s.planet] {
         g.module_mm *= f;
         g.tooth_thickness_mm *= f;
@@ -438,7 +442,7 @@ fn a_tolerance_double_precision_cannot_meet_is_refused_before_any_work() {
     // RK 5(4) asked for a relative tolerance below what double precision can
     // deliver would reject steps forever: the scene is refused up front with
     // the parameter's name and its admissible range.
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     s.dynamics.integrator = IntegratorKind::Rk45;
     s.dynamics.relative_tolerance = 1e-17;
     let msg = s.validate().expect_err("1e-17 cannot be met").to_string();

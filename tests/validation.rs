@@ -42,7 +42,7 @@ fn tip_radius_below_base_radius() {
     let mut s = ex();
     s.sun.tip_radius_mm = 23.5;
     s.sun.root_radius_mm = 22.0;
-    s.sun.tip_chamfer = Some(ChamferSpec { height_mm: 0.0, angle_deg: 45.0 });
+    s.sun.tip_chamfer = Some(ChamferSpec::new(0.0, 45.0));
     expect(&s, "sun.tip_radius_mm", "must exceed the base radius 23.758");
     let mut s = ex();
     s.ring.minor_radius_mm = 48.0;
@@ -72,8 +72,8 @@ fn contact_ratio_below_one() {
     let mut s = ex();
     s.sun.tip_radius_mm = 25.6;
     s.planet.tip_radius_mm = 14.0;
-    s.sun.tip_chamfer = Some(ChamferSpec { height_mm: 0.02, angle_deg: 45.0 });
-    s.planet.tip_chamfer = Some(ChamferSpec { height_mm: 0.02, angle_deg: 45.0 });
+    s.sun.tip_chamfer = Some(ChamferSpec::new(0.02, 45.0));
+    s.planet.tip_chamfer = Some(ChamferSpec::new(0.02, 45.0));
     expect(&s, "sun.tip_radius_mm", "contact ratio must be at least 1");
 }
 
@@ -110,10 +110,10 @@ fn assembly_condition_and_overlapping_planets() {
 #[test]
 fn chamfer_limits() {
     let mut s = ex();
-    s.sun.tip_chamfer = Some(ChamferSpec { height_mm: 1.0, angle_deg: 45.0 });
+    s.sun.tip_chamfer = Some(ChamferSpec::new(1.0, 45.0));
     expect(&s, "sun.tip_chamfer.height_mm", "below half the addendum");
     let mut s = ex();
-    s.planet.tip_chamfer = Some(ChamferSpec { height_mm: 0.1, angle_deg: 95.0 });
+    s.planet.tip_chamfer = Some(ChamferSpec::new(0.1, 95.0));
     expect(&s, "planet.tip_chamfer.angle_deg", "strictly between 0 and 90");
 }
 

@@ -1,5 +1,9 @@
 //! Archard wear: the laws of one passage, one cycle and one update, and the
 //! example's figures through six updates.
+//!
+//! The cases run on the uncalibrated reading of the example
+//! (`Scene::example_2004_annulus`), whose figures they pin; the calibrated
+//! example's own laws and figures: tests/calibrated_example.rs.
 
 use planetwear::physics::gear::{GearSet, Member, MeshKind};
 use planetwear::physics::hertz::LineContact;
@@ -16,7 +20,7 @@ use proptest::prelude::*;
 mod in_phase;
 
 fn example() -> GearSet {
-    Scene::example_2004().validate().unwrap()
+    Scene::example_2004_annulus().validate().unwrap()
 }
 
 /// A set whose planets all mesh in phase (Z_sun/n and Z_ring/n integers):
@@ -51,7 +55,7 @@ fn cycles_per_input_revolution_follow_from_the_carrier_frame() {
     assert!((c.ring - 4.0 * 34.0 / 70.0).abs() < 1e-12, "{c:?}");
     // Ring held, sun driven: the carrier turns Z_s/(Z_s + Z_r) per sun turn,
     // the sun Z_r/(Z_s + Z_r) relative to it.
-    let mut s = Scene::example_2004();
+    let mut s = Scene::example_2004_annulus();
     s.operation.held = Member::Ring;
     s.operation.input = Member::Sun;
     let c = cycles_per_input_revolution(&s.validate().unwrap());

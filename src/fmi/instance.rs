@@ -320,12 +320,14 @@ impl Instance {
         });
         apply!(vr::RING_FILLET_RADIUS, scene.ring.fillet_radius_mm = mm(vr::RING_FILLET_RADIUS));
         if use_it(vr::TIP_CHAMFER_HEIGHT) || use_it(vr::TIP_CHAMFER_ANGLE) {
-            let c = ChamferSpec {
-                height_mm: mm(vr::TIP_CHAMFER_HEIGHT),
-                angle_deg: r(vr::TIP_CHAMFER_ANGLE).to_degrees(),
+            let (h, a) = (mm(vr::TIP_CHAMFER_HEIGHT), r(vr::TIP_CHAMFER_ANGLE).to_degrees());
+            // The edge's reading (whether it carries load, its rounding)
+            // stays the scene's.
+            let set = |c: Option<ChamferSpec>| {
+                Some(ChamferSpec { height_mm: h, angle_deg: a, ..c.unwrap_or(ChamferSpec::new(h, a)) })
             };
-            scene.sun.tip_chamfer = Some(c);
-            scene.planet.tip_chamfer = Some(c);
+            scene.sun.tip_chamfer = set(scene.sun.tip_chamfer);
+            scene.planet.tip_chamfer = set(scene.planet.tip_chamfer);
         }
         apply!(vr::YOUNGS_MODULUS, scene.material.youngs_modulus_gpa = r(vr::YOUNGS_MODULUS) * 1e-9);
         apply!(vr::POISSON_RATIO, scene.material.poisson_ratio = r(vr::POISSON_RATIO));
@@ -757,5 +759,33 @@ mod tests {
         let width = j.real(vr::FACE_WIDTH);
         j.set_real(vr::FACE_WIDTH, width).unwrap();
         assert_ne!(j.build_key(), unset);
+    }
+
+    #[test]
+    fn the_default_parameters_are_the_built_in_example() {
+        // With no scene file every parameter applies: their start values
+        // must describe the calibrated example exactly.
+        let scene = Instance::new("key", None).scene().unwrap();
+        let mut example = Scene::example_2004();
+        // The FMU samples its outputs; the example's sampling is the CLI's.
+        example.dynamics.samples_per_mesh_cycle = scene.dynamics.samples_per_mesh_cycle;
+        let (a, b) = (scene.validate().unwrap(), example.validate().unwrap());
+        // Everything but the last digit of the angles written to 15 digits.
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * y.abs().max(1e-300);
+        assert_eq!(format!("{:?}", a.bodies), format!("{:?}", b.bodies));
+        assert_eq!(format!("{:?}", a.supports), format!("{:?}", b.supports));
+        assert_eq!(a.dynamics.mesh_damping_ratio, b.dynamics.mesh_damping_ratio);
+        assert_eq!((a.held, a.input, a.input_torque), (b.held, b.input, b.input_torque));
+        for (x, y) in [(&a.sun, &b.sun), (&a.planet, &b.planet), (&a.ring, &b.ring)] {
+            assert!(close(x.pressure_angle, y.pressure_angle) && close(x.tooth_thickness, y.tooth_thickness));
+            match (x.chamfer, y.chamfer) {
+                (Some(c), Some(d)) => {
+                    assert!(close(c.height, d.height) && close(c.angle, d.angle));
+                    assert_eq!(c.edge_carries_load, d.edge_carries_load);
+                }
+                (None, None) => {}
+                other => panic!("chamfers differ: {other:?}"),
+            }
+        }
     }
 }

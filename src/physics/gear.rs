@@ -67,6 +67,34 @@ pub struct Chamfer {
     pub height: f64,
     /// Angle between the chamfer and the tip circle's tangent [rad].
     pub angle: f64,
+    /// Whether the edge between involute and chamfer may touch the mating
+    /// flank outside the involute path (corner contact).
+    pub edge_carries_load: bool,
+    /// Radius to which that edge is rounded when it carries no load [m].
+    pub edge_radius: f64,
+}
+
+/// How the flank of a gear whose chamfer edge carries no load recedes
+/// beyond the involute's end, in travel d along the line of action:
+/// r = m·d²/(2·d₀) over the rounded edge (d < d₀), then m·(d − d₀/2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EdgeRelief {
+    /// Slope m of the relief past the rounding [-].
+    pub slope: f64,
+    /// Travel d₀ over which the rounding turns the flank onto the chamfer [m].
+    pub transition: f64,
+}
+
+impl EdgeRelief {
+    /// Relief [m] and its derivative [-] at travel `d` ≥ 0 past the edge.
+    #[inline(always)]
+    pub fn at(&self, d: f64) -> (f64, f64) {
+        if d < self.transition {
+            (0.5 * self.slope * d * d / self.transition, self.slope * d / self.transition)
+        } else {
+            (self.slope * (d - 0.5 * self.transition), self.slope)
+        }
+    }
 }
 
 /// The form of one gear's teeth and body.
@@ -141,6 +169,37 @@ impl ToothForm {
     /// Circular tooth thickness at radius `r` [m], on the involute.
     pub fn thickness_at(&self, r: f64) -> f64 {
         2.0 * r * self.involute_half_angle(r)
+    }
+
+    /// Whether this gear's tip corner may touch the mating flank outside the
+    /// involute path: always for a sharp tip, as set for a chamfered one.
+    pub fn tip_corner_carries_load(&self) -> bool {
+        self.chamfer.is_none_or(|c| c.edge_carries_load)
+    }
+
+    /// The relief beyond the involute path for a chamfer whose edge carries
+    /// no load; `None` when the tip corner carries load (or there is no
+    /// chamfer).
+    ///
+    /// The edge is rounded to radius R, so the mating flank runs from the
+    /// involute over the rounding onto the chamfer's surface instead of
+    /// meeting a corner. The chamfer falls away from the continued involute
+    /// at β = (90° − α_e) − chamfer angle, α_e the involute's pressure angle
+    /// at the edge radius r_e (the involute makes 90° − α_e with the tip
+    /// circle's tangent there). A travel d along the line of action moves
+    /// the contact a = d·tan α_e along the profile (ρ_e/r_b = tan α_e), so
+    /// past the rounding the slope is m = tan β · tan α_e, and the rounding,
+    /// a relief a²/(2R), spans d₀ = R·tan β / tan α_e, joining the slope with
+    /// a continuous derivative (the contact force stays smooth). β ≤ 0 gives
+    /// no relief (scene validation refuses it).
+    pub fn edge_relief(&self) -> Option<EdgeRelief> {
+        let c = self.chamfer.filter(|c| !c.edge_carries_load)?;
+        let alpha_e = (self.base_radius() / self.involute_tip_radius()).clamp(-1.0, 1.0).acos();
+        let beta = std::f64::consts::FRAC_PI_2 - alpha_e - c.angle;
+        Some(EdgeRelief {
+            slope: beta.tan() * alpha_e.tan(),
+            transition: c.edge_radius * beta.tan() / alpha_e.tan(),
+        })
     }
 
     /// Radius where the involute ends toward the tip: the chamfer start, or
@@ -287,6 +346,9 @@ pub struct GearSet {
     pub input: Member,
     /// Torque on the driving member [N·m].
     pub input_torque: f64,
+    /// Factors on the tooth-pair stiffness of the sun–planet and the
+    /// ring–planet mesh [-].
+    pub stiffness_scale: [f64; 2],
     /// Analysis resolution.
     pub analysis: Analysis,
     /// Bearing supports.
@@ -498,6 +560,14 @@ impl GearSet {
             }
         }
         t
+    }
+
+    /// The factor on the tooth-pair stiffness of `mesh` [-].
+    pub fn stiffness_scale(&self, mesh: MeshKind) -> f64 {
+        match mesh {
+            MeshKind::SunPlanet => self.stiffness_scale[0],
+            MeshKind::RingPlanet => self.stiffness_scale[1],
+        }
     }
 
     /// Circumferential backlash at the operating pitch circle [m].

@@ -79,6 +79,11 @@ struct PairLaw {
 /// Samples per base pitch of the contact tables.
 pub const TABLE_SAMPLES_PER_PITCH: usize = 400;
 
+/// One slice's contact: the sign of the force, the penetration [m], the
+/// pair stiffness table, the separation table of the flank in contact and
+/// the slope of its edge relief [-].
+type SliceContact<'a> = (f64, f64, &'a [f64], &'a [f64], f64);
+
 impl MeshModel {
     /// The contact model of a mesh whose flanks carry the same deviations
     /// across the whole face.
@@ -139,22 +144,27 @@ impl MeshModel {
         k_lo..=k_hi
     }
 
-    /// Which flank of one slice touches under approach `delta` [m], given the
-    /// slice's drive and back separations `gd`, `gb` [m] at the pair's
-    /// position: the sign of the force, the penetration [m], the pair
-    /// stiffness table and the slice's separation table of that flank.
+    /// Which flank of one slice touches under approach `delta` [m] with the
+    /// pair at position `pos` [m], given the slice's drive and back
+    /// separations `gd`, `gb` [m] there (relief not included): the sign of
+    /// the force, the penetration [m], the pair stiffness table, the slice's
+    /// separation table of that flank and the slope of its edge relief [-].
     #[inline(always)]
     fn slice_contact<'a>(
         &'a self,
         slice: &'a MeshSeparation,
+        pos: f64,
         gd: f64,
         gb: f64,
         delta: f64,
-    ) -> Option<(f64, f64, &'a [f64], &'a [f64])> {
-        if gd < NO_CONTACT && delta > gd {
-            Some((1.0, delta - gd, &self.drive_k, &slice.drive.values))
-        } else if gb < NO_CONTACT && -delta > gb {
-            Some((-1.0, -delta - gb, &self.back_k, &slice.back.values))
+    ) -> Option<SliceContact<'a>> {
+        let (rd, drd) = slice.drive_relief_at(pos);
+        if gd < NO_CONTACT && delta > gd + rd {
+            return Some((1.0, delta - gd - rd, &self.drive_k, &slice.drive.values, drd));
+        }
+        let (rb, drb) = slice.back_relief_at(pos);
+        if gb < NO_CONTACT && -delta > gb + rb {
+            Some((-1.0, -delta - gb - rb, &self.back_k, &slice.back.values, drb))
         } else {
             None
         }
@@ -178,8 +188,8 @@ impl MeshModel {
         let fraction = 1.0 / self.slices.len() as f64;
         for slice in &self.slices {
             let (gd, gb) = (lerp(&slice.drive.values), lerp(&slice.back.values));
-            out.push(match self.slice_contact(slice, gd, gb, delta) {
-                Some((sign, x, k_table, _)) => {
+            out.push(match self.slice_contact(slice, pos, gd, gb, delta) {
+                Some((sign, x, k_table, _, _)) => {
                     let k = fraction * lerp(k_table);
                     sign * k * x
                 }
@@ -210,14 +220,16 @@ impl MeshModel {
         for slice in &self.slices {
             let gd = lerp(&slice.drive.values);
             let gb = lerp(&slice.back.values);
-            law.event_drive = law.event_drive.max(delta - gd);
-            law.event_back = law.event_back.max(-delta - gb);
-            let Some((sign, x, k_table, g_table)) = self.slice_contact(slice, gd, gb, delta) else {
+            // A relieved edge adds its relief to the separation beyond the
+            // involute path, so the event values stay continuous.
+            law.event_drive = law.event_drive.max(delta - gd - slice.drive_relief_at(pos).0);
+            law.event_back = law.event_back.max(-delta - gb - slice.back_relief_at(pos).0);
+            let Some((sign, x, k_table, g_table, dr)) = self.slice_contact(slice, pos, gd, gb, delta) else {
                 continue;
             };
             let k = fraction * lerp(k_table);
             let dk = fraction * slope(k_table);
-            let dg = slope(g_table);
+            let dg = slope(g_table) + dr;
             law.force += sign * k * x;
             law.stiffness += k;
             law.position_derivative += sign * (dk * x - k * dg);
@@ -315,6 +327,8 @@ impl MeshModel {
         // Counted, not stepped by k += 1: at a travel beyond 2^53 pitches
         // (a diverging iterate) k + 1 == k and a stepped loop never ends.
         let pairs = if k_hi >= k_lo { ((k_hi - k_lo) as usize + 1).min(last as usize + 2) } else { 0 };
+        let sep = &self.separation;
+        let pb = self.path().base_pitch;
         let (mut f, mut kd, mut ks) = (0.0, 0.0, 0.0);
         for j in 0..pairs {
             let k = k_lo + j as f64;
@@ -323,23 +337,26 @@ impl MeshModel {
             let t = x - i as f64;
             let (a, b) = (g[i], g[i + 1]);
             let gd = a[0] + t * (b[0] - a[0]);
-            let (sign, pen, kk, dk, dg) = if gd < NO_CONTACT && delta > gd {
+            let pos = s + k * pb;
+            let (rd, drd) = sep.drive_relief_at(pos);
+            let (sign, pen, kk, dk, dg) = if gd < NO_CONTACT && delta > gd + rd {
                 (
                     1.0,
-                    delta - gd,
+                    delta - gd - rd,
                     a[2] + t * (b[2] - a[2]),
                     (b[2] - a[2]) * inv_step,
-                    (b[0] - a[0]) * inv_step,
+                    (b[0] - a[0]) * inv_step + drd,
                 )
             } else {
                 let gb = a[1] + t * (b[1] - a[1]);
-                if gb < NO_CONTACT && -delta > gb {
+                let (rb, drb) = sep.back_relief_at(pos);
+                if gb < NO_CONTACT && -delta > gb + rb {
                     (
                         -1.0,
-                        -delta - gb,
+                        -delta - gb - rb,
                         a[3] + t * (b[3] - a[3]),
                         (b[3] - a[3]) * inv_step,
-                        (b[1] - a[1]) * inv_step,
+                        (b[1] - a[1]) * inv_step + drb,
                     )
                 } else {
                     continue;
@@ -384,6 +401,53 @@ impl MeshModel {
     /// pair at `s`.
     pub fn approach_for(&self, s: f64, load: f64) -> f64 {
         solve_increasing(|d| self.force(s, d, None), load, 0.0)
+    }
+
+    /// First and last position [m] at which one tooth pair carries load
+    /// while the mesh transmits `load` [N] along its line of action: the
+    /// loaded engagement, corner contact included. Found by a scan over the
+    /// path ± one base pitch and bisection to 1e-12 of a base pitch, so it
+    /// varies smoothly with the geometry (the share of a sampled cycle moves
+    /// in steps of one sample).
+    pub fn loaded_engagement(&self, load: f64) -> (f64, f64) {
+        let p = self.path();
+        let pb = p.base_pitch;
+        let loaded = |s: f64| self.pair_force(s, self.approach_for(s, load)) > 0.0;
+        let (lo, hi) = (p.start.min(p.start_sharp) - pb, p.end.max(p.end_sharp) + pb);
+        let n = 400;
+        let at = |i: usize| lo + (hi - lo) * i as f64 / n as f64;
+        let flags: Vec<bool> = (0..=n).map(|i| loaded(at(i))).collect();
+        let (Some(first), Some(last)) = (flags.iter().position(|f| *f), flags.iter().rposition(|f| *f))
+        else {
+            return (p.start, p.end);
+        };
+        let refine = |mut out: f64, mut inside: f64| {
+            while (out - inside).abs() > 1e-12 * pb {
+                let mid = 0.5 * (out + inside);
+                if loaded(mid) {
+                    inside = mid;
+                } else {
+                    out = mid;
+                }
+            }
+            inside
+        };
+        let start = if first == 0 { at(0) } else { refine(at(first - 1), at(first)) };
+        let end = if last == n { at(n) } else { refine(at(last + 1), at(last)) };
+        (start, end)
+    }
+
+    /// Loaded contact ratio at `load` [N]: the loaded engagement over the
+    /// base pitch [-].
+    pub fn loaded_contact_ratio(&self, load: f64) -> f64 {
+        let (a, b) = self.loaded_engagement(load);
+        (b - a) / self.path().base_pitch
+    }
+
+    /// Share of the mesh cycle with two or more pairs loaded at `load` [N]:
+    /// ε − 1 for a loaded contact ratio ε between 1 and 2 [-].
+    pub fn double_contact_share(&self, load: f64) -> f64 {
+        (self.loaded_contact_ratio(load) - 1.0).clamp(0.0, 1.0)
     }
 }
 

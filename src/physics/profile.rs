@@ -37,15 +37,38 @@ pub enum Region {
     TipLand,
 }
 
+/// What a deviation grid means beyond its ends (below the start of active
+/// profile, toward the root; above its last point, toward the tip).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ProfileEnds {
+    /// The end value continues: a worn band leaves no step where it ends.
+    #[default]
+    Hold,
+    /// Nothing is removed beyond the grid: the surface the mating flank
+    /// never touched keeps its form, leaving a step at each end of a worn band.
+    Unworn,
+}
+
+impl ProfileEnds {
+    /// True for the default ([`ProfileEnds::Hold`]), which files omit.
+    pub fn is_hold(&self) -> bool {
+        *self == ProfileEnds::Hold
+    }
+}
+
 /// A profile deviation along the roll angle: material removed normal to the
-/// involute (wear, tip relief) is positive [m]. Linear between grid points,
-/// constant beyond the ends.
+/// involute (wear, tip relief) is positive [m]. Linear between grid points;
+/// beyond the ends as `ends` says (the end value by default).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ProfileDeviation {
     /// Roll angles of the grid points, increasing [rad].
     pub roll: Vec<f64>,
     /// Deviation at each grid point [m].
     pub depth: Vec<f64>,
+    /// What the deviation is beyond the grid's ends.
+    #[serde(default, skip_serializing_if = "ProfileEnds::is_hold")]
+    pub ends: ProfileEnds,
 }
 
 impl ProfileDeviation {
@@ -54,8 +77,19 @@ impl ProfileDeviation {
         Self::default()
     }
 
+    /// A deviation grid whose end values continue beyond it.
+    pub fn new(roll: Vec<f64>, depth: Vec<f64>) -> Self {
+        Self { roll, depth, ends: ProfileEnds::Hold }
+    }
+
     /// Deviation [m] at roll angle `xi` [rad].
     pub fn at(&self, xi: f64) -> f64 {
+        if self.ends == ProfileEnds::Unworn {
+            match (self.roll.first(), self.roll.last()) {
+                (Some(lo), Some(hi)) if xi < *lo || xi > *hi => return 0.0,
+                _ => {}
+            }
+        }
         interpolate(&self.roll, &self.depth, xi)
     }
 

@@ -22,7 +22,7 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-use super::gear::{GearKind, GearSet, MeshKind, ToothForm};
+use super::gear::{EdgeRelief, GearKind, GearSet, MeshKind, ToothForm};
 use super::mesh::PathOfContact;
 use super::profile::{FlankOutline, ProfileDeviation};
 
@@ -119,6 +119,32 @@ pub struct MeshSeparation {
     /// The back flank of the tooth at drive position s touches the back line
     /// of action at position `back_mirror − s` [m].
     pub back_mirror: f64,
+    /// Drive positions [m] beyond which the drive flanks are relieved (a
+    /// tip chamfer whose edge carries no load); ±∞ without relief.
+    pub drive_window: (f64, f64),
+    /// Drive positions [m] beyond which the back flanks are relieved.
+    pub back_window: (f64, f64),
+    /// Reliefs before and after the drive window
+    /// ([`crate::physics::gear::ToothForm::edge_relief`] of gear 2 and
+    /// gear 1), added to the separation beyond it.
+    pub drive_relief: (Option<EdgeRelief>, Option<EdgeRelief>),
+    /// Reliefs before and after the back window.
+    pub back_relief: (Option<EdgeRelief>, Option<EdgeRelief>),
+}
+
+/// Relief [m] and its derivative along the drive position [-] at `pos` for
+/// a window `w` of unrelieved positions and the reliefs `e` before and
+/// after it.
+#[inline(always)]
+fn relief(w: (f64, f64), e: &(Option<EdgeRelief>, Option<EdgeRelief>), pos: f64) -> (f64, f64) {
+    match e {
+        (Some(r), _) if pos < w.0 => {
+            let (v, dv) = r.at(w.0 - pos);
+            (v, -dv)
+        }
+        (_, Some(r)) if pos > w.1 => r.at(pos - w.1),
+        _ => (0.0, 0.0),
+    }
 }
 
 type P = [f64; 2];
@@ -231,6 +257,21 @@ fn position_offset(g1: &ToothForm, path: &PathOfContact) -> f64 {
 }
 
 impl MeshSeparation {
+    /// Relief of the drive flanks [m] at drive position `pos` [m] and its
+    /// derivative along `pos` [-]: zero on the involute path or without a
+    /// relieved edge.
+    #[inline(always)]
+    pub fn drive_relief_at(&self, pos: f64) -> (f64, f64) {
+        relief(self.drive_window, &self.drive_relief, pos)
+    }
+
+    /// Relief of the back flanks [m] at drive position `pos` [m] and its
+    /// derivative along `pos` [-].
+    #[inline(always)]
+    pub fn back_relief_at(&self, pos: f64) -> (f64, f64) {
+        relief(self.back_window, &self.back_relief, pos)
+    }
+
     /// Separation tables of a mesh with the given flank deviations, sampled
     /// every `step` metres over the path of contact plus one base pitch on
     /// each side.
@@ -289,6 +330,29 @@ impl MeshSeparation {
         let drive = table(1.0, &g1_drive, &g2_drive);
         let back = table(-1.0, &g1_back, &g2_back);
         let back_range = (mirror(path.end), mirror(path.start));
-        Self { path, drive, back, normal_backlash: jn, back_range, back_mirror: 2.0 * offset + jn }
+        // A chamfer whose edge carries no load relieves the tip: before the
+        // involute path the tip corner of gear 2 would touch gear 1, after it
+        // that of gear 1 would touch gear 2; beyond the path's ends the
+        // chamfer's relief (`ToothForm::edge_relief`) is
+        // added to the corner's geometric separation, which the tables keep:
+        // the force falls to zero continuously over about one elastic
+        // approach divided by the relief's slope. The back path runs the other way,
+        // mirrored about `back_mirror`.
+        let back_mirror = 2.0 * offset + jn;
+        let (e2, e1) = (g2.edge_relief(), g1.edge_relief());
+        let lo = if e2.is_some() { path.start } else { f64::NEG_INFINITY };
+        let hi = if e1.is_some() { path.end } else { f64::INFINITY };
+        Self {
+            path,
+            drive,
+            back,
+            normal_backlash: jn,
+            back_range,
+            back_mirror,
+            drive_window: (lo, hi),
+            back_window: (back_mirror - hi, back_mirror - lo),
+            drive_relief: (e2, e1),
+            back_relief: (e1, e2),
+        }
     }
 }

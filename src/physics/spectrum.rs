@@ -72,6 +72,14 @@ pub fn mesh_harmonics(signal: &[f64], cycles: usize, count: usize) -> Result<Har
     Ok(Harmonics { mean: x[0].re / n, amplitude, rms })
 }
 
+/// Phases [rad] of mesh harmonics 1..=`count` of a signal spanning exactly
+/// `cycles` mesh cycles: the harmonic i is F^(i) cos(i·2π t/T_m + φ_i).
+pub fn mesh_phases(signal: &[f64], cycles: usize, count: usize) -> Result<Vec<f64>, SpectrumError> {
+    check(signal, cycles, count)?;
+    let x = spectrum(signal);
+    Ok((1..=count).map(|i| x[i * cycles].arg()).collect())
+}
+
 /// The order spectrum: (order, amplitude) for every bin up to `max_order`.
 pub fn order_spectrum(
     signal: &[f64],

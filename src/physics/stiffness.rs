@@ -215,6 +215,8 @@ pub struct PairStiffness {
     pub gear2: ToothComplianceCurve,
     /// Hertzian compliance of the pair [m/N].
     pub hertz: f64,
+    /// Factor on the pair stiffness (the scene's correction, 1 by default) [-].
+    pub scale: f64,
 }
 
 impl PairStiffness {
@@ -227,6 +229,7 @@ impl PairStiffness {
             gear1: ToothComplianceCurve::new(g1, &set.material),
             gear2: ToothComplianceCurve::new(g2, &set.material),
             hertz: hertz_compliance(&set.material, width),
+            scale: set.stiffness_scale(mesh),
         }
     }
 
@@ -236,6 +239,6 @@ impl PairStiffness {
     pub fn at(&self, s: f64) -> f64 {
         let c =
             self.hertz + self.gear1.total_at(self.path.roll_1(s)) + self.gear2.total_at(self.path.roll_2(s));
-        1.0 / c
+        self.scale / c
     }
 }

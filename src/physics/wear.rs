@@ -80,7 +80,7 @@ use super::hertz::{contact_modulus, line_contact, pressure_at, LineContact};
 use super::involute::roll_angle;
 use super::ltca::{SetEquilibrium, SetModel};
 use super::mesh::PathOfContact;
-use super::profile::ProfileDeviation;
+use super::profile::{ProfileDeviation, ProfileEnds};
 use super::wear_state::{FlankExtreme, UpdateRecord, WornState, WornStateError};
 
 /// Archard wear coefficient of the example [m²/N] (MODEL.md §4).
@@ -248,6 +248,11 @@ pub struct WearSettings {
     /// LTCA unless set).
     #[serde(default)]
     pub source: PressureSource,
+    /// What the worn profile is beyond each flank's grid (below its start of
+    /// active profile and past its last point): the end value held (default)
+    /// or the unworn surface.
+    #[serde(default)]
+    pub profile_ends: ProfileEnds,
 }
 
 impl Default for WearSettings {
@@ -263,6 +268,7 @@ impl Default for WearSettings {
             total_depth: 15e-6,
             wearing: WearingFlanks::default(),
             source: PressureSource::QuasiStatic,
+            profile_ends: ProfileEnds::Hold,
         }
     }
 }
@@ -837,6 +843,7 @@ impl WearModel {
     /// The unworn state (κ = 0) on the settings' grids.
     pub fn unworn(&self) -> WornState {
         WornState::unworn(&self.set, self.settings.profile_points, self.settings.face_slices)
+            .with_profile_ends(self.settings.profile_ends)
     }
 
     /// Refuses a state of another gear set, with unusable grids or with

@@ -41,7 +41,7 @@ use serde_json::Value;
 
 use super::gear::{GearSet, RootForm, ToothForm};
 use super::ltca::SetModel;
-use super::profile::ProfileDeviation;
+use super::profile::{ProfileDeviation, ProfileEnds};
 use super::separation::MeshFlanks;
 use super::wear::{active_profile, Flank, GearCycles, UpdateEnd};
 
@@ -222,6 +222,11 @@ fn form_parameters(out: &mut BTreeMap<String, f64>, gear: &str, f: &ToothForm) {
     let (h, a) = f.chamfer.map_or((0.0, 0.0), |c| (c.height, c.angle));
     put("chamfer_height", h);
     put("chamfer_angle", a);
+    // Present only for a relieved chamfer edge, so the prints of sets whose
+    // edges carry load (all sets before the option existed) are unchanged.
+    if !f.tip_corner_carries_load() {
+        put("chamfer_edge_relieved", 1.0);
+    }
 }
 
 impl GearSetPrint {
@@ -238,6 +243,13 @@ impl GearSetPrint {
         p.insert("centre_distance".into(), set.centre_distance);
         p.insert("material.youngs_modulus".into(), set.material.youngs_modulus);
         p.insert("material.poisson_ratio".into(), set.material.poisson_ratio);
+        // Present only when not 1, so the prints of sets without a correction
+        // (all sets before the option existed) are unchanged.
+        for (mesh, scale) in ["sun_planet", "ring_planet"].iter().zip(set.stiffness_scale) {
+            if scale != 1.0 {
+                p.insert(format!("mesh_stiffness.{mesh}_scale"), scale);
+            }
+        }
         let fingerprint = Self::fingerprint_of(&p);
         Self { name: set.name.clone(), fingerprint, parameters: p }
     }
@@ -358,7 +370,7 @@ impl WornState {
         let grid = |flank: Flank| {
             let (lo, hi) = active_profile(set, flank);
             let roll: Vec<f64> = (0..n).map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64).collect();
-            vec![ProfileDeviation { depth: vec![0.0; n], roll }; face_slices.max(1)]
+            vec![ProfileDeviation::new(roll, vec![0.0; n]); face_slices.max(1)]
         };
         Self {
             gear_set: GearSetPrint::of(set),
@@ -375,6 +387,16 @@ impl WornState {
             },
             history: Vec::new(),
         }
+    }
+
+    /// The state with every flank's deviation read as `ends` says beyond its grid.
+    pub fn with_profile_ends(mut self, ends: ProfileEnds) -> Self {
+        for flank in Flank::ALL {
+            for dev in self.flanks.get_mut(flank) {
+                dev.ends = ends;
+            }
+        }
+        self
     }
 
     /// Number of face slices.

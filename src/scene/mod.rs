@@ -13,7 +13,7 @@ mod validate;
 
 use serde::{Deserialize, Serialize};
 
-pub use validate::{Problem, SceneError};
+pub use validate::{default_chamfer, Problem, SceneError};
 
 pub use crate::physics::gear::{Drive, IntegratorKind};
 use crate::physics::gear::{GearSet, Member};
@@ -50,6 +50,9 @@ pub struct Scene {
     /// Inertia overrides; omitted values are derived from the geometry.
     #[serde(default)]
     pub inertia: InertiaSpec,
+    /// Corrections of the tooth-pair stiffness of each mesh.
+    #[serde(default)]
+    pub mesh_stiffness: MeshStiffnessSpec,
     /// Dynamic model and integrator settings.
     #[serde(default)]
     pub dynamics: DynamicsSpec,
@@ -101,6 +104,25 @@ impl Default for SupportSpec {
             carrier_damping_ratio: None,
             planet_damping_ratio: None,
         }
+    }
+}
+
+/// Factors on the tooth-pair stiffness of the potential-energy method, one
+/// per mesh: a correction for what the 2-D tooth model leaves out (rim and
+/// hub compliance, a measured or finite-element stiffness). 1 uses the
+/// method's stiffness as it is.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MeshStiffnessSpec {
+    /// Factor on the sun–planet pair stiffness [-].
+    pub sun_planet_scale: f64,
+    /// Factor on the ring–planet pair stiffness [-].
+    pub ring_planet_scale: f64,
+}
+
+impl Default for MeshStiffnessSpec {
+    fn default() -> Self {
+        Self { sun_planet_scale: 1.0, ring_planet_scale: 1.0 }
     }
 }
 
@@ -255,6 +277,44 @@ pub struct ChamferSpec {
     pub height_mm: f64,
     /// Angle between the chamfer and the tip circle's tangent [deg].
     pub angle_deg: f64,
+    /// Whether the edge where the chamfer meets the involute may touch the
+    /// mating flank (corner contact outside the involute path). `false`
+    /// reads the chamfer as relieving the tip: contact ends at the involute
+    /// (docs/PARAMETERS.md).
+    #[serde(default = "edge_carries_load_default", skip_serializing_if = "is_true")]
+    pub edge_carries_load: bool,
+    /// Radius to which the edge between involute and chamfer is rounded
+    /// [mm]; read only when the edge carries no load: it sets how the
+    /// relief begins (docs/PARAMETERS.md).
+    #[serde(default = "edge_radius_default", skip_serializing_if = "is_edge_radius_default")]
+    pub edge_radius_mm: f64,
+}
+
+/// Default rounding radius of a chamfer's edge [mm]: a deburred edge.
+pub const EDGE_RADIUS_MM: f64 = 0.05;
+
+fn edge_radius_default() -> f64 {
+    EDGE_RADIUS_MM
+}
+
+fn is_edge_radius_default(v: &f64) -> bool {
+    *v == EDGE_RADIUS_MM
+}
+
+fn edge_carries_load_default() -> bool {
+    true
+}
+
+fn is_true(v: &bool) -> bool {
+    *v
+}
+
+impl ChamferSpec {
+    /// A chamfer of radial height `height_mm` [mm] at `angle_deg` [deg] to
+    /// the tip circle's tangent whose edge may carry load.
+    pub fn new(height_mm: f64, angle_deg: f64) -> Self {
+        Self { height_mm, angle_deg, edge_carries_load: true, edge_radius_mm: EDGE_RADIUS_MM }
+    }
 }
 
 /// Number and placement of the planets.
@@ -335,15 +395,112 @@ impl Scene {
     pub fn builtin(name: &str) -> Option<Self> {
         match name {
             "example-2004" => Some(Self::example_2004()),
+            "example-2004-annulus" => Some(Self::example_2004_annulus()),
             _ => None,
         }
     }
 
     /// Names of the built-in gear scenes.
-    pub const BUILTIN: &'static [&'static str] = &["example-2004"];
+    pub const BUILTIN: &'static [&'static str] = &["example-2004", "example-2004-annulus"];
+
+    /// The calibration plan (TOML) of a built-in scene made by
+    /// `planetwear calibrate`, if it has one.
+    pub fn builtin_plan(name: &str) -> Option<&'static str> {
+        match name {
+            "example-2004" => Some(include_str!("example-2004.calibration.toml")),
+            _ => None,
+        }
+    }
 
     /// Checks every rule and converts to SI.
     pub fn validate(&self) -> Result<GearSet, SceneError> {
         validate::validate(self)
     }
+
+    /// The scene with its derived defaults written out: the tip chamfers of
+    /// sun and planet and every mass and moment of inertia, so that each of
+    /// them has a key with a value (to edit, or to fit with `calibrate`).
+    pub fn explicit(&self) -> Result<Self, SceneError> {
+        let set = self.validate()?;
+        let mut s = self.clone();
+        for g in [&mut s.sun, &mut s.planet] {
+            if g.tip_chamfer.is_none() {
+                g.tip_chamfer = Some(default_chamfer(g.module_mm));
+            }
+        }
+        let b = &set.bodies;
+        let i = &mut s.inertia;
+        i.sun_mass_kg = Some(b.sun.mass);
+        i.sun_inertia_kg_m2 = Some(b.sun.inertia);
+        i.planet_mass_kg = Some(b.planet.mass);
+        i.planet_inertia_kg_m2 = Some(b.planet.inertia);
+        i.ring_mass_kg = Some(b.ring.mass);
+        i.ring_inertia_kg_m2 = Some(b.ring.inertia);
+        i.carrier_mass_kg = Some(b.carrier.mass);
+        i.carrier_inertia_kg_m2 = Some(b.carrier.inertia);
+        Ok(s)
+    }
+
+    /// The real number at `key`, a dotted path of the scene file
+    /// (`inertia.sun_inertia_kg_m2`, `sun.tip_chamfer.height_mm`), in the
+    /// file's units.
+    pub fn value_at(&self, key: &str) -> Result<f64, KeyError> {
+        let doc = toml::Value::try_from(self)
+            .map_err(|e| KeyError::Unusable { key: key.into(), why: e.to_string() })?;
+        let mut v = &doc;
+        for part in key.split('.') {
+            v = v.get(part).ok_or_else(|| KeyError::Unknown { key: key.into() })?;
+        }
+        match v {
+            toml::Value::Float(x) => Ok(*x),
+            _ => Err(KeyError::NotReal { key: key.into() }),
+        }
+    }
+
+    /// The scene with the real number at `key` set to `value` (file units).
+    pub fn with_value(&self, key: &str, value: f64) -> Result<Self, KeyError> {
+        self.value_at(key)?;
+        self.with_toml(key, toml::Value::Float(value))
+    }
+
+    /// The scene with the value at `key` (an existing key, or a new key of
+    /// an existing table) replaced by `value`, of any type the key takes.
+    pub fn with_toml(&self, key: &str, value: toml::Value) -> Result<Self, KeyError> {
+        let unusable = |why: String| KeyError::Unusable { key: key.into(), why };
+        let mut doc = toml::Value::try_from(self).map_err(|e| unusable(e.to_string()))?;
+        let (path, last) = key.rsplit_once('.').map_or(("", key), |(p, l)| (p, l));
+        let mut v = &mut doc;
+        for part in path.split('.').filter(|p| !p.is_empty()) {
+            v = v.get_mut(part).ok_or_else(|| KeyError::Unknown { key: key.into() })?;
+        }
+        let table = v.as_table_mut().ok_or_else(|| KeyError::Unknown { key: key.into() })?;
+        table.insert(last.to_string(), value);
+        Scene::deserialize(doc).map_err(|e| unusable(e.to_string()))
+    }
+}
+
+/// A scene key that cannot be read or set as a real number.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum KeyError {
+    /// No such key in the scene (an optional key must be written out first:
+    /// [`Scene::explicit`] writes the derived defaults).
+    #[error("{key}: no such key in the scene (keys are dotted paths of the scene file, e.g. inertia.sun_inertia_kg_m2, sun.tip_chamfer.height_mm)")]
+    Unknown {
+        /// The key.
+        key: String,
+    },
+    /// The key holds something other than a real number.
+    #[error("{key}: not a real-valued key (counts, names and tables cannot be fitted)")]
+    NotReal {
+        /// The key.
+        key: String,
+    },
+    /// The scene could not be converted with the value.
+    #[error("{key}: {why}")]
+    Unusable {
+        /// The key.
+        key: String,
+        /// The converter's message.
+        why: String,
+    },
 }

@@ -59,7 +59,7 @@ impl SceneError {
 /// height at 45° to the tip circle, a common edge break for hobbed and
 /// shaved automotive gears.
 pub fn default_chamfer(module_mm: f64) -> ChamferSpec {
-    ChamferSpec { height_mm: 0.1 * module_mm, angle_deg: 45.0 }
+    ChamferSpec::new(0.1 * module_mm, 45.0)
 }
 
 struct Checker {
@@ -100,7 +100,19 @@ impl Checker {
             );
         }
         self.in_range(&name_a, c.angle_deg, 0.0, 90.0, "angle to the tip circle's tangent");
-        Chamfer { height: c.height_mm * 1e-3, angle: c.angle_deg.to_radians() }
+        if !(c.edge_radius_mm.is_finite() && c.edge_radius_mm > 0.0 && c.edge_radius_mm <= 1.0) {
+            self.fail(
+                &format!("{key}.tip_chamfer.edge_radius_mm"),
+                c.edge_radius_mm,
+                "must lie above 0 and at most 1 mm (the rounding of the chamfer's edge)",
+            );
+        }
+        Chamfer {
+            height: c.height_mm * 1e-3,
+            angle: c.angle_deg.to_radians(),
+            edge_carries_load: c.edge_carries_load,
+            edge_radius: c.edge_radius_mm * 1e-3,
+        }
     }
 
     fn external(&mut self, key: &str, g: &ExternalGearSpec) -> ToothForm {
@@ -144,6 +156,19 @@ impl Checker {
             return form;
         }
         let rb = form.base_radius() * 1e3;
+        if let Some(slope) = form.edge_relief().map(|e| e.slope).filter(|s| s.is_nan() || *s <= 0.0) {
+            let alpha_e = (rb / (form.involute_tip_radius() * 1e3)).clamp(-1.0, 1.0).acos().to_degrees();
+            self.fail(
+                &n("tip_chamfer.angle_deg"),
+                chamfer_spec.angle_deg,
+                format!(
+                    "must be below {:.2}° (90° less the involute's pressure angle at the chamfer's edge) \
+                     when the edge carries no load: the chamfer must fall away from the involute \
+                     (relief slope {slope:.3})",
+                    90.0 - alpha_e
+                ),
+            );
+        }
         if g.tip_radius_mm <= rb {
             self.fail(
                 &n("tip_radius_mm"),
@@ -377,6 +402,13 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
             c.positive(name, v);
         }
     }
+    let ms = &scene.mesh_stiffness;
+    for (name, v) in [
+        ("mesh_stiffness.sun_planet_scale", ms.sun_planet_scale),
+        ("mesh_stiffness.ring_planet_scale", ms.ring_planet_scale),
+    ] {
+        c.in_range(name, v, 0.1, 10.0, "a correction factor on the energy method's pair stiffness");
+    }
     let d = &scene.dynamics;
     if !(d.mesh_damping_ratio.is_finite() && (0.0..1.0).contains(&d.mesh_damping_ratio)) {
         c.fail("dynamics.mesh_damping_ratio", d.mesh_damping_ratio, "must be at least 0 and below 1");
@@ -463,6 +495,7 @@ pub(super) fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         held: op.held,
         input: op.input,
         input_torque: op.input_torque_nm,
+        stiffness_scale: [ms.sun_planet_scale, ms.ring_planet_scale],
         analysis: Analysis {
             positions_per_mesh_cycle: a.positions_per_mesh_cycle as usize,
             profile_points: a.profile_points as usize,
