@@ -134,11 +134,45 @@ enum Command {
         #[arg(long)]
         quick: bool,
     },
+    /// Fit chosen scene parameters (by their scene keys, with bounds) to target natural
+    /// frequencies and loaded double-contact shares; writes the calibrated scene.
+    Calibrate {
+        /// A plan file (TOML: base, name, [set], [[target]], [[free]]) or a built-in scene
+        /// whose calibration to run (example-2004).
+        #[arg(long)]
+        plan: String,
+        /// Write the calibrated scene (TOML, editable) to this file, atomically.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print the plan (to edit as a starting point) instead of running it.
+        #[arg(long)]
+        show_plan: bool,
+        /// Print the report as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Every claim of the study beside ours, with tolerance and verdict, and the published
+    /// benchmarks: writes DIR/VALIDATION.md and DIR/validation/ (figures, JSON).
+    Validate {
+        /// Output directory (`--out docs` regenerates docs/VALIDATION.md).
+        #[arg(long)]
+        out: PathBuf,
+        /// Reduced grid (sweeps 3000–14000 rpm in 250 rpm steps, no wear-resolution check).
+        #[arg(long)]
+        quick: bool,
+        /// The scene to validate (default the built-in example-2004).
+        #[arg(long, default_value = "example-2004")]
+        scene: String,
+    },
     /// Quasi-static loaded tooth contact analysis of both meshes and of the whole set.
     Ltca {
         /// A built-in scene name (example-2004) or a scene file (TOML).
         #[arg(long)]
         scene: String,
+        /// Worn-profile state file (from `planetwear wear`): load sharing and loaded
+        /// transmission error of the worn set.
+        #[arg(long)]
+        wear_state: Option<PathBuf>,
         /// Input torque [N·m], overriding the scene's.
         #[arg(long)]
         torque: Option<f64>,
@@ -200,6 +234,26 @@ enum WearAction {
         /// Print the comparison as JSON (SI units).
         #[arg(long)]
         json: bool,
+    },
+    /// Controlled experiments on the cause of the wear effect: each variant changes one
+    /// modelling factor, runs the wear model to κ and compares the static and dynamic
+    /// figures at κ = 0 and κ.
+    Effect {
+        /// A built-in scene name or a scene file: the base of the experiments.
+        #[arg(long)]
+        scene: String,
+        /// Geometry state κ to wear to.
+        #[arg(long, default_value_t = 6)]
+        kappa: u32,
+        /// Input speeds [rpm] of the dynamic figures (off resonance).
+        #[arg(long, value_delimiter = ',', default_value = "1500,2000,2750,3000")]
+        speeds: Vec<f64>,
+        /// Only these variants (keys as printed), comma-separated; default: all.
+        #[arg(long, value_delimiter = ',')]
+        only: Vec<String>,
+        /// Output directory (effect.md, effect.json).
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Run the wear model from the unworn set to κ: states kappa-<κ>.json,
     /// summary.json and plots of wear depth against roll angle.
@@ -623,6 +677,43 @@ fn run(cli: Cli) -> Result<()> {
                 println!("{}", serde_json::to_string_pretty(&docs)?);
             }
         }
+        Command::Wear { action: WearAction::Effect { scene, kappa, speeds, only, out } } => {
+            use planetwear::analysis::wear_effect::{run_all, variants};
+            let base = load_scene(&scene)?;
+            validated(&base)?;
+            for rpm in &speeds {
+                if !(rpm.is_finite() && *rpm > 0.0) {
+                    bail!("--speeds {rpm}: every speed must be a finite positive input speed in rpm");
+                }
+            }
+            let mut list = variants(&base);
+            if !only.is_empty() {
+                let keys: Vec<String> = list.iter().map(|v| v.key.clone()).collect();
+                if let Some(bad) = only.iter().find(|k| !keys.contains(k)) {
+                    bail!("--only {bad}: not a variant; the variants are {}", keys.join(", "));
+                }
+                list.retain(|v| only.contains(&v.key));
+            }
+            std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+            let started = std::time::Instant::now();
+            let results: Vec<_> = run_all(&list, kappa, &speeds)
+                .into_iter()
+                .collect::<Result<_, _>>()
+                .map_err(|e| anyhow::anyhow!("wear effect: {e}"))?;
+            let table = planetwear::report::wear_effect::markdown(&results);
+            write_atomic(&out.join("effect.md"), table.as_bytes())?;
+            write_atomic(&out.join("effect.json"), serde_json::to_string_pretty(&results)?.as_bytes())?;
+            for v in &list {
+                println!("{}: {}", v.key, v.description);
+            }
+            println!("\n{table}");
+            println!(
+                "{} variants in {:.1} s; effect.md and effect.json in {}",
+                results.len(),
+                started.elapsed().as_secs_f64(),
+                out.display()
+            );
+        }
         Command::Wear {
             action: WearAction::Step { scene, state, out, threshold, revolutions, ring, dynamic_speed },
         } => {
@@ -656,6 +747,43 @@ fn run(cli: Cli) -> Result<()> {
             );
         }
         Command::WorkPrecision { out, quick } => work_precision(&out, quick)?,
+        Command::Validate { out, quick, scene } => {
+            use planetwear::analysis::validation::{validate, ValidationPlan};
+            let s = load_scene(&scene)?;
+            let set = validated(&s)?;
+            let plan = if quick { ValidationPlan::quick() } else { ValidationPlan::full() };
+            let v = validate(&s, &plan).map_err(|e| anyhow::anyhow!("validation of {scene}: {e}"))?;
+            let command = format!(
+                "planetwear validate --out {}{}{}",
+                out.display(),
+                if quick { " --quick" } else { "" },
+                if scene == "example-2004" { String::new() } else { format!(" --scene {scene}") }
+            );
+            planetwear::report::validation::write_report(&v, &out, set.sun.face_width, &command)?;
+            for r in &v.rows {
+                println!(
+                    "{:<5} {:<40} ours {}",
+                    if r.verdict == planetwear::analysis::validation::Verdict::Pass {
+                        "pass"
+                    } else {
+                        "FAIL"
+                    },
+                    r.id,
+                    r.ours
+                );
+            }
+            let failing = planetwear::report::validation::failing(&v);
+            println!(
+                "{} of {} rows pass ({:.0} s); report {}",
+                v.rows.len() - failing.len(),
+                v.rows.len(),
+                v.seconds,
+                out.join("VALIDATION.md").display()
+            );
+        }
+        Command::Calibrate { plan, out, show_plan, json } => {
+            calibrate(&plan, out.as_deref(), show_plan, json)?
+        }
         Command::Fmu { action: FmuAction::Pack { out, library } } => {
             let library = match library {
                 Some(l) => l,
@@ -715,7 +843,7 @@ fn run(cli: Cli) -> Result<()> {
             };
             report_modes(&name, &lumped, json)?;
         }
-        Command::Ltca { scene, torque, samples, json, out, plots } => {
+        Command::Ltca { scene, wear_state, torque, samples, json, out, plots } => {
             let mut scene = load_scene(&scene)?;
             if let Some(t) = torque {
                 scene.operation.input_torque_nm = t;
@@ -727,7 +855,16 @@ fn run(cli: Cli) -> Result<()> {
             if set.input_torque <= 0.0 {
                 bail!("--torque: the LTCA needs a positive input torque (got {} N·m)", set.input_torque);
             }
-            let study = LtcaStudy::run(&set, set.analysis.positions_per_mesh_cycle);
+            let state = match &wear_state {
+                Some(path) => Some(
+                    planetwear::files::read_worn_state(path, &set)
+                        .with_context(|| format!("--wear-state {}", path.display()))?,
+                ),
+                None => None,
+            };
+            let model = state.as_ref().map_or_else(|| SetModel::new(&set), |s| s.set_model(&set));
+            let kappa = state.as_ref().map(|s| s.kappa);
+            let study = LtcaStudy::run_on(&set, &model, set.analysis.positions_per_mesh_cycle, kappa);
             let doc = study.to_json();
             let text = serde_json::to_string_pretty(&doc)?;
             if let Some(path) = &out {
@@ -748,6 +885,113 @@ fn run(cli: Cli) -> Result<()> {
         }
     }
     Ok(())
+}
+
+fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: bool) -> Result<()> {
+    use planetwear::analysis::calibrate::{calibrate, CalibrationError, PlanFile};
+    let (text, dir) = match Scene::builtin_plan(plan) {
+        Some(t) => (t.to_string(), PathBuf::from(".")),
+        None => {
+            let path = Path::new(plan);
+            if !path.is_file() {
+                bail!("--plan {plan}: neither a built-in scene with a calibration (example-2004) nor a plan file");
+            }
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading plan file {plan}"))?;
+            (text, path.parent().map(Path::to_path_buf).unwrap_or_default())
+        }
+    };
+    if show_plan {
+        print!("{text}");
+        return Ok(());
+    }
+    let file = PlanFile::from_toml(&text).with_context(|| format!("--plan {plan}"))?;
+    let base_name = if Scene::builtin(&file.base).is_some() {
+        file.base.clone()
+    } else {
+        dir.join(&file.base).to_string_lossy().into_owned()
+    };
+    let base = load_scene(&base_name).with_context(|| format!("base = {} in --plan {plan}", file.base))?;
+    let plan_value = file.plan(&base).with_context(|| format!("--plan {plan}"))?;
+    match calibrate(&plan_value) {
+        Ok(done) => {
+            if json {
+                println!("{}", serde_json::to_string_pretty(&done.report)?);
+            } else {
+                print_calibration(&done.report, &file.base);
+            }
+            if let Some(path) = out {
+                write_atomic(path, done.scene.to_toml().as_bytes())?;
+                if !json {
+                    println!("wrote the calibrated scene {} to {}", done.scene.name, path.display());
+                }
+            }
+            Ok(())
+        }
+        Err(CalibrationError::IllPosed { why, report }) => {
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print_calibration(&report, &file.base);
+            }
+            bail!("ill-posed calibration, no scene written: {why}")
+        }
+        Err(e) => Err(e.into()),
+    }
+}
+
+fn print_calibration(r: &planetwear::analysis::calibrate::Report, base: &str) {
+    println!(
+        "calibration of {} from {base}: {} iterations, {} evaluations, {} contact models, {:.1} s",
+        r.name, r.iterations, r.evaluations, r.contact_models, r.seconds
+    );
+    println!("targets:");
+    println!(
+        "  {:<3} {:<44} {:>11} {:>8} {:>11} {:>11} {:>9}  met",
+        "#", "measure", "target", "tol", "start", "reached", "residual"
+    );
+    for (i, t) in r.targets.iter().enumerate() {
+        println!(
+            "  {:<3} {:<44} {:>11.4} {:>7.2}% {:>11.4} {:>11.4} {:>+8.3}%  {}",
+            i + 1,
+            t.target.measure.describe(),
+            t.target.value,
+            100.0 * t.target.tolerance,
+            t.start,
+            t.reached,
+            100.0 * t.residual,
+            if t.met { "yes" } else { "NO" }
+        );
+    }
+    println!("parameters (file units):");
+    for (k, p) in r.parameters.iter().enumerate() {
+        println!(
+            "  p{} {}: bounds [{:.4e}, {:.4e}], start {:.5e}, fitted {:.5e}, ratio {:.4}{}",
+            k + 1,
+            p.free.name(),
+            p.free.min,
+            p.free.max,
+            p.start,
+            p.fitted,
+            p.ratio,
+            p.at_bound.as_ref().map(|b| format!("  AT ITS {}", b.to_uppercase())).unwrap_or_default()
+        );
+    }
+    print!("sensitivity ∂ln(target)/∂ln(parameter) at the fit:\n  {:<3}", "#");
+    for k in 0..r.parameters.len() {
+        print!(" {:>9}", format!("p{}", k + 1));
+    }
+    println!();
+    for (i, _) in r.targets.iter().enumerate() {
+        print!("  {:<3}", i + 1);
+        for p in &r.parameters {
+            print!(" {:>+9.4}", p.sensitivity[i]);
+        }
+        println!();
+    }
+    println!(
+        "singular values of the scaled Jacobian: {}",
+        r.singular_values.iter().map(|v| format!("{v:.3e}")).collect::<Vec<_>>().join(", ")
+    );
 }
 
 fn work_precision(out: &Path, quick: bool) -> Result<()> {
@@ -871,7 +1115,12 @@ fn report_modes(name: &str, set: &LumpedSet, json: bool) -> Result<()> {
 
 fn print_summary(doc: &serde_json::Value) {
     let width_mm = doc["face_width"].as_f64().unwrap_or(1.0) * 1e3;
-    println!("LTCA of {} at {} N·m", doc["scene"].as_str().unwrap_or("?"), doc["input_torque"]);
+    println!(
+        "LTCA of {} at {} N·m (κ = {})",
+        doc["scene"].as_str().unwrap_or("?"),
+        doc["input_torque"],
+        doc["kappa"]
+    );
     for m in doc["meshes"].as_array().into_iter().flatten() {
         let f = |k: &str| m[k].as_f64().unwrap_or(f64::NAN);
         let g = |k: &str, s: &str| m[k][s].as_f64().unwrap_or(f64::NAN);
@@ -911,9 +1160,10 @@ fn print_summary(doc: &serde_json::Value) {
         .map(|v| format!("{:.2}", v.as_f64().unwrap_or(f64::NAN) / width_mm))
         .collect();
     println!(
-        "  planets: mean loads {} N/mm, load sharing factor {:.4}",
+        "  planets: mean loads {} N/mm, load sharing factor {:.4}; sun rotation along the line of action peak-to-peak {:.3} µm",
         loads.join(", "),
-        p["load_sharing_factor"].as_f64().unwrap_or(f64::NAN)
+        p["load_sharing_factor"].as_f64().unwrap_or(f64::NAN),
+        p["sun_transmission_error"]["peak_to_peak"].as_f64().unwrap_or(f64::NAN) * 1e6
     );
 }
 

@@ -21,6 +21,8 @@ pub struct LtcaStudy {
     pub whole_set: SetLtca,
     /// Per mesh: ISO c'·b and c_γα·b [N/m] and the energy-method single-pair extremes.
     pub stiffness_summary: Vec<Value>,
+    /// The worn-profile state's κ the flanks carry (`None`: unworn).
+    pub kappa: Option<u32>,
 }
 
 /// ISO 6336-1 stiffness of a mesh of the set: profile shifts from the tooth
@@ -53,7 +55,12 @@ fn iso_for(set: &GearSet, mesh: MeshKind, contact_ratio: f64) -> crate::physics:
 impl LtcaStudy {
     /// Runs the single-mesh and whole-set analyses at `samples` positions per mesh cycle.
     pub fn run(set: &GearSet, samples: usize) -> Self {
-        let model = SetModel::new(set);
+        Self::run_on(set, &SetModel::new(set), samples, None)
+    }
+
+    /// The analyses on the contact models `model` (e.g. the flanks of a
+    /// worn-profile state of κ = `kappa`).
+    pub fn run_on(set: &GearSet, model: &SetModel, samples: usize, kappa: Option<u32>) -> Self {
         let load = set.mesh_load_per_planet();
         let mut meshes = Vec::new();
         let mut stiffness_summary = Vec::new();
@@ -87,8 +94,8 @@ impl LtcaStudy {
             }));
             meshes.push(r);
         }
-        let whole_set = set_ltca(set, &model, samples);
-        Self { set: set.clone(), meshes, whole_set, stiffness_summary }
+        let whole_set = set_ltca(set, model, samples);
+        Self { set: set.clone(), meshes, whole_set, stiffness_summary, kappa }
     }
 
     /// The JSON document (SI units).
@@ -150,6 +157,7 @@ impl LtcaStudy {
         let w = &self.whole_set;
         json!({
             "scene": set.name,
+            "kappa": self.kappa.unwrap_or(0),
             "units": "SI: m, N, N/m, Pa, rad, N·m",
             "input_torque": set.input_torque,
             "face_width": set.sun.face_width,
@@ -159,6 +167,7 @@ impl LtcaStudy {
                 "angles": set.planet_angles,
                 "mean_load": w.planet_mean_load,
                 "load_sharing_factor": w.load_sharing_factor,
+                "sun_transmission_error": CycleStats::of(&w.sun_approach),
                 "travel": w.travel,
                 "sun_approach": w.sun_approach,
                 "load": w.planet_load,

@@ -8,6 +8,8 @@ pub mod pack;
 pub mod plot;
 pub mod regression;
 pub mod sweep;
+pub mod validation;
 pub mod wear;
+pub mod wear_effect;
 
 pub use plot::write_atomic;

@@ -1,0 +1,16 @@
+//! Studies over the physics: experiments that vary a scene and compare what
+//! the model gives. This stage reads scenes and the physics and writes no
+//! files; the command line and the reports present its results.
+//!
+//! - [`calibrate`]: scene parameters fitted to target natural frequencies
+//!   and double-contact shares.
+//! - [`peaks`]: resonance peaks of a sweep and the mode behind each.
+//! - [`validation`]: every claim of the study beside ours, with tolerance
+//!   and verdict, and the published benchmarks.
+//! - [`wear_effect`]: the cause of the wear effect on the dynamic loads,
+//!   one modelling factor at a time.
+
+pub mod calibrate;
+pub mod peaks;
+pub mod validation;
+pub mod wear_effect;
