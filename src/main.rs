@@ -157,7 +157,7 @@ enum Command {
         /// Output directory (`--out docs` regenerates docs/VALIDATION.md).
         #[arg(long)]
         out: PathBuf,
-        /// Reduced grid (sweeps 3000–14000 rpm in 250 rpm steps, no wear-resolution check).
+        /// Reduced grid (3000–14000 rpm in 250 rpm steps, 100 rpm from 6000 to 10000; no wear-resolution check).
         #[arg(long)]
         quick: bool,
         /// The scene to validate (default the built-in example-2004).
