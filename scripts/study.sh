@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The main job: the published example (MODEL.md §1) end to end, with plots.
+# The main job: the published example (docs/PARAMETERS.md) end to end, with plots.
 # Stages: scene, loaded tooth contact analysis, natural modes, the native
-# speed sweep, the Archard wear model to κ = 6 (MODEL.md §4), the FMU packed
+# speed sweep, the Archard wear model to κ = 6, the validation against the
+# study (rewrites docs/VALIDATION.md and docs/validation/), the FMU packed
 # with the example's worn states, speed sweeps up and down at κ = 0, 2, 4, 6
 # through the FMU driven by fmpy, the study's plots and report
 # (out/study/report.md), and the drivetrain co-simulation example.
@@ -34,6 +35,8 @@ stage "native sweep (unworn)" "$bin" sweep --scene example-2004 --from 500 --to 
     --direction both --histories 3000,5000 --out out/sweep
 echo "== wear model to kappa = 6 (out/wear/: states, summary.json, plots)"
 stage "wear model to κ = 6" "$bin" wear run --scene example-2004 --to-kappa 6 --out out/wear
+echo "== validation against the study, full grid (docs/VALIDATION.md, docs/validation/)"
+stage "validation" "$bin" validate --out docs
 echo "== FMU: pack fmu/planetwear.fmu (with the example's worn states)"
 stage "FMU pack" "$bin" fmu pack --out fmu/planetwear.fmu
 echo "== sweeps through the FMU at kappa = 0, 2, 4, 6 (out/study/)"
@@ -43,4 +46,4 @@ mv "$timings" out/timings.json
     --timings out/timings.json
 echo "== drivetrain co-simulation with fmpy (out/cosim.png)"
 .venv/bin/python examples/drivetrain_cosim.py --out out/cosim.png
-echo "== done: out/study/report.md (the study), out/wear/, out/sweep/, out/ltca.json, out/modes.txt, out/cosim.png, out/plots/"
+echo "== done: docs/VALIDATION.md (the study beside ours), out/study/report.md (the study), out/wear/, out/sweep/, out/ltca.json, out/modes.txt, out/cosim.png, out/plots/"
