@@ -33,13 +33,14 @@ def _window_name(mesh, quantity):
 
 
 def sweep(fmu, unzipdir, wear_state, speeds, direction, history_speeds=(), progress=None,
-          run_in_revolutions=1, window_revolutions=2, instance="sweep"):
+          run_in_revolutions=1, window_revolutions=2, instance="sweep", scene_file=""):
     """Sweeps `speeds` [rpm] (already in sweep order) with one instance.
 
     Returns (rows, histories): rows = one dict per speed with the windowed
     harmonics of planet 1's sun-planet and ring-planet mesh forces in N/mm
     and the wall time; histories = {rpm: dict of arrays} at `history_speeds`.
-    `wear_state` is the worn-profile state file ('' for the unworn set).
+    `wear_state` is the worn-profile state file ('' for the unworn set);
+    `scene_file` a scene file the FMU loads ('' for its built-in example).
     """
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -49,6 +50,8 @@ def sweep(fmu, unzipdir, wear_state, speeds, direction, history_speeds=(), progr
     try:
         slave.setupExperiment(startTime=0.0)
         slave.setString([vr["wearStateFile"]], [str(wear_state)])
+        if scene_file:
+            slave.setString([vr["sceneFile"]], [str(scene_file)])
         slave.setInteger([vr["driveMode"]], [2])
         # Parameters cannot be read before initialisation (FMI 2.0 call order): the sun's
         # teeth and the face width come from the model description's start values.

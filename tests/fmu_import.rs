@@ -26,8 +26,11 @@ fn the_packed_fmu_runs_under_the_fmi_crate() {
     }
     let mut out = [0.0; 2];
     Common::get_real(&mut inst, &[vr::PLANET_1_SUN_MESH_FORCE, vr::SUN_SPEED], &mut out).expect("get");
-    // The mean tooth force is 7892 N; one instant of a running mesh lies within ±30 % of it.
-    assert!(out[0] > 0.7 * 7892.0 && out[0] < 1.3 * 7892.0, "{out:?}");
+    // The mean tooth force is 7892 N; one instant of a running mesh lies
+    // within ±60 % of it (the example's mesh force swings between 0.46 and
+    // 1.53 of the mean at 3000 rpm: `planetwear simulate --scene
+    // example-2004 --stop 0.02 --step 1e-4`).
+    assert!(out[0] > 0.4 * 7892.0 && out[0] < 1.6 * 7892.0, "{out:?}");
     assert!((out[1] / 314.159 - 1.0).abs() < 0.05, "{out:?}");
     Common::terminate(&mut inst).expect("terminate");
 }
