@@ -1,4 +1,4 @@
-"""The study end to end, after the wear model (MODEL.md §4–5): speed sweeps up
+"""The study end to end, after the wear model (docs/MODEL.md §4–5): speed sweeps up
 and down of the planetwear FMU at the worn-profile states κ = 0, 2, 4, 6,
 driven by fmpy (scripts/study_fmu.py), then the study's plots and a Markdown
 report with its figures and how long each stage took.
@@ -245,7 +245,7 @@ def main():
               f"Scene: {summary.get('scene', 'example-2004')}. FMU: `{fmu}`. Sweeps {a.start:.0f}–{a.stop:.0f} rpm in "
               f"{a.step:.0f} rpm steps, up and down, at κ = {', '.join(map(str, kappas))}; one input revolution "
               "of run-in and two revolutions measured per speed, the state carried from speed to speed.", "",
-              "## Wear (quasi-static Archard, MODEL.md §4)", "",
+              "## Wear (quasi-static Archard, docs/MODEL.md §4)", "",
               "| κ | cycles (sun tooth) | input revolutions | max wear sun [µm] at roll [deg] | "
               "max wear planet [µm] at roll [deg] |", "|---|---|---|---|---|"]
     for s in summary["states"]:

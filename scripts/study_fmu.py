@@ -1,7 +1,7 @@
 """Speed sweeps of the planetwear FMU driven by fmpy, one instance per
 (wear state, direction), the steady state of each speed carried to the next.
 
-Protocol per speed (MODEL.md §3, the study's): driveMode 2 keeps the
+Protocol per speed (docs/MODEL.md §3, the study's): driveMode 2 keeps the
 published torque boundary condition and steps the set's rigid-body speed to
 each new inputSpeedReference with the elastic state kept (the continuation of
 the native `planetwear sweep`), one input revolution of run-in, then

@@ -1,4 +1,4 @@
-//! Geometry of the example against MODEL.md §1 and FORMULAS.md.
+//! Geometry of the example against docs/MODEL.md §1 and docs/FORMULAS.md.
 
 use planetwear::physics::gear::MeshKind;
 use planetwear::physics::mesh::PathOfContact;
@@ -37,12 +37,12 @@ fn nominal_contact_ratios_follow_from_the_radii() {
     let set = example();
     let sp = PathOfContact::new(&set, MeshKind::SunPlanet);
     let rp = PathOfContact::new(&set, MeshKind::RingPlanet);
-    // Closed forms of FORMULAS.md evaluated by hand with the given radii:
+    // Closed forms of docs/FORMULAS.md evaluated by hand with the given radii:
     // sun–planet (sqrt(26.37²−rb_s²) − (39 sin α − sqrt(15.25²−rb_p²))) / p_b = 1.3436,
     // ring–planet (sqrt(15.25²−rb_p²) − sqrt(51.725²−rb_r²) + 39 sin α) / p_b = 1.3598.
     assert!((sp.nominal_contact_ratio() - 1.3436).abs() < 2e-3, "{}", sp.nominal_contact_ratio());
     assert!((rp.nominal_contact_ratio() - 1.3598).abs() < 2e-3, "{}", rp.nominal_contact_ratio());
-    // Sun active profile from ~13.4° to ~27.6° of roll (MODEL.md §1).
+    // Sun active profile from ~13.4° to ~27.6° of roll (docs/MODEL.md §1).
     assert!((sp.roll_1(sp.start_sharp).to_degrees() - 13.4).abs() < 0.05);
     assert!((sp.roll_1(sp.end_sharp).to_degrees() - 27.6).abs() < 0.05);
     // The chamfer shortens the path on the involutes.

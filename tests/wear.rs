@@ -48,7 +48,7 @@ fn interp(x: &[f64], y: &[f64], at: f64) -> f64 {
 
 #[test]
 fn cycles_per_input_revolution_follow_from_the_carrier_frame() {
-    // MODEL.md §4.5, carrier held, sun driven: sun n, planet Z_s/Z_p, ring n·Z_s/Z_r.
+    // docs/MODEL.md §4.5, carrier held, sun driven: sun n, planet Z_s/Z_p, ring n·Z_s/Z_r.
     let c = cycles_per_input_revolution(&example());
     assert!((c.sun - 4.0).abs() < 1e-12, "{c:?}");
     assert!((c.planet - 34.0 / 18.0).abs() < 1e-12, "{c:?}");
@@ -470,7 +470,7 @@ proptest! {
 
 #[test]
 fn most_wear_in_the_sun_dedendum_and_the_planet_wears_less() {
-    // MODEL.md §4, expected shape: per input revolution the sun wears most
+    // docs/MODEL.md §4, expected shape: per input revolution the sun wears most
     // in its dedendum (the lowest quarter of its active profile) and more
     // than the planet anywhere. Nothing is negative.
     let set = example();
@@ -653,7 +653,7 @@ fn equal_face_slices_reproduce_the_profile_grid() {
 
 #[test]
 fn six_updates_of_the_example() {
-    // The example's figures (MODEL.md §4: ε^κ = 2.5 µm, six updates).
+    // The example's figures (docs/MODEL.md §4: ε^κ = 2.5 µm, six updates).
     // Printed with `cargo test --release --test wear -- --nocapture six_updates`.
     let set = example();
     let settings = WearSettings::default();

@@ -1,7 +1,7 @@
 """One campaign task: a continuation sweep of the FMU over the speed grid
 for one (wear state, sun torque, direction), its points written one by one.
 
-Protocol per speed (scripts/study_fmu.py, MODEL.md §3): driveMode 2 keeps
+Protocol per speed (scripts/study_fmu.py, docs/MODEL.md §3): driveMode 2 keeps
 the torque boundary condition and steps the set's rigid-body speed to each
 new inputSpeedReference with the elastic state kept; `run_in_cycles` mesh
 cycles of run-in, then `window_cycles` whose mesh-force harmonics the FMU

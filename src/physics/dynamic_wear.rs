@@ -1,6 +1,6 @@
 //! Wear driven by the tooth loads of a dynamic run (beyond the study).
 //!
-//! The study's wear cycle (MODEL.md §4.1, [`super::wear`]) takes each tooth
+//! The study's wear cycle (docs/MODEL.md §4.1, [`super::wear`]) takes each tooth
 //! pair's load from the quasi-static LTCA. Here the pair loads come instead
 //! from the steady state of the nonlinear dynamic model at an input speed:
 //!

@@ -251,7 +251,7 @@ impl ToothForm {
     }
 
     /// Polar moment of inertia of the gear body about its axis per the
-    /// default of MODEL.md §1 [kg·m²]: an annulus from the bore to the root
+    /// default of docs/PARAMETERS.md [kg·m²]: an annulus from the bore to the root
     /// circle (external) or from the tooth tips to the rim outside (ring).
     pub fn body_inertia(&self, density: f64) -> f64 {
         let (ri, ro) = match self.kind {
@@ -411,7 +411,7 @@ pub enum Drive {
     /// Constant input torque as [`Drive::Torque`], and each new speed
     /// reference steps the set's rigid-body speed to it, keeping the elastic
     /// state (deflections and vibration velocities): the continuation of a
-    /// speed sweep (MODEL.md §3) with the published torque boundary
+    /// speed sweep (docs/MODEL.md §3) with the published torque boundary
     /// condition, which a stiff shaft from a constant-speed source would
     /// change (it clamps the input member and shifts the rotational modes).
     SpeedSteps,
@@ -460,7 +460,7 @@ pub struct DynamicsSettings {
 }
 
 impl Bodies {
-    /// Bodies derived from the geometry (MODEL.md §1): sun and planet annuli
+    /// Bodies derived from the geometry (docs/PARAMETERS.md): sun and planet annuli
     /// from bore to root, the ring from tooth tip to rim outside; the carrier
     /// as two plates 0.3 face widths thick from the sun's root circle to the
     /// planets' root circles' outer reach, plus one pin per planet filling the
@@ -490,7 +490,7 @@ impl GearSet {
             .unwrap_or(Member::Ring)
     }
 
-    /// Gear 1 and gear 2 of a mesh (FORMULAS.md: sun–planet has the sun as
+    /// Gear 1 and gear 2 of a mesh (docs/FORMULAS.md: sun–planet has the sun as
     /// gear 1; planet–ring has the planet as gear 1).
     pub fn mesh_gears(&self, mesh: MeshKind) -> (&ToothForm, &ToothForm) {
         match mesh {
@@ -510,7 +510,7 @@ impl GearSet {
         (sum / self.centre_distance).clamp(-1.0, 1.0).acos()
     }
 
-    /// Normal backlash along the line of action of a mesh [m] (FORMULAS.md;
+    /// Normal backlash along the line of action of a mesh [m] (docs/MODEL.md §1;
     /// external j_n = p_b − 2r_b1ψ_b1 − 2r_b2ψ_b2 + 2(r_b1 + r_b2) inv α_w,
     /// internal j_n = 2r_b2ψ_s2 − 2r_b1ψ_b1 − 2(r_b2 − r_b1) inv α_w, with ψ the
     /// half angle of tooth or space at the base circle).

@@ -1,4 +1,4 @@
-//! Hertzian line contact of two cylinders (FORMULAS.md): load per length
+//! Hertzian line contact of two cylinders (docs/FORMULAS.md): load per length
 //! w = F/L; 1/E* = (1−ν1²)/E1 + (1−ν2²)/E2; 1/R' = 1/ρ1 ± 1/ρ2 (minus for a
 //! concave flank); half-width b = sqrt(4 w R' / (π E*)); peak pressure
 //! p0 = 2w/(π b); p(x) = p0 sqrt(1 − x²/b²).

@@ -2,9 +2,9 @@
 //!
 //! A flank point at radius `r` on an involute of base radius `r_b` has the
 //! pressure angle `α_r = acos(r_b / r)` and the roll angle
-//! `ξ = sqrt(r² − r_b²) / r_b = tan α_r` (FORMULAS.md, "Kinematics along the
-//! line of action"). Its polar angle, measured from the start of the involute
-//! on the base circle, is `inv α_r = tan α_r − α_r`.
+//! `ξ = sqrt(r² − r_b²) / r_b = tan α_r` (docs/FORMULAS.md, "Line of
+//! action"). Its polar angle, measured from the start of the involute on the
+//! base circle, is `inv α_r = tan α_r − α_r`.
 
 /// The involute function `inv α = tan α − α` of a pressure angle [rad].
 pub fn inv(alpha: f64) -> f64 {

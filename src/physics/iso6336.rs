@@ -1,5 +1,5 @@
 //! ISO 6336-1 single stiffness c' and mesh stiffness c_γα (method B), the
-//! sanity band for the potential-energy stiffness (FORMULAS.md).
+//! sanity band for the potential-energy stiffness (docs/FORMULAS.md).
 //!
 //! q' = C1 + C2/z_n1 + C3/z_n2 + C4 x1 + C5 x1/z_n1 + C6 x2 + C7 x2/z_n2 + C8 x1² + C9 x2²
 //! [mm·µm/N], z_n = z / (cos²β_b cos β), internal gears z_n2 = ∞;

@@ -1,5 +1,5 @@
 //! The lumped-parameter planetary model in Lin & Parker's coordinates
-//! (Lin & Parker 1999, J. Vib. Acoust. 121:316; FORMULAS.md).
+//! (Lin & Parker 1999, J. Vib. Acoust. 121:316; docs/FORMULAS.md).
 //!
 //! Full coordinates, carrier frame: for each central member j ∈ {carrier,
 //! ring, sun} the translations x_j, y_j and the rotation u_j = r_j θ_j

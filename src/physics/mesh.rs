@@ -2,7 +2,7 @@
 //!
 //! Positions `s` on the LOA are measured from the point T1 where the LOA
 //! touches the base circle of gear 1, in the direction the contact travels
-//! when gear 1 drives (FORMULAS.md). With `L = a sin α_w` the distance T1T2:
+//! when gear 1 drives (docs/FORMULAS.md). With `L = a sin α_w` the distance T1T2:
 //! external pair ρ1 = s, ρ2 = L − s; internal pair (planet 1, ring 2)
 //! ρ1 = s, ρ2 = s + L. The roll angle of gear i at the contact is ρi / r_bi.
 

@@ -1,5 +1,5 @@
 //! Steady-state response at a speed, and speed sweeps with continuation
-//! (MODEL.md §3).
+//! (docs/MODEL.md §3).
 //!
 //! A run starts from a state (the previous speed's steady state, or the
 //! static deflection of the mean-stiffness model), runs in for a number of

@@ -1,4 +1,4 @@
-//! Order spectra of periodic responses (MODEL.md §3).
+//! Order spectra of periodic responses (docs/MODEL.md §3).
 //!
 //! A signal sampled uniformly over exactly C mesh cycles (N samples, the
 //! last sample one step before the window's end) has its i-th mesh harmonic

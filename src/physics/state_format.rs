@@ -1,5 +1,5 @@
 //! The serialized simulation state: a versioned, self-checking byte format
-//! with no pointers in it (FMU.md, "FMU state").
+//! with no pointers in it (docs/FMU.md, Interface).
 //!
 //! Layout, all integers and floats little-endian:
 //!

@@ -1,7 +1,7 @@
 //! Tooth-pair stiffness by the potential-energy method.
 //!
 //! 1/k_pair = 1/k_h + Σ_{i=1,2} (1/k_b,i + 1/k_s,i + 1/k_a,i + 1/k_f,i)
-//! (FORMULAS.md): each tooth is a cantilever of variable section from its
+//! (docs/FORMULAS.md): each tooth is a cantilever of variable section from its
 //! root chord (where the fillets meet the root circle) to the contact point,
 //! its section half-thickness taken from the real outline (fillet and
 //! involute, [`FlankOutline`]) rather than the straight-line approximations
@@ -15,7 +15,7 @@
 //!   for the tooth's direction), I = (2h)³ L / 12;
 //! - shear 1/k_s = ∫ 1.2 f_y² / (G A) dξ, axial 1/k_a = ∫ f_x² / (E' A) dξ, A = 2hL;
 //! - fillet foundation, Sainsot, Velex & Duverger (2004, J. Mech. Des.
-//!   126:748) with the coefficients of FORMULAS.md;
+//!   126:748) with the coefficients of docs/FORMULAS.md;
 //! - Hertz: the load-independent 1/k_h = 4(1 − ν²)/(π E L) of the
 //!   energy-method papers, so that the contact law stays piecewise linear and
 //!   its Jacobian exact. Load-dependent flattening laws (Weber–Banaschek,

@@ -1,4 +1,4 @@
-//! Archard wear of the tooth flanks, quasi-static (MODEL.md §4–5).
+//! Archard wear of the tooth flanks, quasi-static (docs/MODEL.md §4–5).
 //!
 //! Archard: the depth worn at a flank point is h = ∫ k P ds (k the wear
 //! coefficient [m²/N], P the contact pressure, s the sliding distance).
@@ -56,9 +56,9 @@
 //! step the point spends inside the band (centre and half-width linear over
 //! the step). In corner contact the corner's band does not move (Δσ = 0)
 //! and the whole relative slip goes by it. Through a passage with constant
-//! b this sums to 2b·|1 − v_mate/v_self| (Flodin & Andersson 1997; FORMULAS.md).
+//! b this sums to 2b·|1 − v_mate/v_self| (Flodin & Andersson 1997; docs/FORMULAS.md).
 //!
-//! Wear of one cycle (MODEL.md §4.3): Δh = Σ_r ½ k s_{r→r+1} (P_r + P_{r+1}),
+//! Wear of one cycle (docs/MODEL.md §4.3): Δh = Σ_r ½ k s_{r→r+1} (P_r + P_{r+1}),
 //! P_r the band's elliptic pressure at the point at position r. For a
 //! constant band this tends to Δh_i = k w |v_i − v_j| / v_i.
 //!
@@ -83,7 +83,7 @@ use super::mesh::PathOfContact;
 use super::profile::{ProfileDeviation, ProfileEnds};
 use super::wear_state::{FlankExtreme, UpdateRecord, WornState, WornStateError};
 
-/// Archard wear coefficient of the example [m²/N] (MODEL.md §4).
+/// Archard wear coefficient of the example [m²/N] (docs/MODEL.md §4).
 pub const EXAMPLE_ARCHARD_COEFFICIENT: f64 = 1e-18;
 
 /// One of the three gears of the set (all planets alike).
@@ -110,7 +110,7 @@ impl Gear {
 }
 
 /// A physical tooth flank of the set. A planet tooth meets the sun on one
-/// flank and the ring on the other (MODEL.md §4.6), so the planet's sun-side
+/// flank and the ring on the other (docs/MODEL.md §4.6), so the planet's sun-side
 /// flank is gear 2's drive flank of the sun–planet mesh and gear 1's back
 /// flank of the ring–planet mesh, and its ring-side flank the other way round.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -225,7 +225,7 @@ impl WearingFlanks {
     }
 }
 
-/// Settings of the wear model (MODEL.md §4), SI.
+/// Settings of the wear model (docs/MODEL.md §4), SI.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct WearSettings {
     /// Archard wear coefficient k [m²/N].
@@ -273,7 +273,7 @@ impl Default for WearSettings {
     }
 }
 
-/// Where a wear cycle takes the tooth-pair loads from (MODEL.md §4.1 uses
+/// Where a wear cycle takes the tooth-pair loads from (docs/MODEL.md §4.1 uses
 /// the quasi-static ones; the dynamic ones are an option beyond the study).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "kind")]
@@ -466,7 +466,7 @@ impl GearCycles {
     }
 }
 
-/// Tooth cycles per revolution of the input member (MODEL.md §4.5), from
+/// Tooth cycles per revolution of the input member (docs/MODEL.md §4.5), from
 /// the speeds relative to the carrier: with the held member still and the
 /// input turning once, Willis' relation (ω_s − ω_c) Z_s = −(ω_r − ω_c) Z_r
 /// gives the relative sun speed u; a mesh then passes M = Z_s |u| teeth,
@@ -614,7 +614,7 @@ pub fn sliding_map(arc: &[f64], bands: &[Band], slip: &[f64]) -> Vec<Vec<f64>> {
 /// Wear and sliding distance of the points of a flank at arc positions
 /// `arc` [m] through one passage of the band (`bands`, one per pair
 /// position, `slip` between consecutive ones [m]) with Archard coefficient
-/// `archard` [m²/N]: Δh = Σ_r ½ k s_{r→r+1} (P_r + P_{r+1}) (MODEL.md §4.3).
+/// `archard` [m²/N]: Δh = Σ_r ½ k s_{r→r+1} (P_r + P_{r+1}) (docs/MODEL.md §4.3).
 pub fn passage_wear(arc: &[f64], bands: &[Band], slip: &[f64], archard: f64) -> Passage {
     let mut out = Passage { wear: vec![0.0; arc.len()], sliding: vec![0.0; arc.len()] };
     for (w, s) in bands.windows(2).zip(slip) {

@@ -1,4 +1,4 @@
-//! The worn-profile state (MODEL.md §5): the profile deviations of every
+//! The worn-profile state (docs/MODEL.md §5): the profile deviations of every
 //! flank, the geometry state κ, the cycles and input revolutions run, the
 //! history of the updates and the gear set it belongs to; and its JSON
 //! document, versioned and checksummed. Reading and writing files is the

@@ -1,6 +1,6 @@
 //! Reports of speed sweeps and single steady states: CSV tables, plots, and
 //! the identification of resonance peaks with the mode family each mesh
-//! harmonic can excite (Parker & Lin 2004, FORMULAS.md).
+//! harmonic can excite (Parker & Lin 2004, docs/FORMULAS.md).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

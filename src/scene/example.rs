@@ -1,4 +1,4 @@
-//! The 2004 scene: the automatic-transmission planetary set of MODEL.md §1.
+//! The 2004 scene: the automatic-transmission planetary set of docs/MODEL.md §1.
 
 use super::{
     AnalysisSpec, ChamferSpec, ExternalGearSpec, MaterialSpec, OperationSpec, PlanetLayoutSpec, RingGearSpec,
@@ -30,9 +30,9 @@ impl Scene {
         s
     }
 
-    /// The example read with the defaults MODEL.md suggests where the study
-    /// gives nothing: sun and planet inertias of bare annuli from bore to
-    /// root, the ring's from tooth tip to rim outside, needle-bearing planet
+    /// The example read with the geometry's defaults (docs/PARAMETERS.md)
+    /// where the study gives nothing: sun and planet inertias of bare annuli
+    /// from bore to root, the ring's from tooth tip to rim outside, needle-bearing planet
     /// supports (3e8 N/m), chamfers 0.1·m × 45° whose edges carry load, mesh
     /// damping 0.05 ([`Scene::example_2004`] is the calibrated reading).
     pub fn example_2004_annulus() -> Self {

@@ -342,7 +342,7 @@ pub struct MaterialSpec {
 }
 
 impl Default for MaterialSpec {
-    /// Steel (MODEL.md §1).
+    /// Steel (docs/MODEL.md §1).
     fn default() -> Self {
         Self { youngs_modulus_gpa: 207.0, poisson_ratio: 0.3, density_kg_per_m3: 7850.0 }
     }
@@ -366,7 +366,7 @@ pub struct OperationSpec {
 pub struct AnalysisSpec {
     /// Mesh positions per mesh cycle in the loaded tooth contact analysis.
     pub positions_per_mesh_cycle: u32,
-    /// Points along each flank's profile-deviation grid (I of MODEL.md §4).
+    /// Points along each flank's profile-deviation grid (I of docs/MODEL.md §4).
     pub profile_points: u32,
     /// Slices across the face width (J; 1 means a 2-D profile grid).
     pub face_slices: u32,
