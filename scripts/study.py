@@ -187,7 +187,8 @@ def main():
     p.add_argument("--step", type=float, default=250.0)
     p.add_argument("--off-resonance", type=float, nargs=2, default=[1500.0, 3000.0],
                    help="two off-resonance speeds [rpm] for the change of F(rms) with wear")
-    p.add_argument("--resonance", type=float, default=5000.0, help="a resonant speed [rpm]")
+    p.add_argument("--resonance", type=float, default=8250.0,
+                   help="a resonant speed [rpm] (2×f_m on the first rotational mode of the example)")
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     p.add_argument("--timings", default="", help="JSON file of earlier stages' timings to include in the report")
     a = p.parse_args()

@@ -32,7 +32,7 @@ echo "== natural modes (out/modes.txt, out/modes.json)"
 "$bin" modes --scene example-2004 --json > out/modes.json.tmp && mv out/modes.json.tmp out/modes.json
 echo "== native speed sweep up and down, 500-15000 rpm in 250 rpm steps, unworn (out/sweep/)"
 stage "native sweep (unworn)" "$bin" sweep --scene example-2004 --from 500 --to 15000 --step 250 \
-    --direction both --histories 3000,5000 --out out/sweep
+    --direction both --histories 3000,8250 --out out/sweep
 echo "== wear model to kappa = 6 (out/wear/: states, summary.json, plots)"
 stage "wear model to κ = 6" "$bin" wear run --scene example-2004 --to-kappa 6 --out out/wear
 echo "== validation against the study, full grid (docs/VALIDATION.md, docs/validation/)"
