@@ -72,7 +72,8 @@ impl Measure {
                     Fidelity::Torsional => "torsional",
                     Fidelity::TransverseTorsional => "transverse–torsional",
                 };
-                format!("{f} {class:?} mode #{order} [Hz]").to_lowercase()
+                let class = format!("{class:?}").to_lowercase();
+                format!("{f} {class} mode #{order} [Hz]")
             }
             Measure::DoubleContact { mesh } => format!("{} double-contact share [-]", mesh.name()),
         }
