@@ -20,6 +20,7 @@ import contextlib
 import io
 import math
 import os
+import tempfile
 import sys
 import warnings
 
@@ -61,6 +62,12 @@ DENSITY = 7850.0  # kg/m^3; only affects ross's mass/inertia, not the stiffness
 
 def _import_ross():
     """Import ross quietly (its ccp dependency complains about REFPROP)."""
+    # ccp looks for REFPROP in $RPPREFIX, else in the current directory, and
+    # loads any shared library it finds there: a test that runs from a
+    # directory holding an unpacked FMU would make it load planetwear.so.
+    # An empty directory makes the import the same wherever it runs.
+    if "RPPREFIX" not in os.environ:
+        os.environ["RPPREFIX"] = tempfile.mkdtemp(prefix="planetwear-no-refprop-")
     # The REFPROP banner is written at file-descriptor level, so silence fds 1, 2.
     sys.stdout.flush()
     sys.stderr.flush()
