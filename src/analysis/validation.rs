@@ -733,23 +733,34 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     }
     // The jump: two branches where the up and down sweeps differ.
     let f_rot1 = distinct(&tt, ModeClass::Rotational).first().map_or(f2, |m| m.0);
-    let band: Vec<(f64, f64, f64, f64)> = curves[0]
-        .points
-        .iter()
-        .zip(&curves[1].points)
-        .filter(|(u, d)| {
-            let r = 2.0 * fm_per_rpm * u.speed_rpm / f_rot1;
-            (0.7..=1.1).contains(&r) && (u.rms[0] - d.rms[0]).abs() > 0.1 * u.rms[0].max(d.rms[0])
-        })
-        .map(|(u, d)| (u.speed_rpm, u.rms[0], d.rms[0], d.separation[0].max(u.separation[0])))
-        .collect();
+    let branches = |up: &Curve, down: &Curve| -> Vec<(f64, f64, f64, f64)> {
+        up.points
+            .iter()
+            .zip(&down.points)
+            .filter(|(u, d)| {
+                let r = 2.0 * fm_per_rpm * u.speed_rpm / f_rot1;
+                (0.7..=1.1).contains(&r) && (u.rms[0] - d.rms[0]).abs() > 0.1 * u.rms[0].max(d.rms[0])
+            })
+            .map(|(u, d)| (u.speed_rpm, u.rms[0], d.rms[0], d.separation[0].max(u.separation[0])))
+            .collect()
+    };
+    let band = branches(&curves[0], &curves[1]);
+    // The worn set's branches, reported beside the verdict (which is the
+    // unworn set's: the study's figure does not say which state jumps).
+    let worn_band = branches(&curves[2], &curves[3]);
+    let worn_words = match (worn_band.first(), worn_band.last()) {
+        (Some(a), Some(b)) => {
+            format!("; at κ = {}: two branches from {:.0} to {:.0} rpm", worn.kappa, a.0, b.0)
+        }
+        _ => format!("; at κ = {}: none either", worn.kappa),
+    };
     let (jump_ours, jump_ok, jump_value) = match (band.first(), band.last()) {
         (Some(a), Some(b)) => {
             let r = |rpm: f64| 2.0 * fm_per_rpm * rpm / f_rot1;
             let lower_upper = band.iter().filter(|p| p.2 > p.1).count();
             (
                 format!(
-                    "two branches from {:.0} to {:.0} rpm (2f_m = {:.2}–{:.2} f₂, f₂ = {f_rot1:.0} Hz); the down sweep stays on the upper branch at {lower_upper} of {} speeds (softening)",
+                    "two branches from {:.0} to {:.0} rpm (2f_m = {:.2}–{:.2} f₂, f₂ = {f_rot1:.0} Hz); the down sweep stays on the upper branch at {lower_upper} of {} speeds (softening){worn_words}",
                     a.0,
                     b.0,
                     r(a.0),
@@ -760,7 +771,13 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
                 Some(a.0),
             )
         }
-        _ => ("the up and down sweeps agree within 10 % everywhere near 2 f_m = f₂".into(), false, None),
+        _ => (
+            format!(
+                "the up and down sweeps agree within 10 % everywhere near 2 f_m = f₂ at κ = 0{worn_words}"
+            ),
+            false,
+            None,
+        ),
     };
     rows.push(
         "jump-softening",
