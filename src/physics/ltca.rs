@@ -414,27 +414,7 @@ impl MeshModel {
         let pb = p.base_pitch;
         let loaded = |s: f64| self.pair_force(s, self.approach_for(s, load)) > 0.0;
         let (lo, hi) = (p.start.min(p.start_sharp) - pb, p.end.max(p.end_sharp) + pb);
-        let n = 400;
-        let at = |i: usize| lo + (hi - lo) * i as f64 / n as f64;
-        let flags: Vec<bool> = (0..=n).map(|i| loaded(at(i))).collect();
-        let (Some(first), Some(last)) = (flags.iter().position(|f| *f), flags.iter().rposition(|f| *f))
-        else {
-            return (p.start, p.end);
-        };
-        let refine = |mut out: f64, mut inside: f64| {
-            while (out - inside).abs() > 1e-12 * pb {
-                let mid = 0.5 * (out + inside);
-                if loaded(mid) {
-                    inside = mid;
-                } else {
-                    out = mid;
-                }
-            }
-            inside
-        };
-        let start = if first == 0 { at(0) } else { refine(at(first - 1), at(first)) };
-        let end = if last == n { at(n) } else { refine(at(last + 1), at(last)) };
-        (start, end)
+        loaded_span(lo, hi, 400, loaded, Refine::Width(1e-12 * pb)).unwrap_or((p.start, p.end))
     }
 
     /// Loaded contact ratio at `load` [N]: the loaded engagement over the
@@ -449,6 +429,51 @@ impl MeshModel {
     pub fn double_contact_share(&self, load: f64) -> f64 {
         (self.loaded_contact_ratio(load) - 1.0).clamp(0.0, 1.0)
     }
+}
+
+/// How [`loaded_span`] refines an end found by its scan.
+#[derive(Clone, Copy, Debug)]
+pub enum Refine {
+    /// Bisect until the bracket is at most this wide [m].
+    Width(f64),
+    /// Bisect this many times.
+    Steps(usize),
+}
+
+/// First and last position in [`lo`, `hi`] where `loaded` holds: a scan of
+/// `n` equal intervals, then bisection of each end's bracket as `refine`
+/// says. An end that lies on the scan's edge is that edge; `None` when no
+/// scanned position is loaded.
+pub fn loaded_span(
+    lo: f64,
+    hi: f64,
+    n: usize,
+    mut loaded: impl FnMut(f64) -> bool,
+    refine: Refine,
+) -> Option<(f64, f64)> {
+    let at = |i: usize| lo + (hi - lo) * i as f64 / n as f64;
+    let flags: Vec<bool> = (0..=n).map(|i| loaded(at(i))).collect();
+    let first = flags.iter().position(|f| *f)?;
+    let last = flags.iter().rposition(|f| *f)?;
+    let mut bisect = |mut out: f64, mut inside: f64| {
+        let mut steps = 0;
+        while match refine {
+            Refine::Width(w) => (out - inside).abs() > w,
+            Refine::Steps(k) => steps < k,
+        } {
+            let mid = 0.5 * (out + inside);
+            if loaded(mid) {
+                inside = mid;
+            } else {
+                out = mid;
+            }
+            steps += 1;
+        }
+        inside
+    };
+    let start = if first == 0 { at(0) } else { bisect(at(first - 1), at(first)) };
+    let end = if last == n { at(n) } else { bisect(at(last + 1), at(last)) };
+    Some((start, end))
 }
 
 /// Solves f(x) = target for a non-decreasing piecewise-linear f given with

@@ -78,7 +78,7 @@ use serde::{Deserialize, Serialize};
 use super::gear::{GearKind, GearSet, Member, MeshKind};
 use super::hertz::{contact_modulus, line_contact, pressure_at, LineContact};
 use super::involute::roll_angle;
-use super::ltca::{SetEquilibrium, SetModel};
+use super::ltca::{loaded_span, Refine, SetEquilibrium, SetModel};
 use super::mesh::PathOfContact;
 use super::profile::{ProfileDeviation, ProfileEnds};
 use super::wear_state::{FlankExtreme, UpdateRecord, WornState, WornStateError};
@@ -967,7 +967,7 @@ impl WearModel {
         let planets = model.planet_angles.len();
         let mut guesses = vec![SetEquilibrium::unloaded(planets); planets];
         let mut forces = Vec::new();
-        let mut loaded = |s: f64| {
+        let loaded = |s: f64| {
             (0..planets).any(|p| {
                 self.pair_at(model, mesh, p, s, &mut guesses[p], &mut forces);
                 forces.iter().any(|f| *f > 0.0)
@@ -976,26 +976,7 @@ impl WearModel {
         let pb = path.base_pitch;
         let (lo, hi) = (path.start - pb / 2.0, path.end + pb / 2.0);
         let n = ((hi - lo) / pb * ENGAGEMENT_SCAN as f64).ceil() as usize;
-        let at = |i: usize| lo + (hi - lo) * i as f64 / n as f64;
-        let flags: Vec<bool> = (0..=n).map(|i| loaded(at(i))).collect();
-        let (Some(first), Some(last)) = (flags.iter().position(|f| *f), flags.iter().rposition(|f| *f))
-        else {
-            return (path.start, path.end);
-        };
-        let mut refine = |mut out: f64, mut inside: f64| {
-            for _ in 0..ENGAGEMENT_BISECTIONS {
-                let mid = 0.5 * (out + inside);
-                if loaded(mid) {
-                    inside = mid;
-                } else {
-                    out = mid;
-                }
-            }
-            inside
-        };
-        let start = if first == 0 { at(0) } else { refine(at(first - 1), at(first)) };
-        let end = if last == n { at(n) } else { refine(at(last + 1), at(last)) };
-        (start, end)
+        loaded_span(lo, hi, n, loaded, Refine::Steps(ENGAGEMENT_BISECTIONS)).unwrap_or((path.start, path.end))
     }
 
     /// The pair's passage through `mesh` and its per-slice loads
