@@ -144,25 +144,23 @@ impl MeshModel {
         k_lo..=k_hi
     }
 
-    /// Which flank of one slice touches under approach `delta` [m] with the
-    /// pair at position `pos` [m], given the slice's drive and back
-    /// separations `gd`, `gb` [m] there (relief not included): the sign of
-    /// the force, the penetration [m], the pair stiffness table, the slice's
-    /// separation table of that flank and the slope of its edge relief [-].
+    /// Which flank of one slice touches under approach `delta` [m], given the
+    /// slice's drive and back separations `gd`, `gb` [m] at the pair's
+    /// position, each with its edge relief and the relief's slope
+    /// ([`MeshSeparation::drive_relief_at`]): the sign of the force, the
+    /// penetration [m], the pair stiffness table, the slice's separation
+    /// table of that flank and the slope of its edge relief [-].
     #[inline(always)]
     fn slice_contact<'a>(
         &'a self,
         slice: &'a MeshSeparation,
-        pos: f64,
-        gd: f64,
-        gb: f64,
+        (gd, (rd, drd)): (f64, (f64, f64)),
+        (gb, (rb, drb)): (f64, (f64, f64)),
         delta: f64,
     ) -> Option<SliceContact<'a>> {
-        let (rd, drd) = slice.drive_relief_at(pos);
         if gd < NO_CONTACT && delta > gd + rd {
             return Some((1.0, delta - gd - rd, &self.drive_k, &slice.drive.values, drd));
         }
-        let (rb, drb) = slice.back_relief_at(pos);
         if gb < NO_CONTACT && -delta > gb + rb {
             Some((-1.0, -delta - gb - rb, &self.back_k, &slice.back.values, drb))
         } else {
@@ -188,7 +186,8 @@ impl MeshModel {
         let fraction = 1.0 / self.slices.len() as f64;
         for slice in &self.slices {
             let (gd, gb) = (lerp(&slice.drive.values), lerp(&slice.back.values));
-            out.push(match self.slice_contact(slice, pos, gd, gb, delta) {
+            let (rd, rb) = (slice.drive_relief_at(pos), slice.back_relief_at(pos));
+            out.push(match self.slice_contact(slice, (gd, rd), (gb, rb), delta) {
                 Some((sign, x, k_table, _, _)) => {
                     let k = fraction * lerp(k_table);
                     sign * k * x
@@ -222,9 +221,11 @@ impl MeshModel {
             let gb = lerp(&slice.back.values);
             // A relieved edge adds its relief to the separation beyond the
             // involute path, so the event values stay continuous.
-            law.event_drive = law.event_drive.max(delta - gd - slice.drive_relief_at(pos).0);
-            law.event_back = law.event_back.max(-delta - gb - slice.back_relief_at(pos).0);
-            let Some((sign, x, k_table, g_table, dr)) = self.slice_contact(slice, pos, gd, gb, delta) else {
+            let (rd, rb) = (slice.drive_relief_at(pos), slice.back_relief_at(pos));
+            law.event_drive = law.event_drive.max(delta - gd - rd.0);
+            law.event_back = law.event_back.max(-delta - gb - rb.0);
+            let Some((sign, x, k_table, g_table, dr)) = self.slice_contact(slice, (gd, rd), (gb, rb), delta)
+            else {
                 continue;
             };
             let k = fraction * lerp(k_table);
