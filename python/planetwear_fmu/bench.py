@@ -10,6 +10,12 @@ prints points per second, per core, and the scaling efficiency
 point with its Parquet and state files) and the native `planetwear sweep` of
 the same speeds, the fmpy overhead being the ratio of the per-point times.
 The figures are recorded in docs/CAMPAIGNS.md with the command.
+
+Layer 4 (front end): this module owns the bench (`run_bench`, `bench_raw`)
+and its command-line options (`add_arguments`, which the command line
+`campaign` adds to its `bench` subcommand). Of the package it imports
+`campaign_file`, `fmu_check` (`load_campaign`), `sweep` and `runner`, all
+below it; only the command line (`campaign`) imports it.
 """
 
 from __future__ import annotations
@@ -24,7 +30,8 @@ import time
 from pathlib import Path
 
 from . import campaign_file
-from .campaign import dask_client, extract_fmu, run_campaign, task_specs
+from .fmu_check import load_campaign
+from .runner import dask_client, extract_fmu, run_campaign, task_specs
 from .sweep import PointStore, run_task
 
 REPO = Path(__file__).resolve().parents[2]
@@ -80,7 +87,7 @@ def _bench(a, workers_list, root):
     # One sweep in-process, no Dask: the FMU's own cost per point.
     raw = bench_raw(a, root / "inprocess")
     src.write_text(campaign_file.dumps_toml(raw))
-    c = campaign_file.load(src)
+    c = load_campaign(src)
     spec = next(s for s in task_specs(c) if s["torque"] == 750.0) if 750.0 in c.torques else task_specs(c)[0]
     t0 = time.perf_counter()
     r = run_task(spec)
@@ -122,7 +129,7 @@ def _bench(a, workers_list, root):
     for w in workers_list:
         raw = bench_raw(a, root / f"workers-{w}")
         src.write_text(campaign_file.dumps_toml(raw))
-        c = campaign_file.load(src)
+        c = load_campaign(src)
         extract_fmu(c)
         with dask_client(workers=w) as client:
             # Warm the workers (imports) so the run times the sweeps.

@@ -6,8 +6,16 @@ element is one continuation sweep over the speed grid (one Dask task).
 Every key is checked here, all problems at once, each naming its key, the
 value and what is allowed (`CampaignError`). The checks that need the FMU
 (a wear state the FMU refuses, an integrator setting it rejects) are made by
-`fmu_check`, which `load` calls last. The format is documented in
+`fmu_check.check`, which `load` calls last when it is passed in as `probe`
+(`fmu_check.load_campaign` does so). The format is documented in
 docs/CAMPAIGNS.md; campaigns/example-2004.toml is the example.
+
+Layer 1 (files and formats): this module owns the campaign file's format
+and checks (`Campaign`, `Scene`, `WearState`, `Problem`, `CampaignError`,
+`load`, `from_dict`, `dumps_toml`), the worn-profile state's JSON structure
+(`check_state_document`, `max_wear_depth`) and finding the `planetwear`
+binary. Of the package it imports only `files` (`sha256_file` is re-exported
+from there); it never imports `fmu_check` or anything above it.
 """
 
 from __future__ import annotations
@@ -24,6 +32,8 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree
+
+from .files import sha256_file
 
 # Keys allowed in each table, in the order the documentation gives them.
 TOP_KEYS = ("fmu", "scene", "output_dir", "planetwear_bin", "wear", "speeds", "load", "timing", "integrator",
@@ -173,14 +183,6 @@ class Campaign:
 
     def points(self):
         return len(self.tasks()) * len(self.speeds)
-
-
-def sha256_file(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
 
 
 def find_planetwear_bin(value=None, base=None):
@@ -347,11 +349,15 @@ def _resolve_state(entry, base, fmu_path, fmu_names):
                      f"(the FMU ships: {', '.join(shipped) or 'none'})")
 
 
-def load(path, output_dir=None, probe=True):
+def load(path, output_dir=None, *, probe):
     """Reads and checks a campaign file; returns a `Campaign` or raises
-    `CampaignError` listing every problem. With `probe` the FMU is asked
-    (in a subprocess) whether it accepts each wear state with the campaign's
-    settings, and its logged refusal becomes the problem's reason."""
+    `CampaignError` listing every problem. `probe` is the FMU's verdict:
+    a function with the signature of `fmu_check.check` (which asks the FMU,
+    in a subprocess, whether it accepts each wear state with the campaign's
+    settings; its logged refusal becomes the problem's reason), or None for
+    the checks of this module alone. It is a required keyword so that no
+    caller skips the FMU's verdict by leaving it out;
+    `fmu_check.load_campaign` is this function with `fmu_check.check`."""
     path = Path(path).resolve()
     try:
         raw = tomllib.loads(path.read_text())
@@ -362,9 +368,9 @@ def load(path, output_dir=None, probe=True):
     return from_dict(raw, path, output_dir=output_dir, probe=probe)
 
 
-def from_dict(raw, source, output_dir=None, probe=True):
+def from_dict(raw, source, output_dir=None, *, probe):
     """Checks a campaign given as a dict (as read from TOML); relative paths
-    are taken relative to the directory of `source`."""
+    are taken relative to the directory of `source`. `probe` as in `load`."""
     source = Path(source).resolve()
     base = source.parent
     problems = []
@@ -627,9 +633,7 @@ def from_dict(raw, source, output_dir=None, probe=True):
 
     # The FMU's verdict on the settings and on each state that passed the checks above.
     if probe and fmu is not None and scene is not None:
-        from . import fmu_check
-
-        problems += fmu_check.check(fmu, scene, integ, cycles["window_cycles"] if isinstance(
+        problems += probe(fmu, scene, integ, cycles["window_cycles"] if isinstance(
             cycles["window_cycles"], int) and cycles["window_cycles"] >= 1 else 68,
             speeds[0] if speeds else 3000.0, torques[0] if torques else 750.0,
             [(i, wv[i], s) for i, s in state_index.items()])

@@ -7,6 +7,13 @@ a bad setting) in fmi2ExitInitializationMode and logs the reason. The cases
 run in a child process (`python -m planetwear_fmu.fmu_check`, a JSON request
 on stdin, a JSON answer on stdout) with logging on and the child's own
 logger callback: fmpy's logging shim stays out of the caller's process.
+
+Layer 2 (FMU access): this module owns the parameters a task sets
+(`task_parameters`), the FMU's verdict (`check`, `run_cases` and the child
+process) and `load_campaign`, the full check of a campaign file: the
+checks of `campaign_file` with `check` passed in as their `probe`. Of the
+package it imports only `campaign_file` (below it); `campaign_file` does not
+import it back.
 """
 
 from __future__ import annotations
@@ -15,7 +22,16 @@ import json
 import subprocess
 import sys
 
+from . import campaign_file
 from .campaign_file import INTEGRATOR_PARAMETERS, Problem
+
+
+def load_campaign(path, output_dir=None):
+    """Reads a campaign file and checks it whole: every key
+    (`campaign_file.load`) and, last, the FMU's verdict on the settings and
+    each wear state (`check`). Returns a `campaign_file.Campaign` or raises
+    `campaign_file.CampaignError` listing every problem."""
+    return campaign_file.load(path, output_dir=output_dir, probe=check)
 
 
 def task_parameters(scene, integrator, window_cycles, state_value, torque, first_speed_rpm):

@@ -10,6 +10,11 @@ points and the stage's wall time. The states the stepper writes are in
 points are not recomputed (the campaign resumes) and a state already
 written is not stepped again. At the end the stages' points are gathered
 into <output_dir>/loop/results.parquet and .csv with the plots over κ.
+
+Layer 4 (front end): this module owns the loop (`run_loop`, `stage_raw`,
+`print_loop`, `LoopError`). Of the package it imports `files`,
+`campaign_file`, `fmu_check` (`load_campaign` for each stage's file) and
+`runner`, all below it; only the command line (`campaign`) imports it.
 """
 
 from __future__ import annotations
@@ -22,9 +27,10 @@ import zipfile
 from pathlib import Path
 
 from . import campaign_file
-from .campaign import consolidate, dask_client, print_summary, run_campaign, task_specs
 from .campaign_file import CampaignError, Problem, check_state_document, find_planetwear_bin, max_wear_depth
-from .sweep import write_atomic
+from .files import sha256_file, write_atomic
+from .fmu_check import load_campaign
+from .runner import consolidate, dask_client, print_summary, run_campaign, task_specs
 
 MAX_STAGES = 200
 
@@ -118,7 +124,7 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
         raw = stage_raw(campaign, state, stage_dir)
         stage_file = stage_dir / "campaign.toml"
         write_atomic(stage_file, campaign_file.dumps_toml(raw).encode())
-        stage = campaign_file.load(stage_file)
+        stage = load_campaign(stage_file)
         stage.unpack_dir = root / ".fmu"
         summary = run_campaign(stage, client=client, progress=progress, plots=False)
         print_summary(summary, out=sys.stderr)
@@ -166,7 +172,7 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
         manifest = {
             "stage": len(stages),
             "kappa": kappa,
-            "campaign_file": {"path": str(stage_file), "sha256": campaign_file.sha256_file(stage_file)},
+            "campaign_file": {"path": str(stage_file), "sha256": sha256_file(stage_file)},
             "state_in": rec_in,
             "points": summary["points"],
             "wear_step": step,

@@ -5,6 +5,12 @@ and their change relative to κ = 0.
 One pair of figures per sun torque: `frms_T<torque>.png` (every κ, sweep up
 solid, down dashed) and `frms_change_T<torque>.png` (100 (F − F_κ0)/F_κ0 at
 the same speed and direction). Files are written atomically.
+
+Layer 2 (with the FMU access): this module owns the figures of a results
+table (`plot_results`). Of the package it imports only `files`
+(`write_atomic`). It sits below the runner because `runner.consolidate`
+draws the plots of every run; the command line (`campaign plot`) and the
+loop reach it through the runner or directly.
 """
 
 from __future__ import annotations
@@ -13,7 +19,7 @@ import io
 from collections import defaultdict
 from pathlib import Path
 
-from .sweep import write_atomic
+from .files import write_atomic
 
 MESHES = (("sun_frms_n_per_mm", "sun–planet mesh"), ("ring_frms_n_per_mm", "ring–planet mesh"))
 

@@ -17,6 +17,10 @@ pytest run:
         case = kit.case("kappa-0/3000rpm")
         measured = my_drivetrain_run(kit.fmu, kit.parameters(case), kit.inputs(case), kit.duration(case))
         kit.assert_reproduces(case, measured)   # names case, quantity, value, reference, tolerance
+
+Layer 4 (front end): this module owns the fixtures and ``ReferenceKit``. Of
+the package it imports only ``regression`` (below it); no module of the
+package imports it (pytest loads it through the entry point).
 """
 
 import os

@@ -23,6 +23,10 @@ A model that embeds the FMU runs the case with its own driver: it sets
 for ``refs.duration(case)`` seconds from t = 0, reads the ``window.*``
 outputs and hands them to ``compare`` (or the pytest fixture
 ``planetwear_reference``, planetwear_fmu.pytest_plugin).
+
+Layer 2 (FMU access): this module owns the references' format, running a
+case through fmpy and the comparison. It imports no module of the package
+(it stands apart from the campaigns); `pytest_plugin` imports it.
 """
 
 from __future__ import annotations

@@ -14,6 +14,12 @@ points in its directory deserializes the state of point k − 1 into a fresh
 instance and continues with point k at the stored communication point:
 nothing is recomputed or written twice, and with a deterministic integrator
 the continued sweep gives the numbers of an uninterrupted one.
+
+Layer 2 (FMU access): this module owns one task (`run_task`), its point
+files (`PointStore`, `task_directory`, the Parquet `schema`, `table_bytes`)
+and the fingerprint of its results (`task_fingerprint`). Of the package it
+imports only `files` (`write_atomic`, re-exported here); Dask workers
+import it alone, and the runner (`runner.task_specs`) builds its specs.
 """
 
 from __future__ import annotations
@@ -27,6 +33,8 @@ from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.parquet as pq
+
+from .files import write_atomic
 
 STATE_SUFFIX = ".fmustate"
 
@@ -55,24 +63,6 @@ def schema(outputs):
     """The point table's schema for the kept outputs [(name, "Real"|"Integer")]."""
     cols = BASE_COLUMNS + [(n, pa.float64() if t == "Real" else pa.int64()) for n, t in outputs] + TAIL_COLUMNS
     return pa.schema(cols)
-
-
-def write_atomic(path, data):
-    """Writes bytes to `path` through a temporary file in the same directory
-    (fsync, rename, directory fsync): a reader sees the old file or the new
-    one, never a part."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-    fd = os.open(path.parent, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
 
 
 def table_bytes(table):
@@ -136,7 +126,7 @@ def _emit(topic, msg, on_point):
 
 def run_task(spec, on_point=None):
     """Runs (or continues) one sweep; returns its summary. `spec` is the
-    plain dict `campaign.task_specs` builds; `on_point(msg)` is called after
+    plain dict `runner.task_specs` builds; `on_point(msg)` is called after
     each written point when the task runs outside a Dask worker."""
     from fmpy.fmi1 import FMICallException
     from fmpy.fmi2 import FMU2Slave

@@ -26,6 +26,7 @@ import pytest
 from planetwear_fmu import campaign_file
 from planetwear_fmu.campaign import dask_client, main, run_campaign, task_specs
 from planetwear_fmu.campaign_file import CampaignError
+from planetwear_fmu.fmu_check import load_campaign
 from planetwear_fmu.sweep import TIMING_COLUMNS, PointStore, run_task
 from wear_states import write_foreign_state
 
@@ -81,7 +82,7 @@ def reference(tmp_path_factory):
     {(label, torque, direction, index): row}."""
     d = tmp_path_factory.mktemp("reference")
     (d / "c.toml").write_text(SMALL)
-    c = campaign_file.load(d / "c.toml")
+    c = load_campaign(d / "c.toml")
     rows = {}
     for spec in task_specs(c):
         run_task(spec)
@@ -121,7 +122,7 @@ def check_exactly_once_and_equal(out, reference):
 
 def test_a_worker_killed_in_the_middle_of_a_campaign(tmp_path, client, reference):
     (tmp_path / "c.toml").write_text(SMALL)
-    c = campaign_file.load(tmp_path / "c.toml")
+    c = load_campaign(tmp_path / "c.toml")
     specs = {s["key"]: s for s in task_specs(c)}
     outcome = {}
 
@@ -180,7 +181,7 @@ def test_a_killed_campaign_resumes_without_recomputing_a_point(tmp_path, client,
         # The whole campaign — client, scheduler, nanny and worker — dies at once.
         os.killpg(proc.pid, signal.SIGKILL)
         proc.wait()
-    c = campaign_file.load(tmp_path / "c.toml")
+    c = load_campaign(tmp_path / "c.toml")
     done = sum(PointStore(s["dir"], s["speeds"]).done() for s in task_specs(c))
     print(f"campaign process killed with {done} of {2 * len(SPEEDS)} points written")
     assert 3 <= done < 2 * len(SPEEDS), "the campaign was not interrupted in the middle"
@@ -255,7 +256,7 @@ def test_a_bad_campaign_file_is_refused_before_any_work_naming_the_key(tmp_path,
     text = edit(SMALL, tmp_path)
     (tmp_path / "c.toml").write_text(text)
     with pytest.raises(CampaignError) as e:
-        campaign_file.load(tmp_path / "c.toml")
+        load_campaign(tmp_path / "c.toml")
     message = str(e.value)
     print(message)
     assert any(p.key == key for p in e.value.problems), message
@@ -297,7 +298,7 @@ def test_the_loop_alternates_campaigns_and_the_wear_stepper_with_manifests(tmp_p
     text = text.replace('states = ["wear/example-2004/kappa-2.json"]', 'states = ["wear/example-2004/kappa-0.json"]')
     text = f'planetwear_bin = "{EXE}"\n' + text
     (tmp_path / "c.toml").write_text(text)
-    c = campaign_file.load(tmp_path / "c.toml")
+    c = load_campaign(tmp_path / "c.toml")
     record = run_loop(c, to_kappa=2, client=client, progress=False)
     assert [s["kappa"] for s in record["stages"]] == [0, 1, 2]
     manifests = [json.loads(Path(s["manifest"]).read_text()) for s in record["stages"]]
