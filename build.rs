@@ -13,8 +13,15 @@ use std::path::PathBuf;
 
 use serde::Deserialize;
 
+// The GUID's code and the hash it uses, under the library's module paths.
 #[path = "src/fmi/guid.rs"]
 mod guid;
+#[path = "src/files/hash.rs"]
+#[allow(dead_code)]
+pub mod hash;
+mod files {
+    pub(crate) use super::hash;
+}
 
 #[derive(Deserialize)]
 struct Table {
@@ -90,6 +97,7 @@ fn main() {
     println!("cargo:rerun-if-changed={}", source.display());
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=src/fmi/guid.rs");
+    println!("cargo:rerun-if-changed=src/files/hash.rs");
     let text = std::fs::read_to_string(&source).unwrap_or_else(|e| fail(format!("cannot read: {e}")));
     let table: Table = toml::from_str(&text).unwrap_or_else(|e| fail(format!("{e}")));
 

@@ -9,11 +9,11 @@ use std::ffi::CString;
 use std::time::Instant;
 
 use fmi_sys::fmi2::*;
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::simulation::Simulation;
 use planetwear::fmi::export::*;
 use planetwear::fmi::variables::{vr, GUID};
-use planetwear::physics::dynamics::PlanetaryDynamics;
-use planetwear::physics::ltca::SetModel;
-use planetwear::physics::simulation::Simulation;
 use planetwear::scene::{Fidelity, IntegratorKind, Scene};
 
 fn fmu_run(fidelity: i32, integrator: i32, h: f64, span: f64) -> f64 {

@@ -6,11 +6,11 @@
 
 use std::time::Instant;
 
-use planetwear::physics::dynamics::PlanetaryDynamics;
-use planetwear::physics::ltca::SetModel;
-use planetwear::physics::response::{sweep, Direction};
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::response::{sweep, Direction};
+use planetwear::dynamics::solver::SecondOrderSystem;
 use planetwear::scene::Scene;
-use planetwear::solver::SecondOrderSystem;
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");

@@ -9,8 +9,8 @@ mod independent;
 
 use std::path::PathBuf;
 
-use planetwear::physics::accuracy::{IndependentIntegrator, StudyPlan};
-use planetwear::physics::lumped::Fidelity;
+use planetwear::analysis::accuracy::{IndependentIntegrator, StudyPlan};
+use planetwear::model::lumped::Fidelity;
 use planetwear::report::accuracy::{machine, operating_points, run_study, tables_markdown, write_study};
 
 fn main() {

@@ -5,10 +5,13 @@
 //!
 //! cargo run --release --example dynamic_wear [-- [--profiles] rpm ...]
 
-use planetwear::physics::dynamic_wear::{compare_sources, dynamic_cycle};
-use planetwear::physics::gear::MeshKind;
-use planetwear::physics::wear::{Flank, WearModel, WearSettings};
+use planetwear::model::gear::MeshKind;
 use planetwear::scene::Scene;
+use planetwear::wear::archard::WearSettings;
+use planetwear::wear::compare::compare_sources;
+use planetwear::wear::flank::Flank;
+use planetwear::wear::stepper::dynamic_cycle;
+use planetwear::wear::stepper::WearModel;
 
 /// Speed of the low-speed reference run [rpm].
 const LOW_SPEED_RPM: f64 = 100.0;

@@ -6,16 +6,12 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
-use planetwear::physics::dynamic_wear::compare_sources;
-use planetwear::physics::dynamics::PlanetaryDynamics;
-use planetwear::physics::gear::GearSet;
-use planetwear::physics::ltca::SetModel;
-use planetwear::physics::lumped::LumpedSet;
-use planetwear::physics::modes::{natural_modes, ModeClass};
-use planetwear::physics::response::{steady_state, sweep, Direction, SteadyState};
-use planetwear::physics::wear::{
-    Flank, Limit, PressureSource, WearError, WearModel, WearSettings, WearingFlanks,
-};
+use planetwear::analysis::modes::{natural_modes, ModeClass};
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::response::{steady_state, sweep, Direction, SteadyState};
+use planetwear::model::gear::GearSet;
+use planetwear::model::lumped::LumpedSet;
 use planetwear::report::ltca::LtcaStudy;
 use planetwear::report::sweep::{
     find_peaks, sweep_csv, write_csv, write_forced_response, write_steady_state,
@@ -23,6 +19,10 @@ use planetwear::report::sweep::{
 use planetwear::report::write_atomic;
 use planetwear::scene::lumped::LumpedScene;
 use planetwear::scene::Scene;
+use planetwear::wear::archard::{Limit, PressureSource, WearError, WearSettings, WearingFlanks};
+use planetwear::wear::compare::compare_sources;
+use planetwear::wear::flank::Flank;
+use planetwear::wear::stepper::WearModel;
 
 #[derive(Parser)]
 #[command(name = "planetwear", version, about = "Planetary gear dynamics with tooth wear")]
@@ -370,7 +370,7 @@ fn contact_model(set: &GearSet, wear_state: Option<&Path>) -> Result<SetModel> {
     match wear_state {
         None => Ok(SetModel::new(set)),
         Some(path) => {
-            let state = planetwear::files::read_worn_state(path, set)
+            let state = planetwear::wear::state::read_worn_state(path, set)
                 .with_context(|| format!("--wear-state {}", path.display()))?;
             Ok(state.set_model(set))
         }
@@ -416,7 +416,7 @@ fn wear_run(
     let mut state = model.unworn();
     let mut states = vec![state.clone()];
     let mut seconds = vec![0.0];
-    planetwear::files::write_worn_state(&out.join("kappa-0.json"), &state)?;
+    planetwear::wear::state::write_worn_state(&out.join("kappa-0.json"), &state)?;
     let bar = progress_bar(u64::from(to_kappa));
     let mut stopped = None;
     for _ in 0..to_kappa {
@@ -430,7 +430,7 @@ fn wear_run(
             Err(e) => return Err(e.into()),
         }
         seconds.push(started.elapsed().as_secs_f64());
-        planetwear::files::write_worn_state(&out.join(format!("kappa-{}.json", state.kappa)), &state)?;
+        planetwear::wear::state::write_worn_state(&out.join(format!("kappa-{}.json", state.kappa)), &state)?;
         states.push(state.clone());
         bar.inc(1);
     }
@@ -493,8 +493,12 @@ fn run(cli: Cli) -> Result<()> {
                 bail!("--stop and --step must be finite and positive (got {stop} and {step})");
             }
             let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
-            let mut sim =
-                planetwear::physics::simulation::Simulation::new(&set, model, 0.0, set.dynamics.input_speed)?;
+            let mut sim = planetwear::dynamics::simulation::Simulation::new(
+                &set,
+                model,
+                0.0,
+                set.dynamics.input_speed,
+            )?;
             let n = (stop / step).round() as u64;
             for k in 0..n {
                 // Communication points on the integer grid t_k = k·step, each
@@ -505,9 +509,9 @@ fn run(cli: Cli) -> Result<()> {
                 sim.do_step(t0, t1 - t0)?;
                 let row = serde_json::json!({
                     "time": sim.time(),
-                    "sun.speed": sim.speed(planetwear::physics::gear::Member::Sun),
-                    "planet[1].sunMeshForce": sim.mesh_force(0, planetwear::physics::gear::MeshKind::SunPlanet),
-                    "planet[1].ringMeshForce": sim.mesh_force(0, planetwear::physics::gear::MeshKind::RingPlanet),
+                    "sun.speed": sim.speed(planetwear::model::gear::Member::Sun),
+                    "planet[1].sunMeshForce": sim.mesh_force(0, planetwear::model::gear::MeshKind::SunPlanet),
+                    "planet[1].ringMeshForce": sim.mesh_force(0, planetwear::model::gear::MeshKind::RingPlanet),
                 });
                 println!("{row}");
             }
@@ -623,7 +627,7 @@ fn run(cli: Cli) -> Result<()> {
             let set = validated(&load_scene(&scene)?)?;
             let model = wear_model(&set, false, None, None)?;
             let state = match &state {
-                Some(path) => planetwear::files::read_worn_state(path, &set)
+                Some(path) => planetwear::wear::state::read_worn_state(path, &set)
                     .with_context(|| format!("--state {}", path.display()))?,
                 None => model.unworn(),
             };
@@ -678,7 +682,7 @@ fn run(cli: Cli) -> Result<()> {
             }
         }
         Command::Wear { action: WearAction::Effect { scene, kappa, speeds, only, out } } => {
-            use planetwear::analysis::wear_effect::{run_all, variants};
+            use planetwear::analysis::study::wear_effect::{run_all, variants};
             let base = load_scene(&scene)?;
             validated(&base)?;
             for rpm in &speeds {
@@ -720,7 +724,7 @@ fn run(cli: Cli) -> Result<()> {
             let set = validated(&load_scene(&scene)?)?;
             let model = wear_model(&set, ring, threshold, dynamic_speed)?;
             let before = match &state {
-                Some(path) => planetwear::files::read_worn_state(path, &set)
+                Some(path) => planetwear::wear::state::read_worn_state(path, &set)
                     .with_context(|| format!("--state {}", path.display()))?,
                 None => model.unworn(),
             };
@@ -730,8 +734,8 @@ fn run(cli: Cli) -> Result<()> {
                 None => Limit::Update,
             };
             let after = model.step(&before, limit)?;
-            planetwear::files::write_worn_state(&out, &after)?;
-            let deepest = |s: &planetwear::physics::wear_state::WornState, f| s.deepest_on(f);
+            planetwear::wear::state::write_worn_state(&out, &after)?;
+            let deepest = |s: &planetwear::wear::state::WornState, f| s.deepest_on(f);
             let (sun, planet) = (Flank::SunDrive, Flank::PlanetSunSide);
             println!(
                 "κ {} → {}: {:.4e} input revolutions ({:.4e} in all); deepest wear sun {:.3} µm at {:.2}°, planet {:.3} µm at {:.2}°; wrote {}",
@@ -748,7 +752,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::WorkPrecision { out, quick } => work_precision(&out, quick)?,
         Command::Validate { out, quick, scene } => {
-            use planetwear::analysis::validation::{validate, ValidationPlan};
+            use planetwear::analysis::study::validation::{validate, ValidationPlan};
             let s = load_scene(&scene)?;
             let set = validated(&s)?;
             let plan = if quick { ValidationPlan::quick() } else { ValidationPlan::full() };
@@ -763,7 +767,7 @@ fn run(cli: Cli) -> Result<()> {
             for r in &v.rows {
                 println!(
                     "{:<5} {:<40} ours {}",
-                    if r.verdict == planetwear::analysis::validation::Verdict::Pass {
+                    if r.verdict == planetwear::analysis::study::validation::Verdict::Pass {
                         "pass"
                     } else {
                         "FAIL"
@@ -857,7 +861,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             let state = match &wear_state {
                 Some(path) => Some(
-                    planetwear::files::read_worn_state(path, &set)
+                    planetwear::wear::state::read_worn_state(path, &set)
                         .with_context(|| format!("--wear-state {}", path.display()))?,
                 ),
                 None => None,
@@ -888,7 +892,7 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: bool) -> Result<()> {
-    use planetwear::analysis::calibrate::{calibrate, CalibrationError, PlanFile};
+    use planetwear::analysis::study::calibrate::{calibrate, CalibrationError, PlanFile};
     let (text, dir) = match Scene::builtin_plan(plan) {
         Some(t) => (t.to_string(), PathBuf::from(".")),
         None => {
@@ -939,7 +943,7 @@ fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: bool) -> Res
     }
 }
 
-fn print_calibration(r: &planetwear::analysis::calibrate::Report, base: &str) {
+fn print_calibration(r: &planetwear::analysis::study::calibrate::Report, base: &str) {
     println!(
         "calibration of {} from {base}: {} iterations, {} evaluations, {} contact models, {:.1} s",
         r.name, r.iterations, r.evaluations, r.contact_models, r.seconds
@@ -995,8 +999,8 @@ fn print_calibration(r: &planetwear::analysis::calibrate::Report, base: &str) {
 }
 
 fn work_precision(out: &Path, quick: bool) -> Result<()> {
-    use planetwear::physics::accuracy::StudyPlan;
-    use planetwear::physics::lumped::Fidelity;
+    use planetwear::analysis::accuracy::StudyPlan;
+    use planetwear::model::lumped::Fidelity;
     use planetwear::report::accuracy::{operating_points, run_study, tables_markdown, write_study};
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let (plan, mut points) = if quick {

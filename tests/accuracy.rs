@@ -10,12 +10,12 @@
 #[path = "support/independent.rs"]
 mod independent;
 
-use planetwear::physics::accuracy::{
+use planetwear::analysis::accuracy::{
     confirm, harmonic_error, measure, observed_order, reference, Method, Protocol, SettingResult,
 };
-use planetwear::physics::dynamics::PlanetaryDynamics;
-use planetwear::physics::gear::GearSet;
-use planetwear::physics::ltca::SetModel;
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::model::gear::GearSet;
 use planetwear::scene::{Fidelity, Scene};
 
 /// The torsional example at 3000 rpm (no separation), a short run.

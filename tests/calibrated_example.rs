@@ -2,16 +2,18 @@
 //! calibration that makes it (`planetwear calibrate`), and the frequency and
 //! wear-shape rows of the validation report on the reduced grid.
 
-use planetwear::analysis::calibrate::{calibrate, CalibrationError, Free, Measure, Plan, PlanFile, Target};
-use planetwear::analysis::validation::{validate, ValidationPlan, Verdict};
-use planetwear::physics::dynamics::PlanetaryDynamics;
-use planetwear::physics::ltca::SetModel;
-use planetwear::physics::modes::{natural_modes, ModeClass};
+use planetwear::analysis::modes::{natural_modes, ModeClass};
+use planetwear::analysis::study::calibrate::{
+    calibrate, CalibrationError, Free, Measure, Plan, PlanFile, Target,
+};
+use planetwear::analysis::study::validation::{validate, ValidationPlan, Verdict};
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::scene::{ChamferSpec, Fidelity, Scene};
 
 /// Loaded contact ratio of the sun–planet mesh and its involute path's, and
 /// the mesh model.
-fn sun_planet(scene: &Scene) -> (planetwear::physics::ltca::MeshModel, f64) {
+fn sun_planet(scene: &Scene) -> (planetwear::contact::ltca::MeshModel, f64) {
     let set = scene.validate().unwrap();
     let model = SetModel::new(&set);
     (model.sun_planet.clone(), set.mesh_load_per_planet())

@@ -6,13 +6,14 @@
 //! (`Scene::example_2004_annulus`), whose figures they pin; the calibrated
 //! example's own laws and figures: tests/calibrated_example.rs.
 
-use planetwear::physics::dynamic_wear::{compare_sources, dynamic_cycle, SourceComparison};
-use planetwear::physics::gear::{GearSet, MeshKind};
-use planetwear::physics::mesh::PathOfContact;
-use planetwear::physics::wear::{
-    CycleWear, Flank, Limit, PressureSource, WearError, WearModel, WearSettings,
-};
+use planetwear::model::gear::{GearSet, MeshKind};
+use planetwear::model::mesh::PathOfContact;
 use planetwear::scene::{Fidelity, Scene};
+use planetwear::wear::archard::{CycleWear, Limit, PressureSource, WearError, WearSettings};
+use planetwear::wear::compare::{compare_sources, SourceComparison};
+use planetwear::wear::flank::Flank;
+use planetwear::wear::stepper::dynamic_cycle;
+use planetwear::wear::stepper::WearModel;
 
 fn example() -> GearSet {
     Scene::example_2004_annulus().validate().unwrap()

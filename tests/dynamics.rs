@@ -1,13 +1,13 @@
 //! The nonlinear dynamic model: laws, phasing, the softening jump, energy,
 //! integrator agreement and determinism.
 
-use planetwear::physics::dynamics::PlanetaryDynamics;
-use planetwear::physics::gear::{GearSet, MeshKind};
-use planetwear::physics::ltca::SetModel;
-use planetwear::physics::response::{static_state, steady_state, sweep, Direction};
-use planetwear::physics::spectrum::mesh_harmonics;
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::response::{static_state, steady_state, sweep, Direction};
+use planetwear::dynamics::solver::{GeneralizedAlpha, GeneralizedAlphaSettings, SecondOrderSystem};
+use planetwear::dynamics::spectrum::mesh_harmonics;
+use planetwear::model::gear::{GearSet, MeshKind};
 use planetwear::scene::{Fidelity, IntegratorKind, Scene};
-use planetwear::solver::{GeneralizedAlpha, GeneralizedAlphaSettings, SecondOrderSystem};
 
 const RPM: f64 = std::f64::consts::PI / 30.0;
 
@@ -89,10 +89,10 @@ fn a_separating_set_shows_a_softening_jump_and_two_branches() {
     let mut rev = speeds.clone();
     rev.reverse();
     let down = run(Direction::Down, &rev);
-    let rms = |sw: &planetwear::physics::response::Sweep, rpm: f64| {
+    let rms = |sw: &planetwear::dynamics::response::Sweep, rpm: f64| {
         sw.points.iter().find(|p| (p.input_speed_rpm - rpm).abs() < 1e-9).unwrap().meshes[0].harmonics.rms
     };
-    let sep = |sw: &planetwear::physics::response::Sweep| {
+    let sep = |sw: &planetwear::dynamics::response::Sweep| {
         sw.points.iter().map(|p| p.meshes[0].separation).fold(0.0, f64::max)
     };
     assert!(sep(&up) > 0.1 && sep(&down) > 0.1, "separation up {} down {}", sep(&up), sep(&down));
@@ -258,7 +258,7 @@ fn per_planet_bearings_and_per_member_damping_take_effect() {
     let mut s = Scene::example_2004_annulus();
     s.supports.planet_bearings_n_per_m = Some(vec![6e8, 3e8, 3e8, 3e8]);
     let (_, model) = build(&s);
-    let modes = planetwear::physics::modes::natural_modes(&model.lumped);
+    let modes = planetwear::analysis::modes::natural_modes(&model.lumped);
     assert!(
         modes.iter().all(|m| m.multiplicity == 1),
         "{:?}",

@@ -282,16 +282,12 @@ fn a_step_under_a_huge_finite_torque_ends_promptly_without_a_nan() {
 }
 
 /// Replaces the f64 at `at` in a serialized state and recomputes its FNV-1a
-/// checksum (the format of src/physics/state_format.rs), as a forger would.
+/// checksum (the format of src/dynamics/state_format.rs), as a forger would.
 fn forge(bytes: &[fmi2Byte], at: usize, value: f64) -> Vec<fmi2Byte> {
     let mut b: Vec<u8> = bytes.iter().map(|x| *x as u8).collect();
     b[at..at + 8].copy_from_slice(&value.to_le_bytes());
     let n = b.len();
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for x in &b[..n - 8] {
-        h ^= u64::from(*x);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
+    let h = planetwear::files::hash::fnv1a64(&b[..n - 8]);
     b[n - 8..].copy_from_slice(&h.to_le_bytes());
     b.into_iter().map(|x| x as fmi2Byte).collect()
 }

@@ -1,10 +1,10 @@
 //! Loaded tooth contact analysis: laws and the example's figures.
 
-use planetwear::physics::gear::{GearSet, MeshKind};
-use planetwear::physics::hertz::{contact_modulus, line_contact};
-use planetwear::physics::iso6336::{iso_stiffness, IsoPair};
-use planetwear::physics::ltca::{mesh_ltca, set_ltca, MeshModel, SetModel};
-use planetwear::physics::separation::MeshFlanks;
+use planetwear::contact::hertz::{contact_modulus, line_contact};
+use planetwear::contact::iso6336::{iso_stiffness, IsoPair};
+use planetwear::contact::ltca::{mesh_ltca, set_ltca, MeshModel, SetModel};
+use planetwear::contact::separation::MeshFlanks;
+use planetwear::model::gear::{GearSet, MeshKind};
 use planetwear::scene::Scene;
 
 #[path = "support/in_phase.rs"]
@@ -141,7 +141,7 @@ fn in_phase_planets_share_the_load_equally_at_every_position() {
 
 mod deviations_and_slices {
     use super::*;
-    use planetwear::physics::profile::ProfileDeviation;
+    use planetwear::geometry::profile::ProfileDeviation;
 
     fn uniform(depth: f64) -> ProfileDeviation {
         ProfileDeviation::new(vec![0.0, 1.0], vec![depth, depth])

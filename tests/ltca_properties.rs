@@ -2,9 +2,9 @@
 
 use std::sync::OnceLock;
 
-use planetwear::physics::gear::{GearSet, MeshKind};
-use planetwear::physics::ltca::MeshModel;
-use planetwear::physics::separation::MeshFlanks;
+use planetwear::contact::ltca::MeshModel;
+use planetwear::contact::separation::MeshFlanks;
+use planetwear::model::gear::{GearSet, MeshKind};
 use planetwear::scene::Scene;
 use proptest::prelude::*;
 

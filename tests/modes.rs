@@ -1,8 +1,8 @@
 //! Modal analysis against closed forms and the structure Lin & Parker proved.
 
-use planetwear::physics::gear::Member;
-use planetwear::physics::lumped::{Fidelity, LumpedSet};
-use planetwear::physics::modes::{natural_modes, Mode, ModeClass};
+use planetwear::analysis::modes::{natural_modes, Mode, ModeClass};
+use planetwear::model::gear::Member;
+use planetwear::model::lumped::{Fidelity, LumpedSet};
 
 /// A benchmark-like set in the style of Lin & Parker (1999), Table 1 orders
 /// of magnitude; the laws tested hold for any values.

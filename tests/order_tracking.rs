@@ -1,4 +1,4 @@
-//! Order-tracked harmonics (src/physics/order_tracking.rs), the measure of
+//! Order-tracked harmonics (src/analysis/order_tracking.rs), the measure of
 //! the regression references: the FMU's window (Simulation) converges to it
 //! as the internal grid points per mesh cycle grow, at the second order of
 //! its linear interpolation between them.
@@ -7,12 +7,12 @@
 //! (`Scene::example_2004_annulus`), whose figures they pin; the calibrated
 //! example's own laws and figures: tests/calibrated_example.rs.
 
-use planetwear::physics::dynamics::PlanetaryDynamics;
-use planetwear::physics::gear::{IntegratorKind, MeshKind};
-use planetwear::physics::ltca::SetModel;
-use planetwear::physics::order_tracking::{order_tracked_windows, WindowMeasure};
-use planetwear::physics::response::ResponseError;
-use planetwear::physics::simulation::Simulation;
+use planetwear::analysis::order_tracking::{order_tracked_windows, WindowMeasure};
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::response::ResponseError;
+use planetwear::dynamics::simulation::Simulation;
+use planetwear::model::gear::{IntegratorKind, MeshKind};
 use planetwear::report::regression::window_error;
 use planetwear::scene::{Fidelity, Scene};
 

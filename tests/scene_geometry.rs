@@ -1,10 +1,10 @@
 //! Geometry of the example against docs/MODEL.md §1 and docs/FORMULAS.md.
 
-use planetwear::physics::gear::MeshKind;
-use planetwear::physics::mesh::PathOfContact;
+use planetwear::model::gear::MeshKind;
+use planetwear::model::mesh::PathOfContact;
 use planetwear::scene::Scene;
 
-fn example() -> planetwear::physics::gear::GearSet {
+fn example() -> planetwear::model::gear::GearSet {
     Scene::example_2004().validate().expect("the example is valid")
 }
 

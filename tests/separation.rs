@@ -1,8 +1,8 @@
 //! Unloaded separation from the 2-D flank outlines.
 
-use planetwear::physics::gear::{GearSet, MeshKind};
-use planetwear::physics::profile::{FlankOutline, ProfileDeviation};
-use planetwear::physics::separation::{MeshFlanks, MeshSeparation};
+use planetwear::contact::separation::{MeshFlanks, MeshSeparation};
+use planetwear::geometry::profile::{FlankOutline, ProfileDeviation};
+use planetwear::model::gear::{GearSet, MeshKind};
 use planetwear::scene::Scene;
 
 fn example() -> GearSet {

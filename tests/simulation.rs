@@ -4,12 +4,12 @@
 //! (`Scene::example_2004_annulus`), whose figures they pin; the calibrated
 //! example's own laws and figures: tests/calibrated_example.rs.
 
-use planetwear::physics::dynamics::PlanetaryDynamics;
-use planetwear::physics::gear::{GearSet, Member, MeshKind};
-use planetwear::physics::ltca::SetModel;
-use planetwear::physics::simulation::{Simulation, SimulationError};
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::simulation::{Simulation, SimulationError};
+use planetwear::dynamics::solver::SecondOrderSystem;
+use planetwear::model::gear::{GearSet, Member, MeshKind};
 use planetwear::scene::{Fidelity, IntegratorKind, Scene};
-use planetwear::solver::SecondOrderSystem;
 
 const OMEGA: f64 = 3000.0 * std::f64::consts::PI / 30.0;
 
@@ -157,8 +157,8 @@ fn an_unbalanced_torque_accelerates_the_train_at_the_rigid_body_rate() {
 
 mod outputs {
     use super::*;
-    use planetwear::physics::response::steady_state;
-    use planetwear::physics::simulation::Bearing;
+    use planetwear::dynamics::response::steady_state;
+    use planetwear::dynamics::simulation::Bearing;
 
     fn run_cycles(
         sim: &mut Simulation,

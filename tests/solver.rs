@@ -1,7 +1,7 @@
 //! Tests of the time integrators against closed-form solutions and the laws they must obey.
 
 use nalgebra::DMatrix;
-use planetwear::solver::{
+use planetwear::dynamics::solver::{
     AlphaParameters, GeneralizedAlpha, GeneralizedAlphaSettings, Rk45, Rk45Settings, SecondOrderSystem,
     SolverError, StepController,
 };

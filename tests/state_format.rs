@@ -1,10 +1,10 @@
 //! The serialized state: versioned, self-checking, pointer-free, bit-identical.
 
-use planetwear::physics::dynamics::PlanetaryDynamics;
-use planetwear::physics::gear::MeshKind;
-use planetwear::physics::ltca::SetModel;
-use planetwear::physics::simulation::{Simulation, Snapshot};
-use planetwear::physics::state_format::{decode, encode, StateFormatError};
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::simulation::{Simulation, Snapshot};
+use planetwear::dynamics::state_format::{decode, encode, StateFormatError};
+use planetwear::model::gear::MeshKind;
 use planetwear::scene::{Fidelity, Scene};
 use proptest::prelude::*;
 

@@ -1,8 +1,8 @@
 //! Tooth-pair stiffness against ISO 6336-1 and the published test vector.
 
-use planetwear::physics::gear::MeshKind;
-use planetwear::physics::iso6336::{iso_stiffness, IsoPair};
-use planetwear::physics::stiffness::PairStiffness;
+use planetwear::contact::iso6336::{iso_stiffness, IsoPair};
+use planetwear::contact::stiffness::PairStiffness;
+use planetwear::model::gear::MeshKind;
 use planetwear::scene::Scene;
 
 #[test]

@@ -7,15 +7,17 @@
 //! (`Scene::example_2004_annulus`), whose figures they pin; the calibrated
 //! example's own laws and figures: tests/calibrated_example.rs.
 
-use planetwear::physics::dynamics::PlanetaryDynamics;
-use planetwear::physics::gear::{GearSet, Member, MeshKind};
-use planetwear::physics::ltca::SetModel;
-use planetwear::physics::profile::ProfileDeviation;
-use planetwear::physics::response::{static_state, steady_state, SteadyState};
-use planetwear::physics::separation::MeshFlanks;
-use planetwear::physics::simulation::Simulation;
+use planetwear::contact::ltca::SetModel;
+use planetwear::contact::separation::MeshFlanks;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::response::{static_state, steady_state, SteadyState};
+use planetwear::dynamics::simulation::Simulation;
+use planetwear::dynamics::solver::{
+    GeneralizedAlpha, GeneralizedAlphaSettings, Rk45, Rk45Settings, SecondOrderSystem,
+};
+use planetwear::geometry::profile::ProfileDeviation;
+use planetwear::model::gear::{GearSet, Member, MeshKind};
 use planetwear::scene::{Fidelity, IntegratorKind, Scene};
-use planetwear::solver::{GeneralizedAlpha, GeneralizedAlphaSettings, Rk45, Rk45Settings, SecondOrderSystem};
 
 const RPM: f64 = std::f64::consts::PI / 30.0;
 

@@ -5,15 +5,16 @@
 //! (`Scene::example_2004_annulus`), whose figures they pin; the calibrated
 //! example's own laws and figures: tests/calibrated_example.rs.
 
-use planetwear::physics::gear::{GearSet, Member, MeshKind};
-use planetwear::physics::hertz::LineContact;
-use planetwear::physics::mesh::PathOfContact;
-use planetwear::physics::wear::{
-    contact_rolls, cycles_per_input_revolution, involute_arc, passage_wear, sliding_map, Band, CycleWear,
-    Flank, Limit, Stop, UpdateEnd, WearError, WearModel, WearSettings, WearingFlanks,
-};
-use planetwear::physics::wear_state::WornState;
+use planetwear::contact::hertz::LineContact;
+use planetwear::model::gear::{GearSet, Member, MeshKind};
+use planetwear::model::mesh::PathOfContact;
 use planetwear::scene::Scene;
+use planetwear::wear::archard::{
+    passage_wear, sliding_map, Band, CycleWear, Limit, Stop, WearError, WearSettings, WearingFlanks,
+};
+use planetwear::wear::flank::{contact_rolls, cycles_per_input_revolution, involute_arc, Flank, UpdateEnd};
+use planetwear::wear::state::WornState;
+use planetwear::wear::stepper::WearModel;
 use proptest::prelude::*;
 
 #[path = "support/in_phase.rs"]
@@ -43,7 +44,7 @@ fn max_of(v: &[f64]) -> f64 {
 
 /// Linear interpolation on an increasing grid.
 fn interp(x: &[f64], y: &[f64], at: f64) -> f64 {
-    planetwear::physics::profile::interpolate(x, y, at)
+    planetwear::geometry::profile::interpolate(x, y, at)
 }
 
 #[test]

@@ -3,13 +3,15 @@
 
 use std::sync::OnceLock;
 
-use planetwear::files::{read_worn_state, write_worn_state, StateFileError};
-use planetwear::physics::gear::{GearSet, MeshKind};
-use planetwear::physics::ltca::MeshModel;
-use planetwear::physics::profile::ProfileDeviation;
-use planetwear::physics::wear::{Flank, Limit, WearModel, WearSettings};
-use planetwear::physics::wear_state::{content_checksum, GearSetPrint, WornState, WornStateError};
+use planetwear::contact::ltca::MeshModel;
+use planetwear::geometry::profile::ProfileDeviation;
+use planetwear::model::gear::{GearSet, MeshKind};
 use planetwear::scene::Scene;
+use planetwear::wear::archard::{Limit, WearSettings};
+use planetwear::wear::flank::Flank;
+use planetwear::wear::state::{content_checksum, GearSetPrint, WornState, WornStateError};
+use planetwear::wear::state::{read_worn_state, write_worn_state, StateFileError};
+use planetwear::wear::stepper::WearModel;
 use proptest::prelude::*;
 use serde_json::Value;
 
@@ -322,13 +324,13 @@ fn a_set_entered_in_other_units_is_the_same_set() {
     // the example's own worn states foreign, while a real change still does.
     let mut scene = planetwear::scene::Scene::example_2004();
     let set = scene.validate().unwrap();
-    let state = planetwear::physics::wear_state::WornState::unworn(&set, 10, 1);
+    let state = planetwear::wear::state::WornState::unworn(&set, 10, 1);
     scene.planet.pressure_angle_deg =
         (scene.planet.pressure_angle_deg.to_radians() * (1.0 + 1e-15)).to_degrees();
     scene.ring.tooth_thickness_mm *= 1.0 + 2e-16;
     let rounded = scene.validate().unwrap();
     assert_ne!(
-        planetwear::physics::wear_state::GearSetPrint::of(&rounded).fingerprint,
+        planetwear::wear::state::GearSetPrint::of(&rounded).fingerprint,
         state.gear_set.fingerprint,
         "the test must exercise a different fingerprint"
     );
@@ -347,12 +349,12 @@ fn a_state_file_moves_the_unloaded_separation_and_the_static_te_of_the_dynamic_m
     // mesh's unloaded separation rises by 5 µm along the whole path, and the
     // static transmission error under the example's load by 5 µm, in the
     // dynamic model's contact tables.
-    use planetwear::physics::dynamics::PlanetaryDynamics;
-    use planetwear::physics::gear::MeshKind;
-    use planetwear::physics::ltca::SetModel;
-    use planetwear::physics::simulation::Simulation;
+    use planetwear::contact::ltca::SetModel;
+    use planetwear::dynamics::equations::PlanetaryDynamics;
+    use planetwear::dynamics::simulation::Simulation;
+    use planetwear::model::gear::MeshKind;
     let set = planetwear::scene::Scene::example_2004().validate().unwrap();
-    let mut state = planetwear::physics::wear_state::WornState::unworn(&set, 50, 1);
+    let mut state = planetwear::wear::state::WornState::unworn(&set, 50, 1);
     for d in &mut state.flanks.sun_drive {
         d.depth.iter_mut().for_each(|x| *x = 4e-6);
     }
@@ -361,8 +363,8 @@ fn a_state_file_moves_the_unloaded_separation_and_the_static_te_of_the_dynamic_m
     }
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("uniform.json");
-    planetwear::files::write_worn_state(&path, &state).unwrap();
-    let read = planetwear::files::read_worn_state(&path, &set).unwrap();
+    planetwear::wear::state::write_worn_state(&path, &state).unwrap();
+    let read = planetwear::wear::state::read_worn_state(&path, &set).unwrap();
     let (worn, fresh) = (read.set_model(&set), SetModel::new(&set));
     let p = fresh.sun_planet.path().clone();
     let load = set.mesh_load_per_planet();

@@ -1,16 +1,17 @@
-//! Studies over the physics: experiments that vary a scene and compare what
-//! the model gives. This stage reads scenes and the physics and writes no
-//! files; the command line and the reports present its results.
+//! Stage 7, analysis: studies over the physics. Natural frequencies and
+//! modes, order tracking, the integrators' accuracy against run time, and
+//! experiments that vary a scene and compare what the model gives. This stage
+//! writes no files; the command line and the reports present its results.
 //!
-//! - [`calibrate`]: scene parameters fitted to target natural frequencies
-//!   and double-contact shares.
-//! - [`peaks`]: resonance peaks of a sweep and the mode behind each.
-//! - [`validation`]: every claim of the study beside ours, with tolerance
-//!   and verdict, and the published benchmarks.
-//! - [`wear_effect`]: the cause of the wear effect on the dynamic loads,
-//!   one modelling factor at a time.
+//! May import: every earlier stage ([`crate::files`] to [`crate::wear`]).
+//!
+//! - [`accuracy`]: work-precision of the integrators.
+//! - [`modes`]: natural frequencies and mode shapes, with mode classes.
+//! - [`order_tracking`]: order spectra of a run-up or time history.
+//! - [`study`]: the published example's study: calibration, resonance
+//!   peaks, validation against the study's claims, and the wear effect.
 
-pub mod calibrate;
-pub mod peaks;
-pub mod validation;
-pub mod wear_effect;
+pub mod accuracy;
+pub mod modes;
+pub mod order_tracking;
+pub mod study;

@@ -7,12 +7,12 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
 use super::variables::{find, vr, Causality, Kind, Start, GUID, VARIABLES};
-use crate::physics::dynamics::PlanetaryDynamics;
-use crate::physics::gear::{Drive, IntegratorKind, Member, MeshKind};
-use crate::physics::ltca::SetModel;
-use crate::physics::lumped::Fidelity;
-use crate::physics::simulation::{Bearing, Simulation, Snapshot};
-use crate::physics::state_format;
+use crate::contact::ltca::SetModel;
+use crate::dynamics::equations::PlanetaryDynamics;
+use crate::dynamics::simulation::{Bearing, Simulation, Snapshot};
+use crate::dynamics::state_format;
+use crate::model::gear::{Drive, IntegratorKind, Member, MeshKind};
+use crate::model::lumped::Fidelity;
 use crate::scene::{ChamferSpec, Scene};
 
 /// FMI status of a refused or partial call.
@@ -376,7 +376,7 @@ impl Instance {
     /// The contact model: unworn, or with the flanks of the worn-profile
     /// state named by wearStateFile (a path, or a file in resources/ such as
     /// `wear/example-2004/kappa-2.json`), which must belong to this gear set.
-    fn contact_model(&self, set: &crate::physics::gear::GearSet) -> Result<SetModel, Refusal> {
+    fn contact_model(&self, set: &crate::model::gear::GearSet) -> Result<SetModel, Refusal> {
         let file = self.strings.get(&vr::WEAR_STATE_FILE).cloned().unwrap_or_default();
         if file.is_empty() {
             return Ok(SetModel::new(set));
@@ -387,7 +387,7 @@ impl Instance {
                 path = r.join(&file);
             }
         }
-        let state = crate::files::read_worn_state(&path, set)
+        let state = crate::wear::state::read_worn_state(&path, set)
             .map_err(|e| Refusal::error(format!("wearStateFile = {file}: {e}")))?;
         Ok(state.set_model(set))
     }
@@ -627,7 +627,7 @@ impl Instance {
                 self.last_successful_time = sim.time();
                 Ok(())
             }
-            Err(crate::physics::simulation::SimulationError::InvalidInput { name, value, reason }) => {
+            Err(crate::dynamics::simulation::SimulationError::InvalidInput { name, value, reason }) => {
                 Err(Refusal::error(format!("{name} = {value}: {reason}")))
             }
             Err(e) => {

@@ -12,11 +12,11 @@ use serde::Serialize;
 
 use super::plot::{write_chart, Chart, PlotError, Series, SeriesStyle};
 use super::write_atomic;
-use crate::physics::accuracy::{
+use crate::analysis::accuracy::{
     cheapest_meeting, observed_order, study_point, time_to_reach, AccuracyError, IndependentIntegrator,
     Method, OperatingPoint, PointResult, SettingResult, StudyPlan,
 };
-use crate::physics::lumped::Fidelity;
+use crate::model::lumped::Fidelity;
 use crate::scene::{Scene, SceneError};
 
 /// The accuracy every default setting must reach at every operating point.

@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 use serde_json::{json, Value};
 
 use super::plot::{write_chart, Chart, PlotError, Series};
-use crate::physics::gear::{GearSet, MeshKind};
-use crate::physics::iso6336::{iso_stiffness, IsoPair};
-use crate::physics::ltca::{mesh_ltca, set_ltca, CycleStats, MeshLtca, SetLtca, SetModel};
+use crate::contact::iso6336::{iso_stiffness, IsoPair};
+use crate::contact::ltca::{mesh_ltca, set_ltca, CycleStats, MeshLtca, SetLtca, SetModel};
+use crate::model::gear::{GearSet, MeshKind};
 
 /// Everything the LTCA command computes.
 #[derive(Clone, Debug)]
@@ -28,7 +28,7 @@ pub struct LtcaStudy {
 /// ISO 6336-1 stiffness of a mesh of the set: profile shifts from the tooth
 /// thicknesses with the backlash shared equally; basic-rack dedendum from
 /// the root radius.
-fn iso_for(set: &GearSet, mesh: MeshKind, contact_ratio: f64) -> crate::physics::iso6336::IsoStiffness {
+fn iso_for(set: &GearSet, mesh: MeshKind, contact_ratio: f64) -> crate::contact::iso6336::IsoStiffness {
     let (g1, g2) = set.mesh_gears(mesh);
     let j = set.circumferential_backlash(mesh);
     let a = g1.pressure_angle;
@@ -107,7 +107,7 @@ impl LtcaStudy {
             .zip(MeshKind::ALL)
             .zip(&self.stiffness_summary)
             .map(|((r, mesh), summary)| {
-                let p = crate::physics::mesh::PathOfContact::new(set, mesh);
+                let p = crate::model::mesh::PathOfContact::new(set, mesh);
                 let mut v = json!({
                     "name": r.name,
                     "load": r.load,

@@ -10,13 +10,14 @@ use std::path::Path;
 use zip::write::SimpleFileOptions;
 
 use crate::fmi::variables::{Causality, GUID, MODEL_DESCRIPTION_XML, MODEL_IDENTIFIER, VARIABLES};
-use crate::physics::wear::{Limit, WearModel, WearSettings};
-use crate::physics::wear_state::WornState;
 use crate::report::regression::{
     example_references, CASES, REFERENCE_RELATIVE_TOLERANCE, RESOURCE, STEPS_PER_MESH_CYCLE,
 };
 use crate::scene::lumped::LumpedScene;
 use crate::scene::Scene;
+use crate::wear::archard::{Limit, WearSettings};
+use crate::wear::state::WornState;
+use crate::wear::stepper::WearModel;
 
 /// Why the FMU could not be assembled.
 #[derive(Debug, thiserror::Error)]
@@ -93,6 +94,12 @@ pub fn example_wear_states() -> Result<Vec<WornState>, PackError> {
     Ok(states)
 }
 
+impl From<crate::files::FileError> for PackError {
+    fn from(e: crate::files::FileError) -> Self {
+        PackError::Io { path: e.path.display().to_string(), source: e.source }
+    }
+}
+
 /// Writes the FMU archive to `out` from the shared library at `library`.
 pub fn pack(library: &Path, out: &Path) -> Result<(), PackError> {
     let io = |path: &Path| {
@@ -105,38 +112,37 @@ pub fn pack(library: &Path, out: &Path) -> Result<(), PackError> {
     let so = std::fs::read(library).map_err(io(library))?;
     let dir = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir).map_err(io(dir))?;
-    let tmp = dir.join(format!(
-        ".{}.{}.tmp",
-        out.file_name().and_then(|s| s.to_str()).unwrap_or("fmu"),
-        std::process::id()
-    ));
-    let file = std::fs::File::create(&tmp).map_err(io(&tmp))?;
-    let mut zip = zip::ZipWriter::new(file);
-    let opts = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
-    let mut add = |name: &str, data: &[u8]| -> Result<(), PackError> {
-        zip.start_file(name, opts)?;
-        zip.write_all(data).map_err(io(Path::new(name)))
-    };
-    add("modelDescription.xml", MODEL_DESCRIPTION_XML.as_bytes())?;
-    add(&format!("binaries/linux64/{MODEL_IDENTIFIER}.so"), &so)?;
-    add("resources/example-2004.toml", Scene::example_2004().to_toml().as_bytes())?;
-    add("resources/lumped-benchmark.toml", LumpedScene::lumped_benchmark().to_toml().as_bytes())?;
-    // The example's worn-profile states κ = 0..6 (the wear model's run,
-    // about 5 s), for the wearStateFile parameter.
-    let mut texts = Vec::new();
-    for (kappa, state) in example_wear_states()?.iter().enumerate() {
-        let text = state.to_json().map_err(|e| PackError::Wear(e.to_string()))?;
-        add(&format!("resources/wear/example-2004/kappa-{kappa}.json"), text.as_bytes())?;
-        texts.push(text);
-    }
-    // Reference results for regression tests (docs/REGRESSION.md), computed
-    // from the shipped states' text as the FMU reads it.
-    let references = example_references(&texts, &CASES, REFERENCE_RELATIVE_TOLERANCE)
-        .and_then(|r| r.to_json())
-        .map_err(|e| PackError::References(e.to_string()))?;
-    add(RESOURCE, references.as_bytes())?;
-    add("documentation/index.html", documentation().as_bytes())?;
-    zip.finish()?;
-    std::fs::rename(&tmp, out).map_err(io(out))?;
-    Ok(())
+    // Written durably: on any failure (here or while packing) the temporary
+    // archive is removed and `out` is untouched.
+    let states = example_wear_states()?;
+    crate::files::write_durable_with(out, "", |tmp| {
+        let file = std::fs::OpenOptions::new().write(true).truncate(true).open(tmp).map_err(io(tmp))?;
+        let mut zip = zip::ZipWriter::new(file);
+        let opts = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+        let mut add = |name: &str, data: &[u8]| -> Result<(), PackError> {
+            zip.start_file(name, opts)?;
+            zip.write_all(data).map_err(io(Path::new(name)))
+        };
+        add("modelDescription.xml", MODEL_DESCRIPTION_XML.as_bytes())?;
+        add(&format!("binaries/linux64/{MODEL_IDENTIFIER}.so"), &so)?;
+        add("resources/example-2004.toml", Scene::example_2004().to_toml().as_bytes())?;
+        add("resources/lumped-benchmark.toml", LumpedScene::lumped_benchmark().to_toml().as_bytes())?;
+        // The example's worn-profile states κ = 0..6 (the wear model's run,
+        // about 5 s), for the wearStateFile parameter.
+        let mut texts = Vec::new();
+        for (kappa, state) in states.iter().enumerate() {
+            let text = state.to_json().map_err(|e| PackError::Wear(e.to_string()))?;
+            add(&format!("resources/wear/example-2004/kappa-{kappa}.json"), text.as_bytes())?;
+            texts.push(text);
+        }
+        // Reference results for regression tests (docs/REGRESSION.md), computed
+        // from the shipped states' text as the FMU reads it.
+        let references = example_references(&texts, &CASES, REFERENCE_RELATIVE_TOLERANCE)
+            .and_then(|r| r.to_json())
+            .map_err(|e| PackError::References(e.to_string()))?;
+        add(RESOURCE, references.as_bytes())?;
+        add("documentation/index.html", documentation().as_bytes())?;
+        zip.finish()?;
+        Ok(())
+    })
 }

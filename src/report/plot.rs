@@ -7,13 +7,9 @@
 //! `dejavu` crate, so no system fonts or font libraries are needed.
 
 use std::ffi::OsString;
-use std::fs::{self, File, OpenOptions};
-use std::io::Write;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
-use std::time::{SystemTime, UNIX_EPOCH};
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -438,55 +434,9 @@ fn draw<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Returns a unique temporary path in the same directory as `target`, ending in `ext`.
-fn temp_path(target: &Path, ext: &str) -> PathBuf {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let nanos = SystemTime::now().duration_since(UNIX_EPOCH).map(|d| d.subsec_nanos()).unwrap_or(0);
-    let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp_name = format!(".{name}.tmp-{}-{n}-{nanos}{ext}", std::process::id());
-    target.with_file_name(tmp_name)
-}
-
-/// Creates a fresh temporary file next to `target`, retrying if the name is taken.
-fn create_temp(target: &Path, ext: &str) -> Result<(PathBuf, File), PlotError> {
-    let mut attempts = 0;
-    loop {
-        let tmp = temp_path(target, ext);
-        match OpenOptions::new().write(true).create_new(true).open(&tmp) {
-            Ok(f) => return Ok((tmp, f)),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempts < 16 => {
-                attempts += 1;
-            }
-            Err(source) => return Err(PlotError::Io { path: tmp, source }),
-        }
-    }
-}
-
-/// Flushes `tmp` to disk and renames it to `target`, removing `tmp` on failure.
-fn commit_temp(tmp: &Path, target: &Path) -> Result<(), PlotError> {
-    let result = File::open(tmp)
-        .and_then(|f| f.sync_all())
-        .map_err(|source| PlotError::Io { path: tmp.to_path_buf(), source })
-        .and_then(|()| {
-            fs::rename(tmp, target).map_err(|source| PlotError::Io { path: target.to_path_buf(), source })
-        });
-    if result.is_err() {
-        let _ = fs::remove_file(tmp);
-    }
-    result
-}
-
-/// Writes `bytes` to `target` through a temporary file and a rename.
+/// Writes `bytes` to `target` atomically ([`crate::files::write_durable`]).
 pub fn write_atomic(target: &Path, bytes: &[u8]) -> Result<(), PlotError> {
-    let (tmp, mut file) = create_temp(target, ".svg")?;
-    if let Err(source) = file.write_all(bytes) {
-        drop(file);
-        let _ = fs::remove_file(&tmp);
-        return Err(PlotError::Io { path: tmp, source });
-    }
-    drop(file);
-    commit_temp(&tmp, target)
+    Ok(crate::files::write_durable(target, bytes)?)
 }
 
 /// Lets `render` write a PNG to a temporary path (ending in `.png`) and renames it to `target`.
@@ -495,13 +445,13 @@ fn write_png_atomic(
     render: impl FnOnce(&Path) -> Result<(), PlotError>,
 ) -> Result<(), PlotError> {
     // The bitmap backend picks the image format from the extension, so keep `.png` last.
-    let (tmp, file) = create_temp(target, ".png")?;
-    drop(file);
-    if let Err(e) = render(&tmp) {
-        let _ = fs::remove_file(&tmp);
-        return Err(e);
+    crate::files::write_durable_with(target, ".png", render)
+}
+
+impl From<crate::files::FileError> for PlotError {
+    fn from(e: crate::files::FileError) -> Self {
+        PlotError::Io { path: e.path, source: e.source }
     }
-    commit_temp(&tmp, target)
 }
 
 #[cfg(test)]

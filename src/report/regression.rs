@@ -26,13 +26,13 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+use crate::analysis::order_tracking::{order_tracked_windows, WindowMeasure, HARMONICS};
+use crate::dynamics::equations::PlanetaryDynamics;
+use crate::dynamics::response::Work;
 use crate::fmi::variables::{Start, GUID, VARIABLES};
-use crate::physics::dynamics::PlanetaryDynamics;
-use crate::physics::gear::IntegratorKind;
-use crate::physics::order_tracking::{order_tracked_windows, WindowMeasure, HARMONICS};
-use crate::physics::response::Work;
-use crate::physics::wear_state::WornState;
+use crate::model::gear::IntegratorKind;
 use crate::scene::Scene;
+use crate::wear::state::WornState;
 
 /// Format tag of the reference file; the Python kit refuses any other.
 pub const FORMAT: &str = "planetwear-regression/1";

@@ -5,14 +5,14 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-pub use crate::analysis::peaks::{excited_family, find_peaks, Peak};
+pub use crate::analysis::study::peaks::{excited_family, find_peaks, Peak};
 
 use super::plot::{write_chart, Chart, PlotError, Series, SeriesStyle};
 use super::write_atomic;
-use crate::physics::gear::{GearSet, MeshKind};
-use crate::physics::modes::{Mode, ModeClass};
-use crate::physics::response::{Direction, SteadyState, Sweep};
-use crate::physics::spectrum::order_spectrum;
+use crate::analysis::modes::{Mode, ModeClass};
+use crate::dynamics::response::{Direction, SteadyState, Sweep};
+use crate::dynamics::spectrum::order_spectrum;
+use crate::model::gear::{GearSet, MeshKind};
 
 fn mesh_label(m: MeshKind) -> &'static str {
     match m {

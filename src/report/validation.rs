@@ -1,5 +1,5 @@
 //! The validation report (docs/VALIDATION.md): the rows of
-//! [`crate::analysis::validation`] as Markdown tables, the figures that lay
+//! [`crate::analysis::study::validation`] as Markdown tables, the figures that lay
 //! the study's features over ours, and the JSON of the run, so that a later
 //! run can say which rows moved.
 
@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 
 use super::plot::{write_chart, Chart, PlotError, Series};
 use super::write_atomic;
-use crate::analysis::validation::{Row, Validation, Verdict, STUDY_PEAKS};
-use crate::physics::response::Direction;
+use crate::analysis::study::validation::{Row, Validation, Verdict, STUDY_PEAKS};
+use crate::dynamics::response::Direction;
 
 /// A row whose number differs from the previous run's beyond this relative change has moved.
 const MOVED: f64 = 1e-6;

@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 use serde_json::{json, Value};
 
 use super::plot::{write_chart, Chart, PlotError, Series};
-use crate::physics::gear::{GearSet, MeshKind};
-use crate::physics::profile::ProfileDeviation;
-use crate::physics::wear_state::WornState;
+use crate::geometry::profile::ProfileDeviation;
+use crate::model::gear::{GearSet, MeshKind};
+use crate::wear::state::WornState;
 
 const DEG: f64 = 180.0 / std::f64::consts::PI;
 

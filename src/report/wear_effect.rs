@@ -1,7 +1,7 @@
-//! Tables of the wear-effect experiments ([`crate::analysis::wear_effect`]):
+//! Tables of the wear-effect experiments ([`crate::analysis::study::wear_effect`]):
 //! Markdown for the documentation and the terminal, in the field's units.
 
-use crate::analysis::wear_effect::VariantResult;
+use crate::analysis::study::wear_effect::VariantResult;
 
 /// The experiments as two Markdown tables: the wear shape and quasi-static
 /// figures, then the dynamic loads of planet 1's meshes per speed.

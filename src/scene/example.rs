@@ -1,10 +1,10 @@
 //! The 2004 scene: the automatic-transmission planetary set of docs/MODEL.md §1.
 
+use super::Member;
 use super::{
     AnalysisSpec, ChamferSpec, ExternalGearSpec, MaterialSpec, OperationSpec, PlanetLayoutSpec, RingGearSpec,
     Scene,
 };
-use crate::physics::gear::Member;
 
 impl Scene {
     /// The study's example system, calibrated to the study's own figures:

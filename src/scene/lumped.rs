@@ -5,10 +5,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::validate::Problem;
 use super::SceneError;
-use crate::physics::gear::Member;
-use crate::physics::lumped::{Fidelity, LumpedSet};
+use super::{Fidelity, Member};
 
 /// One central member of a lumped scene.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -122,95 +120,5 @@ impl LumpedScene {
     /// The scene as TOML.
     pub fn to_toml(&self) -> String {
         toml::to_string_pretty(self).unwrap_or_default()
-    }
-
-    /// Validates into the linear model.
-    pub fn validate(&self) -> Result<LumpedSet, SceneError> {
-        let l = &self.lumped;
-        let mut problems = Vec::new();
-        let mut positive = |name: &str, v: f64, zero_ok: bool| {
-            let ok = v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0));
-            if !ok {
-                problems.push(Problem {
-                    name: name.into(),
-                    value: v.to_string(),
-                    reason: if zero_ok {
-                        "must be zero or a finite positive number"
-                    } else {
-                        "must be a finite number greater than zero"
-                    }
-                    .into(),
-                });
-            }
-        };
-        for (key, c) in [("carrier", &l.carrier), ("ring", &l.ring), ("sun", &l.sun)] {
-            positive(&format!("lumped.{key}.mass_kg"), c.mass_kg, false);
-            positive(&format!("lumped.{key}.rotational_mass_kg"), c.rotational_mass_kg, false);
-            positive(&format!("lumped.{key}.bearing_n_per_m"), c.bearing_n_per_m, true);
-            positive(&format!("lumped.{key}.torsional_n_per_m"), c.torsional_n_per_m, true);
-        }
-        positive("lumped.planet.mass_kg", l.planet.mass_kg, false);
-        positive("lumped.planet.rotational_mass_kg", l.planet.rotational_mass_kg, false);
-        positive("lumped.planet.bearing_n_per_m", l.planet.bearing_n_per_m, false);
-        positive("lumped.sun_mesh_n_per_m", l.sun_mesh_n_per_m, false);
-        positive("lumped.ring_mesh_n_per_m", l.ring_mesh_n_per_m, false);
-        for (name, a) in [
-            ("lumped.sun_pressure_angle_deg", l.sun_pressure_angle_deg),
-            ("lumped.ring_pressure_angle_deg", l.ring_pressure_angle_deg),
-        ] {
-            if !(a.is_finite() && a > 0.0 && a < 45.0) {
-                problems.push(Problem {
-                    name: name.into(),
-                    value: a.to_string(),
-                    reason: "must lie strictly between 0 and 45".into(),
-                });
-            }
-        }
-        let n = l.planet.count;
-        let angles: Vec<f64> = match &l.planet.angles_deg {
-            None => (0..n).map(|i| 2.0 * std::f64::consts::PI * f64::from(i) / f64::from(n.max(1))).collect(),
-            Some(a) => a.iter().map(|d| d.to_radians()).collect(),
-        };
-        if !(1..=32).contains(&n) {
-            problems.push(Problem {
-                name: "lumped.planet.count".into(),
-                value: n.to_string(),
-                reason: "must be between 1 and 32".into(),
-            });
-        } else if angles.len() != n as usize || angles.iter().any(|a| !a.is_finite()) {
-            problems.push(Problem {
-                name: "lumped.planet.angles_deg".into(),
-                value: format!("{:?}", l.planet.angles_deg),
-                reason: format!("must list exactly lumped.planet.count = {n} finite angles"),
-            });
-        }
-        if !problems.is_empty() {
-            return Err(SceneError::Invalid { problems });
-        }
-        Ok(LumpedSet {
-            central_mass: [l.carrier.mass_kg, l.ring.mass_kg, l.sun.mass_kg],
-            central_rotational_mass: [
-                l.carrier.rotational_mass_kg,
-                l.ring.rotational_mass_kg,
-                l.sun.rotational_mass_kg,
-            ],
-            planet_mass: l.planet.mass_kg,
-            planet_rotational_mass: l.planet.rotational_mass_kg,
-            central_bearing: [l.carrier.bearing_n_per_m, l.ring.bearing_n_per_m, l.sun.bearing_n_per_m],
-            central_torsional: [
-                l.carrier.torsional_n_per_m,
-                l.ring.torsional_n_per_m,
-                l.sun.torsional_n_per_m,
-            ],
-            planet_bearing: l.planet.bearing_n_per_m,
-            planet_bearings: Vec::new(),
-            sun_mesh: l.sun_mesh_n_per_m,
-            ring_mesh: l.ring_mesh_n_per_m,
-            sun_pressure_angle: l.sun_pressure_angle_deg.to_radians(),
-            ring_pressure_angle: l.ring_pressure_angle_deg.to_radians(),
-            planet_angles: angles,
-            held: l.held,
-            fidelity: l.fidelity,
-        })
     }
 }

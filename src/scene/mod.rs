@@ -1,23 +1,25 @@
-//! Scenes: what a user writes to describe a planetary gear set, and its
-//! validation into the SI types the physics accepts.
+//! Stage 1, scene: what a user writes to describe a planetary gear set.
 //!
 //! A [`Scene`] is the file as written (TOML, engineering units named in every
-//! key: `_mm`, `_deg`, `_gpa`, `_nm`, `_n_per_m`). [`Scene::validate`] checks
-//! every rule at once and returns either a [`GearSet`] (SI inside, proven
+//! key: `_mm`, `_deg`, `_gpa`, `_nm`, `_n_per_m`), with the built-in scenes
+//! and the words the file is written in (members, drives, integrators,
+//! fidelity). `Scene::validate` (in [`crate::model::build`]) checks every
+//! rule at once and returns either the model's `GearSet` (SI inside, proven
 //! valid) or a [`SceneError`] listing one [`Problem`] per broken rule, each
 //! naming the parameter and what is allowed.
+//!
+//! May import: [`crate::files`].
 
 mod example;
 pub mod lumped;
+mod terms;
 mod validate;
 
 use serde::{Deserialize, Serialize};
 
 pub use validate::{default_chamfer, Problem, SceneError};
 
-pub use crate::physics::gear::{Drive, IntegratorKind};
-use crate::physics::gear::{GearSet, Member};
-pub use crate::physics::lumped::Fidelity;
+pub use terms::{Drive, Fidelity, IntegratorKind, Member};
 
 /// A planetary gear set as written in a scene file (engineering units).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -410,35 +412,6 @@ impl Scene {
             "example-2004" => Some(include_str!("example-2004.calibration.toml")),
             _ => None,
         }
-    }
-
-    /// Checks every rule and converts to SI.
-    pub fn validate(&self) -> Result<GearSet, SceneError> {
-        validate::validate(self)
-    }
-
-    /// The scene with its derived defaults written out: the tip chamfers of
-    /// sun and planet and every mass and moment of inertia, so that each of
-    /// them has a key with a value (to edit, or to fit with `calibrate`).
-    pub fn explicit(&self) -> Result<Self, SceneError> {
-        let set = self.validate()?;
-        let mut s = self.clone();
-        for g in [&mut s.sun, &mut s.planet] {
-            if g.tip_chamfer.is_none() {
-                g.tip_chamfer = Some(default_chamfer(g.module_mm));
-            }
-        }
-        let b = &set.bodies;
-        let i = &mut s.inertia;
-        i.sun_mass_kg = Some(b.sun.mass);
-        i.sun_inertia_kg_m2 = Some(b.sun.inertia);
-        i.planet_mass_kg = Some(b.planet.mass);
-        i.planet_inertia_kg_m2 = Some(b.planet.inertia);
-        i.ring_mass_kg = Some(b.ring.mass);
-        i.ring_inertia_kg_m2 = Some(b.ring.inertia);
-        i.carrier_mass_kg = Some(b.carrier.mass);
-        i.carrier_inertia_kg_m2 = Some(b.carrier.inertia);
-        Ok(s)
     }
 
     /// The real number at `key`, a dotted path of the scene file

@@ -215,9 +215,9 @@ impl Fmu {
 /// The example scene and its unworn wear state, as `planetwear fmu pack`
 /// ships them (`example-2004.toml`, `wear/example-2004/kappa-0.json`).
 fn write_example_resources(dir: &Path) -> Result<(), String> {
-    use planetwear::physics::wear::WearSettings;
-    use planetwear::physics::wear_state::WornState;
     use planetwear::scene::Scene;
+    use planetwear::wear::archard::WearSettings;
+    use planetwear::wear::state::WornState;
     let scene = Scene::example_2004();
     let set = scene.validate().map_err(|e| format!("example scene: {e}"))?;
     let settings = WearSettings::for_set(&set);
@@ -765,16 +765,6 @@ impl Files {
     }
 }
 
-/// FNV-1a 64, the serialized state's checksum (src/physics/state_format.rs).
-fn fnv1a(data: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in data {
-        h ^= u64::from(*b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
 /// Where the numbers of a serialized state are: (offset of the time,
 /// offset of the seven array lengths, number of f64 after the time).
 fn blob_layout(b: &[u8]) -> Option<(usize, usize, usize)> {
@@ -790,7 +780,7 @@ fn blob_layout(b: &[u8]) -> Option<(usize, usize, usize)> {
 
 fn fix_checksum(b: &mut [u8]) {
     let n = b.len();
-    let sum = fnv1a(&b[..n - 8]);
+    let sum = planetwear::files::hash::fnv1a64(&b[..n - 8]);
     b[n - 8..].copy_from_slice(&sum.to_le_bytes());
 }
 

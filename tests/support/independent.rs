@@ -9,8 +9,8 @@
 use std::cell::RefCell;
 
 use differential_equations::prelude::{ExplicitRungeKutta, IVP, ODE};
-use planetwear::physics::accuracy::{IndependentIntegrator, IndependentSolution};
-use planetwear::solver::SecondOrderSystem;
+use planetwear::analysis::accuracy::{IndependentIntegrator, IndependentSolution};
+use planetwear::dynamics::solver::SecondOrderSystem;
 
 /// DOP853 at a relative tolerance; absolute tolerances scaled as the
 /// reference's (1e-6 m and 1e-3 m/s per unit of relative tolerance).

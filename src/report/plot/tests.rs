@@ -1,6 +1,7 @@
 //! Unit tests for the chart writer.
 
 use super::*;
+use std::fs;
 
 const PNG_MAGIC: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
 

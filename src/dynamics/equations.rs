@@ -1,0 +1,638 @@
+//! The nonlinear tooth-by-tooth dynamic model of the planetary set.
+//!
+//! Coordinates: Lin & Parker's, reduced to the scene's fidelity with the held
+//! member's rotation removed ([`crate::model::lumped`]). Equations:
+//!
+//! M q̈ + C_b q̇ + K_b q + Σ_meshes b (F(s, δ) + c_m δ̇ [in contact]) = f_ext(t)
+//!
+//! with δ = bᵀq the mesh approach along the line of action, F the tooth
+//! forces of all pairs of that mesh at their real positions
+//! ([`MeshModel::force_with_derivatives`]), c_m the viscous mesh damping of
+//! the mesh mode (damping ratio ζ_m on the mean stiffness and the two gears'
+//! rotational masses), acting only while a pair touches. Positions follow
+//! from the gears' rotations relative to the carrier:
+//! s_sn = u_s − (r_b,s/a) u_c − r_b,s ψ_n and s_rn = −u_r + (r_b,r/a) u_c − r_b,s ψ_n + Δ
+//! (Δ the geometric offset of [`SetModel::ring_shift`]), so planet phasing
+//! is geometry, not a prescribed phase. External forces: the input torque
+//! (or a torsional shaft from a source at constant speed) and the balancing
+//! torque on the output member, both as generalised forces on u.
+
+use nalgebra::DMatrix;
+
+use crate::contact::ltca::{CycleStats, SetModel};
+use crate::dynamics::solver::{LowRankJacobian, RankOneTerm, SecondOrderSystem, TermCoefficients};
+use crate::model::gear::{Drive, GearSet, Member, MeshKind};
+use crate::model::lumped::{add_outer, Coordinate, LumpedSet, Reduction};
+
+/// One mesh of one planet in the dynamic model.
+#[derive(Clone, Debug)]
+struct Link {
+    planet: usize,
+    kind: MeshKind,
+    /// Nonzero entries of the reduced mesh vector b (δ = bᵀq).
+    b_nz: Vec<(usize, f64)>,
+    /// Position s = Σ p_i q_i + s0.
+    p_nz: Vec<(usize, f64)>,
+    s0: f64,
+    /// Viscous mesh damping [N·s/m].
+    damping: f64,
+}
+
+/// Per-mesh state of the last force evaluation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MeshState {
+    /// Position of the reference pair [m].
+    pub position: f64,
+    /// Approach along the line of action [m].
+    pub approach: f64,
+    /// Rate of the approach [m/s].
+    pub approach_rate: f64,
+    /// Elastic mesh force (sum of the tooth forces) [N].
+    pub force: f64,
+    /// Tangent stiffness ∂F/∂δ [N/m].
+    pub stiffness: f64,
+    /// ∂F/∂s [N/m].
+    pub position_derivative: f64,
+    /// Damping force [N] (zero out of contact).
+    pub damping_force: f64,
+}
+
+/// The dynamic model of a gear set.
+#[derive(Clone, Debug)]
+pub struct PlanetaryDynamics {
+    /// The contact models and phasing.
+    pub contact: SetModel,
+    /// The mean-stiffness linear model (masses, supports).
+    pub lumped: LumpedSet,
+    /// Reduction of the fidelity level.
+    pub reduction: Reduction,
+    mass: Vec<f64>,
+    k_support: DMatrix<f64>,
+    c_support: DMatrix<f64>,
+    /// Nonzero entries (i, j, k_ij, c_ij) of the support matrices.
+    support_nz: Vec<(usize, usize, f64, f64)>,
+    links: Vec<Link>,
+    f_ext: Vec<f64>,
+    speed_drive: Option<SpeedDrive>,
+    /// Index of the input member's rotation among the reduced coordinates.
+    pub input_index: usize,
+    /// Lever of the input member's rotation: u = lever·θ [m].
+    pub input_lever: f64,
+    /// Rigid-body velocity pattern: reduced velocities per rad/s of the input member.
+    pub rigid_velocity: Vec<f64>,
+    /// Mesh frequency per rad/s of input speed [Hz·s/rad].
+    pub mesh_frequency_per_input_speed: f64,
+    /// Index of the rotation u of carrier, ring, sun among the reduced
+    /// coordinates (None when held) and its lever, u = lever·θ [m].
+    pub rotations: [(Option<usize>, f64); 3],
+    /// State of every mesh after the last force evaluation (planet-major: sun, ring).
+    pub meshes: Vec<MeshState>,
+    slots: Vec<usize>,
+    events_scratch: Vec<f64>,
+    /// The state of the last mesh evaluation (with or without events), so a
+    /// Jacobian or an output request at the state just evaluated costs nothing.
+    cache: Option<(Vec<f64>, Vec<f64>, bool)>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct SpeedDrive {
+    /// Shaft stiffness on u [N/m].
+    stiffness: f64,
+    /// Shaft damping on u [N·s/m].
+    damping: f64,
+    /// Source speed on u [m/s].
+    speed: f64,
+    /// Source position on u at t = 0 [m].
+    offset: f64,
+    /// Mean generalised input force the shaft carries [N].
+    preload: f64,
+}
+
+/// Errors of the dynamic model.
+#[derive(Debug, thiserror::Error)]
+pub enum DynamicsError {
+    /// A parameter or request cannot be used.
+    #[error("{name} = {value}: {reason}")]
+    InvalidParameter {
+        /// Parameter.
+        name: String,
+        /// Value.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+}
+
+/// Speeds of sun, ring and carrier [rad/s] for a unit input speed, the held
+/// member at rest (Willis: ω_s − ω_c = R (ω_r − ω_c), R = −Z_r/Z_s).
+pub fn rigid_speeds(set: &GearSet) -> (f64, f64, f64) {
+    let r = -f64::from(set.ring.teeth) / f64::from(set.sun.teeth);
+    match (set.held, set.input) {
+        (Member::Carrier, Member::Sun) => (1.0, 1.0 / r, 0.0),
+        (Member::Carrier, Member::Ring) => (r, 1.0, 0.0),
+        (Member::Ring, Member::Sun) => (1.0, 0.0, 1.0 / (1.0 - r)),
+        (Member::Ring, Member::Carrier) => (1.0 - r, 0.0, 1.0),
+        (Member::Sun, Member::Ring) => (0.0, 1.0, r / (r - 1.0)),
+        (Member::Sun, Member::Carrier) => (0.0, (r - 1.0) / r, 1.0),
+        // Validation refuses held == input.
+        _ => (0.0, 0.0, 0.0),
+    }
+}
+
+fn lever(set: &GearSet, m: Member) -> f64 {
+    match m {
+        Member::Sun => set.sun.base_radius(),
+        Member::Ring => set.ring.base_radius(),
+        Member::Carrier => set.centre_distance,
+    }
+}
+
+impl PlanetaryDynamics {
+    /// The dynamic model of a validated gear set with its contact models.
+    pub fn new(set: &GearSet, contact: SetModel) -> Result<Self, DynamicsError> {
+        let alpha_s = set.operating_pressure_angle(MeshKind::SunPlanet);
+        let alpha_r = set.operating_pressure_angle(MeshKind::RingPlanet);
+        let load = set.mesh_load_per_planet().max(1.0);
+        let mean_stiffness = |m: &crate::contact::ltca::MeshModel| {
+            let p = m.path();
+            let samples: Vec<f64> = (0..64)
+                .map(|i| {
+                    let s = p.start + p.base_pitch * f64::from(i) / 64.0;
+                    let d = m.approach_for(s, load);
+                    m.force(s, d, None).1
+                })
+                .collect();
+            CycleStats::of(&samples).mean
+        };
+        let k_sp = mean_stiffness(&contact.sun_planet);
+        let k_rp = mean_stiffness(&contact.ring_planet);
+        let b = &set.bodies;
+        let (rbs, rbr, rbp, a) =
+            (set.sun.base_radius(), set.ring.base_radius(), set.planet.base_radius(), set.centre_distance);
+        let lumped = LumpedSet {
+            central_mass: [b.carrier.mass, b.ring.mass, b.sun.mass],
+            central_rotational_mass: [
+                b.carrier.inertia / (a * a),
+                b.ring.inertia / (rbr * rbr),
+                b.sun.inertia / (rbs * rbs),
+            ],
+            planet_mass: b.planet.mass,
+            planet_rotational_mass: b.planet.inertia / (rbp * rbp),
+            central_bearing: [set.supports.carrier_radial, set.supports.ring_radial, set.supports.sun_radial],
+            central_torsional: [0.0; 3],
+            planet_bearing: set.supports.planet_bearing,
+            planet_bearings: set.supports.planet_bearings.clone(),
+            sun_mesh: k_sp,
+            ring_mesh: k_rp,
+            sun_pressure_angle: alpha_s,
+            ring_pressure_angle: alpha_r,
+            planet_angles: set.planet_angles.clone(),
+            held: Some(set.held),
+            fidelity: set.dynamics.fidelity,
+        };
+        let reduction = lumped.reduction();
+        let mass = lumped.mass();
+        let dim = reduction.dim();
+        let k_support = lumped.support_stiffness();
+        // Bearing damping: c = 2ζ√(k m) of each body on its own bearing, with
+        // the damping ratio of that member (carrier, ring, sun, planets).
+        let mut c_support = DMatrix::zeros(dim, dim);
+        let zeta = set.supports.damping_ratios;
+        let members = [Member::Carrier, Member::Ring, Member::Sun];
+        for (j, m) in members.iter().enumerate() {
+            let c = 2.0 * zeta[j] * (lumped.central_bearing[j] * lumped.central_mass[j]).sqrt();
+            for coord in [Coordinate::X(*m), Coordinate::Y(*m)] {
+                if let Some(i) = reduction.position(coord) {
+                    c_support[(i, i)] += c;
+                }
+            }
+        }
+        let n = set.planet_angles.len();
+        for (p, psi) in set.planet_angles.iter().enumerate() {
+            let cp = 2.0 * zeta[3] * (lumped.planet_bearing_of(p) * lumped.planet_mass).sqrt();
+            for bv in crate::model::lumped::planet_bearing_vectors(n, p, *psi) {
+                add_outer(&mut c_support, &reduction.reduce_vector(&bv), cp);
+            }
+        }
+        let u = |m: Member| reduction.position(Coordinate::U(m));
+        let zeta_m = set.dynamics.mesh_damping_ratio;
+        let m_rot = |x: f64, y: f64| x * y / (x + y);
+        let c_sp = 2.0
+            * zeta_m
+            * (k_sp * m_rot(lumped.central_rotational_mass[2], lumped.planet_rotational_mass)).sqrt();
+        let c_rp = 2.0
+            * zeta_m
+            * (k_rp * m_rot(lumped.central_rotational_mass[1], lumped.planet_rotational_mass)).sqrt();
+        let mut links = Vec::new();
+        for (p, (bs, br)) in lumped.mesh_vectors().into_iter().enumerate() {
+            let psi = set.planet_angles[p];
+            let nz =
+                |v: &[f64]| v.iter().enumerate().filter(|(_, x)| **x != 0.0).map(|(i, x)| (i, *x)).collect();
+            let mut ps = Vec::new();
+            if let Some(i) = u(Member::Sun) {
+                ps.push((i, 1.0));
+            }
+            if let Some(i) = u(Member::Carrier) {
+                ps.push((i, -rbs / a));
+            }
+            let mut pr = Vec::new();
+            if let Some(i) = u(Member::Ring) {
+                pr.push((i, -1.0));
+            }
+            if let Some(i) = u(Member::Carrier) {
+                pr.push((i, rbr / a));
+            }
+            links.push(Link {
+                planet: p,
+                kind: MeshKind::SunPlanet,
+                b_nz: nz(&bs),
+                p_nz: ps,
+                s0: -rbs * psi,
+                damping: c_sp,
+            });
+            links.push(Link {
+                planet: p,
+                kind: MeshKind::RingPlanet,
+                b_nz: nz(&br),
+                p_nz: pr,
+                s0: -rbs * psi + contact.ring_shift,
+                damping: c_rp,
+            });
+        }
+        // External torques: the set's balance ([`GearSet::balanced_torques`]),
+        // applied through `set_torques` once the model stands.
+        let torques = set.balanced_torques();
+        let input_torque = match set.input {
+            Member::Sun => torques[0],
+            Member::Ring => torques[1],
+            Member::Carrier => torques[2],
+        };
+        let input_index = u(set.input).ok_or_else(|| DynamicsError::InvalidParameter {
+            name: "operation.input".into(),
+            value: set.input.name().into(),
+            reason: "the input member cannot be the held member".into(),
+        })?;
+        let input_lever = lever(set, set.input);
+        // Rigid-body velocity at unit input speed. Willis: (ω_s − ω_c) =
+        // R (ω_r − ω_c) with R = −Z_r/Z_s; the held member at rest.
+        let (ws, wr, wc) = rigid_speeds(set);
+        let mut rigid = vec![0.0; dim];
+        if let Some(i) = u(Member::Sun) {
+            rigid[i] = ws * rbs;
+        }
+        if let Some(i) = u(Member::Ring) {
+            rigid[i] = wr * rbr;
+        }
+        if let Some(i) = u(Member::Carrier) {
+            rigid[i] = wc * a;
+        }
+        for p in 0..set.planet_angles.len() {
+            // δ_sn = u_s + u_n − η_n cos α_s = 0 with η_n = u_c for rigid motion.
+            if let Some(i) = reduction.position(Coordinate::PlanetU(p)) {
+                rigid[i] = -ws * rbs + wc * a * alpha_s.cos();
+            }
+            if let Some(i) = reduction.position(Coordinate::Eta(p)) {
+                rigid[i] = wc * a;
+            }
+        }
+        let mesh_frequency_per_input_speed =
+            ((ws - wc) * f64::from(set.sun.teeth) / (2.0 * std::f64::consts::PI)).abs();
+        let rotations = [(u(Member::Carrier), a), (u(Member::Ring), rbr), (u(Member::Sun), rbs)];
+        let speed_drive = match set.dynamics.drive {
+            Drive::Torque | Drive::SpeedSteps => None,
+            Drive::Speed => {
+                // Shaft stiffness on u: k_θ / lever²; damping ratio 0.05 of the
+                // input body on the shaft.
+                let k = set.dynamics.shaft_stiffness / (input_lever * input_lever);
+                let c = 2.0 * 0.05 * (k * mass[input_index]).sqrt();
+                Some(SpeedDrive {
+                    stiffness: k,
+                    damping: c,
+                    speed: 0.0,
+                    offset: input_torque / input_lever / k,
+                    preload: input_torque / input_lever,
+                })
+            }
+        };
+        let slots = vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()];
+        let mut support_nz = Vec::new();
+        for i in 0..dim {
+            for j in 0..dim {
+                let (k, c) = (k_support[(i, j)], c_support[(i, j)]);
+                if k != 0.0 || c != 0.0 {
+                    support_nz.push((i, j, k, c));
+                }
+            }
+        }
+        let meshes = vec![MeshState::default(); links.len()];
+        let mut model = Self {
+            contact,
+            lumped,
+            reduction,
+            mass,
+            k_support,
+            c_support,
+            support_nz,
+            links,
+            f_ext: vec![0.0; dim],
+            speed_drive,
+            input_index,
+            input_lever,
+            rigid_velocity: rigid,
+            mesh_frequency_per_input_speed,
+            rotations,
+            meshes,
+            slots,
+            events_scratch: Vec::new(),
+            cache: None,
+        };
+        model.set_torques(torques[0], torques[1], torques[2]);
+        Ok(model)
+    }
+
+    /// The constant external generalised forces: the input torque (or the
+    /// mean torque the speed drive's shaft carries) and the output's
+    /// balancing torque.
+    pub fn external_force(&self, f: &mut [f64]) {
+        f.copy_from_slice(&self.f_ext);
+        if let Some(d) = self.speed_drive {
+            f[self.input_index] += d.preload;
+        }
+    }
+
+    /// Places the speed drive's source so that at t = 0 the shaft's wind-up
+    /// carries the mean input torque for coordinates `q`.
+    pub fn rebase_drive(&mut self, q: &[f64]) {
+        let i = self.input_index;
+        if let Some(d) = &mut self.speed_drive {
+            d.offset = q[i] + d.preload / d.stiffness;
+        }
+    }
+
+    /// Energy bookkeeping at a state: kinetic energy, elastic energy of the
+    /// supports (and the speed drive's shaft), elastic energy of the tooth
+    /// contacts [J], and the work rate of the time-varying mesh stiffness and
+    /// separation, Σ ∂V/∂s · ṡ [W].
+    pub fn energy(&self, t: f64, q: &[f64], v: &[f64]) -> (f64, f64, f64, f64) {
+        let kinetic: f64 = 0.5 * self.mass.iter().zip(v).map(|(m, v)| m * v * v).sum::<f64>();
+        let mut support = 0.0;
+        for (i, qi) in q.iter().enumerate() {
+            for (j, qj) in q.iter().enumerate() {
+                support += 0.5 * qi * self.k_support[(i, j)] * qj;
+            }
+        }
+        if let Some(d) = self.speed_drive {
+            let w = d.offset + d.speed * t - q[self.input_index];
+            support += 0.5 * d.stiffness * w * w;
+        }
+        let (mut contact, mut power) = (0.0, 0.0);
+        for link in &self.links {
+            let delta: f64 = link.b_nz.iter().map(|(j, b)| b * q[*j]).sum();
+            let s: f64 = link.p_nz.iter().map(|(j, p)| p * q[*j]).sum::<f64>() + link.s0;
+            let s_rate: f64 = link.p_nz.iter().map(|(j, p)| p * v[*j]).sum();
+            let (e, de) = self.model(link.kind).contact_energy(s, delta);
+            contact += e;
+            power += de * s_rate;
+        }
+        (kinetic, support, contact, power)
+    }
+
+    /// Work rate of the constant external forces at velocities `v` [W].
+    pub fn external_power(&self, v: &[f64]) -> f64 {
+        self.f_ext.iter().zip(v).map(|(f, v)| f * v).sum()
+    }
+
+    /// Sets the external torques on sun, ring and carrier [N·m],
+    /// counter-clockwise positive; a held member's torque is its reaction and
+    /// is ignored, and so is the input member's under the speed drive (its
+    /// shaft carries the torque). The generalised force on u = lever·θ is
+    /// T/lever.
+    pub fn set_torques(&mut self, sun: f64, ring: f64, carrier: f64) {
+        self.f_ext.iter_mut().for_each(|f| *f = 0.0);
+        for ((index, lever), torque) in self.rotations.iter().zip([carrier, ring, sun]) {
+            if let Some(i) = index {
+                if self.speed_drive.is_some() && *i == self.input_index {
+                    continue;
+                }
+                self.f_ext[*i] = torque / lever;
+            }
+        }
+        self.cache = None;
+    }
+
+    /// Torque of the speed drive's shaft on the input member [N·m], if the
+    /// input is speed-driven.
+    pub fn shaft_torque(&self, t: f64, q: &[f64], v: &[f64]) -> Option<f64> {
+        self.speed_drive.map(|d| {
+            let i = self.input_index;
+            (d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i])) * self.input_lever
+        })
+    }
+
+    /// Number of meshes (2 per planet).
+    pub fn mesh_count(&self) -> usize {
+        self.links.len()
+    }
+
+    /// Planet and kind of mesh `i`.
+    pub fn mesh_identity(&self, i: usize) -> (usize, MeshKind) {
+        (self.links[i].planet, self.links[i].kind)
+    }
+
+    /// Sets the speed of the speed drive's source [rad/s of the input member].
+    pub fn set_drive_speed(&mut self, omega: f64) {
+        let lever = self.input_lever;
+        if let Some(d) = &mut self.speed_drive {
+            d.speed = omega * lever;
+        }
+    }
+
+    /// The speed drive's source state (angle offset [m] and speed [m/s] on
+    /// u), empty for the torque drive.
+    pub fn drive_state(&self) -> Vec<f64> {
+        self.speed_drive.map_or(Vec::new(), |d| vec![d.offset, d.speed])
+    }
+
+    /// Restores a state from [`Self::drive_state`] (ignored when its length
+    /// does not fit this model's drive).
+    pub fn set_drive_state(&mut self, state: &[f64]) {
+        if let (Some(d), [offset, speed]) = (&mut self.speed_drive, state) {
+            d.offset = *offset;
+            d.speed = *speed;
+        }
+    }
+
+    /// Changes the speed drive's source speed at time `t` [s] keeping the
+    /// source's angle continuous (no jump in the shaft's wind-up).
+    pub fn change_drive_speed(&mut self, omega: f64, t: f64) {
+        let lever = self.input_lever;
+        if let Some(d) = &mut self.speed_drive {
+            let new = omega * lever;
+            d.offset += (d.speed - new) * t;
+            d.speed = new;
+        }
+    }
+
+    /// Rigid-body initial state at input speed `omega` [rad/s], elastic
+    /// deflection from the static load: q = 0 but for a uniform approach.
+    pub fn rigid_velocity_at(&self, omega: f64) -> Vec<f64> {
+        self.rigid_velocity.iter().map(|v| v * omega).collect()
+    }
+
+    /// The contact model of a mesh.
+    pub fn mesh_model(&self, kind: MeshKind) -> &crate::contact::ltca::MeshModel {
+        self.model(kind)
+    }
+
+    /// Full Lin–Parker coordinates of a reduced coordinate vector.
+    pub fn full_coordinates(&self, q: &[f64]) -> Vec<f64> {
+        let mut full = vec![0.0; self.reduction.full];
+        for (row, entries) in self.reduction.t.iter().enumerate() {
+            for (col, f) in entries {
+                full[row] += f * q[*col];
+            }
+        }
+        full
+    }
+
+    fn model(&self, kind: MeshKind) -> &crate::contact::ltca::MeshModel {
+        match kind {
+            MeshKind::SunPlanet => &self.contact.sun_planet,
+            MeshKind::RingPlanet => &self.contact.ring_planet,
+        }
+    }
+
+    fn evaluate_meshes(&mut self, q: &[f64], v: &[f64], with_events: bool) {
+        if let Some((cq, cv, ce)) = &self.cache {
+            if cq.as_slice() == q && cv.as_slice() == v && (*ce || !with_events) {
+                return;
+            }
+        }
+        match &mut self.cache {
+            Some((cq, cv, ce)) => {
+                cq.clear();
+                cq.extend_from_slice(q);
+                cv.clear();
+                cv.extend_from_slice(v);
+                *ce = with_events;
+            }
+            None => self.cache = Some((q.to_vec(), v.to_vec(), with_events)),
+        }
+        let mut events = std::mem::take(&mut self.events_scratch);
+        events.clear();
+        for (i, link) in self.links.iter().enumerate() {
+            let delta: f64 = link.b_nz.iter().map(|(j, b)| b * q[*j]).sum();
+            let rate: f64 = link.b_nz.iter().map(|(j, b)| b * v[*j]).sum();
+            let s: f64 = link.p_nz.iter().map(|(j, p)| p * q[*j]).sum::<f64>() + link.s0;
+            let (f, kd, ks) = if with_events {
+                let slots = self.slots[if link.kind == MeshKind::SunPlanet { 0 } else { 1 }];
+                let start = events.len();
+                events.resize(start + 2 * slots, 0.0);
+                self.model(link.kind).force_with_derivatives(s, delta, &mut events[start..])
+            } else {
+                self.model(link.kind).force_tangents(s, delta)
+            };
+            let damping_force = if kd > 0.0 { link.damping * rate } else { 0.0 };
+            self.meshes[i] = MeshState {
+                position: s,
+                approach: delta,
+                approach_rate: rate,
+                force: f,
+                stiffness: kd,
+                position_derivative: ks,
+                damping_force,
+            };
+        }
+        self.events_scratch = events;
+    }
+}
+
+impl SecondOrderSystem for PlanetaryDynamics {
+    fn dim(&self) -> usize {
+        self.mass.len()
+    }
+
+    fn mass(&self) -> &[f64] {
+        &self.mass
+    }
+
+    fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
+        self.evaluate_meshes(q, v, false);
+        f.copy_from_slice(&self.f_ext);
+        for &(i, j, k, c) in &self.support_nz {
+            f[i] -= k * q[j] + c * v[j];
+        }
+        for (link, state) in self.links.iter().zip(&self.meshes) {
+            let total = state.force + state.damping_force;
+            for (j, b) in &link.b_nz {
+                f[*j] -= b * total;
+            }
+        }
+        if let Some(d) = self.speed_drive {
+            let i = self.input_index;
+            f[i] += d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i]);
+        }
+    }
+
+    fn jacobian(&mut self, _t: f64, q: &[f64], v: &[f64], k: &mut DMatrix<f64>, c: &mut DMatrix<f64>) {
+        self.evaluate_meshes(q, v, false);
+        k.copy_from(&self.k_support);
+        c.copy_from(&self.c_support);
+        for (link, state) in self.links.iter().zip(&self.meshes) {
+            if state.stiffness == 0.0 {
+                continue;
+            }
+            for &(i, bi) in &link.b_nz {
+                for &(j, bj) in &link.b_nz {
+                    k[(i, j)] += state.stiffness * bi * bj;
+                    c[(i, j)] += link.damping * bi * bj;
+                }
+            }
+            // ∂F/∂s · ∂s/∂q: a rank-one, non-symmetric term.
+            for (i, b) in &link.b_nz {
+                for (j, p) in &link.p_nz {
+                    k[(*i, *j)] += b * state.position_derivative * p;
+                }
+            }
+        }
+        if let Some(d) = self.speed_drive {
+            let i = self.input_index;
+            k[(i, i)] += d.stiffness;
+            c[(i, i)] += d.damping;
+        }
+    }
+
+    fn low_rank_jacobian(&self) -> Option<LowRankJacobian> {
+        // Bearings and the drive shaft are constant; each mesh adds u = b (δ = bᵀq) with the
+        // contact's tangent stiffness and damping, and the rank-one term b ∂F/∂s pᵀ.
+        let (mut k0, mut c0) = (self.k_support.clone(), self.c_support.clone());
+        if let Some(d) = self.speed_drive {
+            let i = self.input_index;
+            k0[(i, i)] += d.stiffness;
+            c0[(i, i)] += d.damping;
+        }
+        let terms = self.links.iter().map(|l| RankOneTerm { u: l.b_nz.clone(), p: l.p_nz.clone() }).collect();
+        Some(LowRankJacobian { k0, c0, terms })
+    }
+
+    fn jacobian_coefficients(&mut self, _t: f64, q: &[f64], v: &[f64], out: &mut [TermCoefficients]) {
+        self.evaluate_meshes(q, v, false);
+        for ((link, state), c) in self.links.iter().zip(&self.meshes).zip(out.iter_mut()) {
+            *c = if state.stiffness == 0.0 {
+                TermCoefficients::default()
+            } else {
+                TermCoefficients {
+                    stiffness: state.stiffness,
+                    damping: link.damping,
+                    cross: state.position_derivative,
+                }
+            };
+        }
+    }
+
+    fn events(&mut self, _t: f64, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
+        self.evaluate_meshes(q, v, true);
+        out.clear();
+        out.extend_from_slice(&self.events_scratch);
+    }
+}

@@ -1,0 +1,478 @@
+//! Steady-state response at a speed, and speed sweeps with continuation
+//! (docs/MODEL.md §3).
+//!
+//! A run starts from a state (the previous speed's steady state, or the
+//! static deflection of the mean-stiffness model), runs in for a number of
+//! input revolutions, then records the mesh forces over a window of whole
+//! mesh cycles at a fixed number of samples per cycle. The order spectrum of
+//! each mesh force gives F^(1..6), F^(rms) and the mean; the separation
+//! fraction is the share of samples with no tooth force. Continuation keeps
+//! the elastic deflections and their rates and changes only the rigid-body
+//! speed.
+
+use nalgebra::DVector;
+use serde::{Deserialize, Serialize};
+
+use crate::dynamics::equations::PlanetaryDynamics;
+use crate::dynamics::solver::{
+    GeneralizedAlpha, GeneralizedAlphaSettings, Rk45, Rk45Settings, SecondOrderSystem, SolverError, Stats,
+};
+use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics, SpectrumError};
+use crate::model::gear::{GearSet, IntegratorKind, MeshKind};
+
+/// Integrator work of a run (a copy of the solver's counters).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Work {
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected steps.
+    pub rejected_steps: u64,
+    /// Newton iterations.
+    pub newton_iterations: u64,
+    /// Evaluations of the force.
+    pub rhs_evaluations: u64,
+    /// Evaluations of the Jacobian.
+    pub jacobian_evaluations: u64,
+    /// Contact events located.
+    pub events_located: u64,
+}
+
+impl From<Stats> for Work {
+    fn from(s: Stats) -> Self {
+        Self {
+            steps: s.steps,
+            rejected_steps: s.rejected_steps,
+            newton_iterations: s.newton_iterations,
+            rhs_evaluations: s.rhs_evaluations,
+            jacobian_evaluations: s.jacobian_evaluations,
+            events_located: s.events_located,
+        }
+    }
+}
+
+/// Errors of a response computation.
+#[derive(Debug, thiserror::Error)]
+pub enum ResponseError {
+    /// The integrator failed (non-finite state, Newton divergence, step too small).
+    #[error("integration failed at {speed_rpm} rpm: {source}")]
+    Integration {
+        /// Input speed [rpm].
+        speed_rpm: f64,
+        /// The integrator's error.
+        source: SolverError,
+    },
+    /// The spectrum could not be formed.
+    #[error("spectrum at {speed_rpm} rpm: {source}")]
+    Spectrum {
+        /// Input speed [rpm].
+        speed_rpm: f64,
+        /// Cause.
+        source: SpectrumError,
+    },
+    /// A request that cannot be met.
+    #[error("{name} = {value}: {reason}")]
+    InvalidRequest {
+        /// Name.
+        name: String,
+        /// Value.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+}
+
+/// State of the model at an instant.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct State {
+    /// Input speed the state belongs to [rad/s].
+    pub input_speed: f64,
+    /// Coordinates.
+    pub q: Vec<f64>,
+    /// Velocities.
+    pub v: Vec<f64>,
+}
+
+/// Response measures of one mesh at one speed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeshResponse {
+    /// Planet index.
+    pub planet: usize,
+    /// Which mesh.
+    pub mesh: MeshKind,
+    /// Mean and harmonics 1..6 of the mesh force [N].
+    pub harmonics: Harmonics,
+    /// Fraction of the window with no tooth force.
+    pub separation: f64,
+    /// Largest mesh force [N].
+    pub max_force: f64,
+}
+
+/// Steady-state response at one speed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SteadyState {
+    /// Input speed [rpm].
+    pub input_speed_rpm: f64,
+    /// Mesh frequency [Hz].
+    pub mesh_frequency: f64,
+    /// Mean speed of the input member over the window, from its rotation [rad/s].
+    pub mean_input_speed: f64,
+    /// Mesh cycles in the window.
+    pub cycles: usize,
+    /// Sample times in the window [s].
+    pub time: Vec<f64>,
+    /// Mesh forces [N]: `mesh_force[mesh][sample]` (planet-major, sun then ring).
+    pub mesh_force: Vec<Vec<f64>>,
+    /// Measures per mesh.
+    pub meshes: Vec<MeshResponse>,
+    /// Integrator work for this speed.
+    pub stats: Work,
+    /// State at the end of the window.
+    pub end: State,
+}
+
+#[derive(Clone)]
+pub(crate) enum Stepper {
+    Alpha(Box<GeneralizedAlpha>),
+    Rk(Box<Rk45>),
+}
+
+impl Stepper {
+    pub(crate) fn new(set: &GearSet, mesh_period: f64) -> Result<Self, SolverError> {
+        let d = &set.dynamics;
+        Ok(match d.integrator {
+            IntegratorKind::GeneralizedAlpha => {
+                let mut s = GeneralizedAlphaSettings::chung_hulbert(d.rho_infinity)?;
+                // Rotation coordinates grow without bound: a tight relative
+                // tolerance keeps the elastic part converged to ~1e-13 m.
+                s.rtol = 1e-13;
+                s.atol = 1e-13;
+                s.max_iterations = 25;
+                s.min_step = mesh_period * 1e-6;
+                Stepper::Alpha(Box::new(GeneralizedAlpha::new(s)?))
+            }
+            IntegratorKind::Rk45 => {
+                let s = Rk45Settings {
+                    rtol: d.relative_tolerance,
+                    atol_q: d.relative_tolerance * 1e-6,
+                    atol_v: d.relative_tolerance * 1e-3,
+                    max_step: mesh_period / 4.0,
+                    ..Rk45Settings::default()
+                };
+                Stepper::Rk(Box::new(Rk45::new(s)?))
+            }
+        })
+    }
+
+    pub(crate) fn init(
+        &mut self,
+        sys: &mut PlanetaryDynamics,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(), SolverError> {
+        match self {
+            Stepper::Alpha(a) => a.init(sys, t, q, v),
+            Stepper::Rk(r) => r.init(sys, t, q, v),
+        }
+    }
+
+    pub(crate) fn advance(
+        &mut self,
+        sys: &mut PlanetaryDynamics,
+        t_end: f64,
+        steps: u64,
+    ) -> Result<(), SolverError> {
+        match self {
+            Stepper::Alpha(a) => a.advance(sys, t_end, steps),
+            Stepper::Rk(r) => r.advance_to(sys, t_end),
+        }
+    }
+
+    /// The integrator's own extra state: generalized-α's algorithmic
+    /// acceleration; the adaptive method's step controller (three numbers).
+    pub(crate) fn internal(&self) -> Vec<f64> {
+        match self {
+            Stepper::Alpha(a) => a.a().to_vec(),
+            Stepper::Rk(r) => r.controller_state().to_vec(),
+        }
+    }
+
+    /// Restores a state with the integrator's extra state (see `internal`).
+    pub(crate) fn restore(
+        &mut self,
+        sys: &mut PlanetaryDynamics,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        internal: &[f64],
+    ) -> Result<(), SolverError> {
+        match self {
+            Stepper::Alpha(a) if internal.len() == q.len() => a.restore(sys, t, q, v, internal),
+            Stepper::Rk(r) => match <[f64; 3]>::try_from(internal) {
+                Ok(controller) => r.restore(sys, t, q, v, &controller),
+                Err(_) => r.init(sys, t, q, v),
+            },
+            _ => self.init(sys, t, q, v),
+        }
+    }
+
+    /// The system's forces changed at the current state (new external
+    /// torques): the adaptive method re-evaluates the derivative it carries
+    /// from its last stage (first-same-as-last), keeping its step
+    /// controller; generalized-α needs nothing (its force at the step start
+    /// enters the scheme as the old load).
+    pub(crate) fn forces_changed(&mut self, sys: &mut PlanetaryDynamics) -> Result<(), SolverError> {
+        match self {
+            Stepper::Alpha(_) => Ok(()),
+            Stepper::Rk(r) => {
+                let (t, q, v, c) = (r.time(), r.q().to_vec(), r.v().to_vec(), r.controller_state());
+                r.restore(sys, t, &q, &v, &c)
+            }
+        }
+    }
+
+    /// Time of the last accepted step [s].
+    pub(crate) fn time(&self) -> f64 {
+        match self {
+            Stepper::Alpha(a) => a.time(),
+            Stepper::Rk(r) => r.time(),
+        }
+    }
+
+    pub(crate) fn state(&self) -> (&[f64], &[f64]) {
+        match self {
+            Stepper::Alpha(a) => (a.q(), a.v()),
+            Stepper::Rk(r) => (r.q(), r.v()),
+        }
+    }
+
+    pub(crate) fn stats(&self) -> Work {
+        match self {
+            Stepper::Alpha(a) => Work::from(*a.stats()),
+            Stepper::Rk(r) => Work::from(*r.stats()),
+        }
+    }
+}
+
+/// The static deflection of the mean-stiffness model under the external
+/// loads, with the free rigid-body rotation pinned by a penalty along it.
+pub fn static_state(model: &PlanetaryDynamics, input_speed: f64) -> State {
+    let n = model.dim();
+    let mut k = model.lumped.stiffness();
+    let r = DVector::from_vec(model.rigid_velocity.clone());
+    let m = DVector::from_vec(model.mass().to_vec());
+    let mr = m.component_mul(&r);
+    let scale = k.diagonal().max().max(1.0) / mr.norm_squared().max(f64::MIN_POSITIVE);
+    k += &mr * mr.transpose() * scale;
+    let mut f = vec![0.0; n];
+    let zeros = vec![0.0; n];
+    model.external_force(&mut f);
+    let q = k.lu().solve(&DVector::from_vec(f)).map(|x| x.as_slice().to_vec()).unwrap_or(zeros);
+    State { input_speed, q, v: model.rigid_velocity_at(input_speed) }
+}
+
+/// Steady-state response at input speed `omega` [rad/s], continuing from
+/// `start` when given.
+pub fn steady_state(
+    model: &mut PlanetaryDynamics,
+    set: &GearSet,
+    omega: f64,
+    start: Option<&State>,
+) -> Result<SteadyState, ResponseError> {
+    steady_state_observed(model, set, omega, start, |_, _| {})
+}
+
+/// [`steady_state`], calling `observe(k, model)` at every sample k of the
+/// window (k = 0 .. cycles × samples per mesh cycle) with the model's mesh
+/// states ([`PlanetaryDynamics::meshes`]: each mesh's reference position and
+/// approach) evaluated at that sample, so a caller can read more than the
+/// mesh forces (the wear model reads each tooth pair's load).
+pub fn steady_state_observed(
+    model: &mut PlanetaryDynamics,
+    set: &GearSet,
+    omega: f64,
+    start: Option<&State>,
+    mut observe: impl FnMut(usize, &PlanetaryDynamics),
+) -> Result<SteadyState, ResponseError> {
+    let rpm = omega * 30.0 / std::f64::consts::PI;
+    let fm = model.mesh_frequency_per_input_speed * omega.abs();
+    if !(fm.is_finite() && fm > 0.0) {
+        return Err(ResponseError::InvalidRequest {
+            name: "input speed".into(),
+            value: format!("{rpm} rpm"),
+            reason: "must be non-zero and finite: the steady state is measured over mesh cycles".into(),
+        });
+    }
+    let d = &set.dynamics;
+    let period = 1.0 / fm;
+    let cycles_per_rev = model.mesh_frequency_per_input_speed * 2.0 * std::f64::consts::PI;
+    let run_in_cycles = (d.run_in_revolutions * cycles_per_rev).ceil() as u64;
+    let cycles = ((d.measured_revolutions * cycles_per_rev).round() as usize).max(1);
+    let samples = d.samples_per_mesh_cycle;
+    let steps_per_sample = (d.steps_per_mesh_cycle as u64).div_ceil(samples as u64).max(1);
+    let err = |source| ResponseError::Integration { speed_rpm: rpm, source };
+    let (q0, v0) = match start {
+        Some(s) => {
+            let dv = omega - s.input_speed;
+            let v: Vec<f64> = s.v.iter().zip(&model.rigid_velocity).map(|(v, r)| v + r * dv).collect();
+            (s.q.clone(), v)
+        }
+        None => {
+            let s = static_state(model, omega);
+            (s.q, s.v)
+        }
+    };
+    model.set_drive_speed(omega);
+    model.rebase_drive(&q0);
+    let mut stepper = Stepper::new(set, period).map_err(err)?;
+    stepper.init(model, 0.0, &q0, &v0).map_err(err)?;
+    // Run-in, one mesh cycle at a time. The excitation repeats every mesh
+    // cycle, so the steady state does too: the run-in ends once the mesh
+    // forces and their rates (scaled to forces by the mean stiffness over a
+    // mesh period) at two successive cycle boundaries agree to
+    // `steady_tolerance` of the mean tooth force, or after the set number of
+    // revolutions (a response that is not periodic in one mesh cycle, such as
+    // a subharmonic one, runs the whole run-in).
+    let n_mesh = model.mesh_count();
+    let mut scratch = vec![0.0; model.dim()];
+    let tolerance = d.steady_tolerance * set.mesh_load_per_planet().max(f64::MIN_POSITIVE);
+    let rate_scale =
+        model.lumped.sun_mesh.max(model.lumped.ring_mesh) * period / (2.0 * std::f64::consts::PI);
+    let mut previous: Option<Vec<f64>> = None;
+    let mut agreeing = 0;
+    let mut t_run = 0.0;
+    for c in 1..=run_in_cycles {
+        t_run = c as f64 * period;
+        stepper.advance(model, t_run, d.steps_per_mesh_cycle as u64).map_err(err)?;
+        if d.steady_tolerance <= 0.0 {
+            continue;
+        }
+        let (q, v) = stepper.state();
+        model.force(t_run, q, v, &mut scratch);
+        let signature: Vec<f64> =
+            model.meshes.iter().flat_map(|m| [m.force, m.approach_rate * rate_scale]).collect();
+        if let Some(p) = &previous {
+            let change = p.iter().zip(&signature).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            agreeing = if change <= tolerance { agreeing + 1 } else { 0 };
+        }
+        previous = Some(signature);
+        if agreeing >= 2 && c >= 4 {
+            break;
+        }
+    }
+    let total = cycles * samples;
+    let mut time = Vec::with_capacity(total);
+    let mut force = vec![Vec::with_capacity(total); n_mesh];
+    let input_start = stepper.state().0[model.input_index];
+    let t_end = t_run + cycles as f64 * period;
+    let n = model.dim();
+    let (mut q_dense, mut v_dense) = (vec![0.0; n], vec![0.0; n]);
+    for k in 0..total {
+        let t = t_run + (k as f64) * period / samples as f64;
+        let (q, v): (&[f64], &[f64]) = match &mut stepper {
+            // The adaptive method takes its own steps and the samples come
+            // from its dense output (docs/ACCURACY.md measures it so).
+            Stepper::Rk(r) if k > 0 => {
+                while r.time() < t {
+                    r.step(model, t_end).map_err(err)?;
+                }
+                r.dense_at(t, &mut q_dense, &mut v_dense).map_err(err)?;
+                (&q_dense, &v_dense)
+            }
+            _ => {
+                if k > 0 {
+                    stepper.advance(model, t, steps_per_sample).map_err(err)?;
+                }
+                stepper.state()
+            }
+        };
+        model.force(t, q, v, &mut scratch);
+        if let Some(i) = scratch.iter().position(|x| !x.is_finite()) {
+            return Err(err(SolverError::NonFiniteState { t, index: i }));
+        }
+        time.push(t);
+        for (m, state) in model.meshes.iter().enumerate() {
+            force[m].push(state.force);
+        }
+        observe(k, model);
+    }
+    // Close the window so the end state is one full cycle set later.
+    if stepper.time() < t_end {
+        stepper.advance(model, t_end, steps_per_sample).map_err(err)?;
+    }
+    let (q, v) = stepper.state();
+    let end = State { input_speed: omega, q: q.to_vec(), v: v.to_vec() };
+    let mean_input_speed = (end.q[model.input_index] - input_start) / (t_end - t_run) / model.input_lever;
+    let mut meshes = Vec::with_capacity(n_mesh);
+    for (m, f) in force.iter().enumerate() {
+        let (planet, mesh) = model.mesh_identity(m);
+        let harmonics = mesh_harmonics(f, cycles, 6)
+            .map_err(|source| ResponseError::Spectrum { speed_rpm: rpm, source })?;
+        meshes.push(MeshResponse {
+            planet,
+            mesh,
+            harmonics,
+            separation: separation_fraction(f),
+            max_force: f.iter().cloned().fold(0.0, f64::max),
+        });
+    }
+    Ok(SteadyState {
+        input_speed_rpm: rpm,
+        mesh_frequency: fm,
+        mean_input_speed,
+        cycles,
+        time,
+        mesh_force: force,
+        meshes,
+        stats: stepper.stats(),
+        end,
+    })
+}
+
+/// A sweep's direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Direction {
+    /// Increasing speed.
+    Up,
+    /// Decreasing speed.
+    Down,
+}
+
+/// Result of a sweep: one steady state per speed, in the order run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Sweep {
+    /// Direction.
+    pub direction: Direction,
+    /// Steady states (without time histories, which are dropped to save memory).
+    pub points: Vec<SteadyState>,
+}
+
+/// Runs a continuation sweep over `speeds_rpm` (in the given order); calls
+/// `progress` after every point. Time histories are kept only for the speeds
+/// listed in `keep_histories_rpm`.
+pub fn sweep(
+    set: &GearSet,
+    model: &mut PlanetaryDynamics,
+    direction: Direction,
+    speeds_rpm: &[f64],
+    keep_histories_rpm: &[f64],
+    mut progress: impl FnMut(usize),
+) -> Result<Sweep, ResponseError> {
+    let mut points = Vec::with_capacity(speeds_rpm.len());
+    let mut state: Option<State> = None;
+    for (i, rpm) in speeds_rpm.iter().enumerate() {
+        let omega = rpm * std::f64::consts::PI / 30.0;
+        let mut ss = steady_state(model, set, omega, state.as_ref())?;
+        // Report the grid speed as given, not its rpm → rad/s → rpm round trip.
+        ss.input_speed_rpm = *rpm;
+        state = Some(ss.end.clone());
+        if !keep_histories_rpm.iter().any(|k| (k - rpm).abs() < 1e-9) {
+            ss.time = Vec::new();
+            ss.mesh_force = Vec::new();
+        }
+        points.push(ss);
+        progress(i + 1);
+    }
+    Ok(Sweep { direction, points })
+}

@@ -1,0 +1,724 @@
+//! A time-domain simulation of the planetary set between communication
+//! points: the API the FMU (and any other co-simulation shell) drives.
+//!
+//! The caller owns time: `do_step(t, h)` checks that t is the current time
+//! (to a rounding tolerance), takes ⌈h / h_nominal⌉ internal steps whose
+//! times come from integer counts inside the interval, and lands exactly on
+//! t + h. Inputs (torques, the speed reference) hold over a step. A step that
+//! cannot be completed leaves the last good state and reports why; it never
+//! returns a non-finite state.
+
+use serde::{Deserialize, Serialize};
+
+use std::collections::VecDeque;
+
+use crate::dynamics::equations::PlanetaryDynamics;
+use crate::dynamics::response::{static_state, Stepper};
+use crate::dynamics::solver::{SecondOrderSystem, SolverError};
+use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
+use crate::model::gear::{Drive, GearSet, Member, MeshKind};
+use crate::model::lumped::{full_index, planet_bearing_vectors, Coordinate, Fidelity};
+
+/// Why a simulation step or setting was refused.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SimulationError {
+    /// A value that cannot be used.
+    #[error("{name} = {value}: {reason}")]
+    InvalidInput {
+        /// Name of the input or argument.
+        name: String,
+        /// Value.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+    /// The step needed more work than its budget
+    /// ([`WORK_PER_INTERNAL_STEP`] force evaluations per internal step at the
+    /// nominal speed, plus [`WORK_BASE`]): the response has left the range the
+    /// step was sized for (for example a run-away speed in an unstable
+    /// coupling), and going on would take without bound.
+    #[error(
+        "step from t = {t} s stopped at t = {reached} s: the adaptive integrator used more than {budget} \
+         force evaluations ({internal} internal steps of the nominal speed {nominal_speed} rad/s); \
+         the input member turns at {speed} rad/s"
+    )]
+    WorkBudget {
+        /// Start of the step [s].
+        t: f64,
+        /// Time reached [s].
+        reached: f64,
+        /// The budget [force evaluations].
+        budget: u64,
+        /// Internal steps of the communication step at the nominal speed.
+        internal: u64,
+        /// The speed the internal step was sized for [rad/s].
+        nominal_speed: f64,
+        /// The input member's speed when the budget ran out [rad/s].
+        speed: f64,
+    },
+    /// The integrator could not complete the step.
+    #[error("step from t = {t} s failed: {source}")]
+    Integration {
+        /// Start of the step [s].
+        t: f64,
+        /// The integrator's error.
+        source: SolverError,
+    },
+}
+
+/// Work budget of one communication step with the adaptive integrator:
+/// force evaluations allowed per internal step at the nominal speed. The
+/// default setting needs 10 to 80 (7 per step, 90 to 1300 steps per mesh
+/// cycle against 120 internal steps), so this is a margin of 25 at least.
+pub const WORK_PER_INTERNAL_STEP: u64 = 2000;
+/// Force evaluations every communication step may use besides
+/// [`WORK_PER_INTERNAL_STEP`] (short steps, restarts after input changes).
+pub const WORK_BASE: u64 = 100_000;
+
+/// A restorable snapshot of a simulation (plain data, no pointers).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Snapshot {
+    /// Time [s].
+    pub time: f64,
+    /// Coordinates.
+    pub q: Vec<f64>,
+    /// Velocities.
+    pub v: Vec<f64>,
+    /// The integrator's own state (generalized-α's algorithmic acceleration),
+    /// so a restored run continues bit-identically.
+    pub integrator: Vec<f64>,
+    /// Torques on sun, ring, carrier [N·m].
+    pub torques: [f64; 3],
+    /// Speed reference of the speed drive [rad/s].
+    pub speed_reference: f64,
+    /// Harmonic window: planet 1's sun and ring mesh-force samples, oldest first [N].
+    pub window_sun: Vec<f64>,
+    /// See `window_sun`.
+    pub window_ring: Vec<f64>,
+    /// The window's last (travel [m], sun force [N], ring force [N]), if any.
+    pub window_last: Vec<f64>,
+    /// The speed drive's source state (empty for the torque drive).
+    pub drive: Vec<f64>,
+}
+
+/// Order-tracked samples of planet 1's two mesh forces over the last mesh
+/// cycles: a sample each time the sun mesh's travel crosses a multiple of
+/// p_b / S (interpolated linearly between internal steps), so the window
+/// holds whole mesh cycles whatever the speed and the communication step.
+#[derive(Clone, Debug)]
+struct Window {
+    cycles: usize,
+    samples_per_cycle: usize,
+    spacing: f64,
+    last: Option<(f64, f64, f64)>,
+    sun: VecDeque<f64>,
+    ring: VecDeque<f64>,
+    collected: u64,
+}
+
+impl Window {
+    fn push(&mut self, s: f64, fs: f64, fr: f64) {
+        if let Some((s0, fs0, fr0)) = self.last {
+            let d = self.spacing;
+            let mut add = |g: f64| {
+                let w = if s != s0 { (g - s0) / (s - s0) } else { 1.0 };
+                self.sun.push_back(fs0 + w * (fs - fs0));
+                self.ring.push_back(fr0 + w * (fr - fr0));
+                self.collected += 1;
+            };
+            // Only the last `cap` crossings can stay in the window: a jump
+            // over more (a huge travel in one step) adds just those, so the
+            // loop is bounded whatever the travel.
+            let cap = self.cycles * self.samples_per_cycle;
+            let bounded = |first: f64, last: f64| {
+                let n = last - first + 1.0;
+                if n >= 1.0 && n.is_finite() {
+                    (first.max(last - (cap as f64 - 1.0)), n.min(cap as f64) as usize)
+                } else {
+                    (first, 0)
+                }
+            };
+            if s > s0 {
+                let (a, n) = bounded((s0 / d).floor() + 1.0, (s / d).floor());
+                for j in 0..n {
+                    add((a + j as f64) * d);
+                }
+            } else if s < s0 {
+                let (b, n) = bounded(-((s0 / d).ceil() - 1.0), -(s / d).ceil());
+                for j in 0..n {
+                    add(-(b + j as f64) * d);
+                }
+            }
+            while self.sun.len() > cap {
+                self.sun.pop_front();
+                self.ring.pop_front();
+            }
+        }
+        self.last = Some((s, fs, fr));
+    }
+
+    fn full(&self) -> bool {
+        self.sun.len() == self.cycles * self.samples_per_cycle
+    }
+}
+
+/// Where a bearing force acts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Bearing {
+    /// The bearing of a central member.
+    Member(Member),
+    /// The bearing of planet `p` (0-based).
+    Planet(usize),
+}
+
+/// A running simulation.
+#[derive(Clone)]
+pub struct Simulation {
+    model: PlanetaryDynamics,
+    stepper: Stepper,
+    set: GearSet,
+    time: f64,
+    nominal_step: f64,
+    torques: [f64; 3],
+    speed_reference: f64,
+    window: Window,
+}
+
+const TIME_TOLERANCE: f64 = 1e-9;
+
+/// Most internal steps one communication step may take: about a minute of
+/// work at the default settings, hundreds of thousands of mesh cycles. A
+/// longer step (1e20 s, or any step at an absurd speed or step count) is
+/// refused at once instead of running for ever.
+pub const MAX_INTERNAL_STEPS: u64 = 10_000_000;
+
+impl Simulation {
+    /// Starts at time `t0` [s] from the static deflection with the input
+    /// member turning at `input_speed` [rad/s]; internal steps follow the
+    /// scene's steps per mesh cycle at that speed.
+    pub fn new(
+        set: &GearSet,
+        model: PlanetaryDynamics,
+        t0: f64,
+        input_speed: f64,
+    ) -> Result<Self, SimulationError> {
+        let invalid = |name: &str, value: f64, reason: &str| SimulationError::InvalidInput {
+            name: name.into(),
+            value: value.to_string(),
+            reason: reason.into(),
+        };
+        if !t0.is_finite() {
+            return Err(invalid("t0", t0, "must be finite"));
+        }
+        if !(input_speed.is_finite() && input_speed != 0.0) {
+            return Err(invalid("input speed", input_speed, "must be finite and non-zero"));
+        }
+        let fm = model.mesh_frequency_per_input_speed * input_speed.abs();
+        let nominal_step = 1.0 / (fm * set.dynamics.steps_per_mesh_cycle as f64);
+        let mut model = model;
+        let start = static_state(&model, input_speed);
+        let torques = set.balanced_torques();
+        model.set_torques(torques[0], torques[1], torques[2]);
+        model.set_drive_speed(input_speed);
+        model.rebase_drive(&start.q);
+        let err = |source| SimulationError::Integration { t: t0, source };
+        let mut stepper = Stepper::new(set, 1.0 / fm).map_err(err)?;
+        stepper.init(&mut model, t0, &start.q, &start.v).map_err(err)?;
+        // The outputs at t0 are the initial state's, not a trial state's of
+        // the integrator's start.
+        let mut f = vec![0.0; model.dim()];
+        model.force(t0, &start.q, &start.v, &mut f);
+        Ok(Self {
+            model,
+            stepper,
+            set: set.clone(),
+            time: t0,
+            nominal_step,
+            torques,
+            speed_reference: input_speed,
+            window: Window {
+                cycles: 34,
+                samples_per_cycle: set.dynamics.samples_per_mesh_cycle,
+                spacing: set.sun.base_pitch() / set.dynamics.samples_per_mesh_cycle as f64,
+                last: None,
+                sun: VecDeque::new(),
+                ring: VecDeque::new(),
+                collected: 0,
+            },
+        })
+    }
+
+    /// Sets the window of the harmonic outputs: `cycles` mesh cycles of
+    /// `samples_per_cycle` samples (the window restarts).
+    pub fn set_window(&mut self, cycles: usize, samples_per_cycle: usize) -> Result<(), SimulationError> {
+        if !(1..=10_000).contains(&cycles) {
+            return Err(SimulationError::InvalidInput {
+                name: "harmonicWindowCycles".into(),
+                value: cycles.to_string(),
+                reason: "must be between 1 and 10000".into(),
+            });
+        }
+        if !(16..=10_000).contains(&samples_per_cycle) {
+            return Err(SimulationError::InvalidInput {
+                name: "samplesPerMeshCycle".into(),
+                value: samples_per_cycle.to_string(),
+                reason: "must be between 16 and 10000 (harmonic 6 needs more than 12)".into(),
+            });
+        }
+        self.window.cycles = cycles;
+        self.window.samples_per_cycle = samples_per_cycle;
+        self.window.spacing = self.set.sun.base_pitch() / samples_per_cycle as f64;
+        self.window.sun.clear();
+        self.window.ring.clear();
+        self.window.collected = 0;
+        Ok(())
+    }
+
+    /// Current time [s].
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Sets the torques on sun, ring and carrier [N·m] for the next steps.
+    pub fn set_torques(&mut self, sun: f64, ring: f64, carrier: f64) -> Result<(), SimulationError> {
+        for (name, v) in [("sunTorque", sun), ("ringTorque", ring), ("carrierTorque", carrier)] {
+            if !v.is_finite() {
+                return Err(SimulationError::InvalidInput {
+                    name: name.into(),
+                    value: v.to_string(),
+                    reason: "must be finite".into(),
+                });
+            }
+        }
+        if self.torques == [sun, ring, carrier] {
+            return Ok(());
+        }
+        self.torques = [sun, ring, carrier];
+        self.model.set_torques(sun, ring, carrier);
+        let t = self.time;
+        self.stepper
+            .forces_changed(&mut self.model)
+            .map_err(|source| SimulationError::Integration { t, source })?;
+        let mut f = vec![0.0; self.model.dim()];
+        self.refresh(&mut f);
+        Ok(())
+    }
+
+    /// Sets the input speed reference [rad/s]. Under the speed drive the
+    /// shaft's source turns at it from now on; under [`Drive::SpeedSteps`] a
+    /// new reference steps the rigid-body speed to it (the elastic state is
+    /// kept); under the torque drive it is only recorded. With the speed
+    /// drive and the speed steps the internal step follows the reference, so
+    /// a step count per mesh cycle holds at every speed.
+    pub fn set_speed_reference(&mut self, omega: f64) -> Result<(), SimulationError> {
+        let invalid = |reason: &str| SimulationError::InvalidInput {
+            name: "inputSpeedReference".into(),
+            value: omega.to_string(),
+            reason: reason.into(),
+        };
+        if !omega.is_finite() {
+            return Err(invalid("must be finite"));
+        }
+        if omega == self.speed_reference {
+            return Ok(());
+        }
+        match self.set.dynamics.drive {
+            Drive::Torque => self.speed_reference = omega,
+            Drive::Speed => {
+                self.speed_reference = omega;
+                self.model.change_drive_speed(omega, self.time);
+                if let Some(mut stepper) = self.retuned_stepper(omega)? {
+                    // Continue from the current state, integrator state included.
+                    let t = self.time;
+                    let (q, v) = self.stepper.state();
+                    let internal = self.stepper.internal();
+                    stepper
+                        .restore(&mut self.model, t, q, v, &internal)
+                        .map_err(|source| SimulationError::Integration { t, source })?;
+                    self.stepper = stepper;
+                }
+            }
+            Drive::SpeedSteps => {
+                if omega == 0.0 {
+                    return Err(invalid("must be non-zero with driveMode 2 (speed steps)"));
+                }
+                let (q, v) = self.stepper.state();
+                let q = q.to_vec();
+                let dv = omega - self.speed_reference;
+                let v: Vec<f64> = v.iter().zip(&self.model.rigid_velocity).map(|(v, r)| v + r * dv).collect();
+                self.speed_reference = omega;
+                if let Some(stepper) = self.retuned_stepper(omega)? {
+                    self.stepper = stepper;
+                }
+                let t = self.time;
+                self.stepper
+                    .init(&mut self.model, t, &q, &v)
+                    .map_err(|source| SimulationError::Integration { t, source })?;
+            }
+        }
+        // Starting an integrator may evaluate the model at trial states (the
+        // adaptive method's first-step estimate): the outputs are the
+        // accepted state's.
+        let mut f = vec![0.0; self.model.dim()];
+        self.refresh(&mut f);
+        Ok(())
+    }
+
+    /// Sets the internal step for input speed `omega` [rad/s] and returns a
+    /// new, not yet started integrator for it; `None` at zero speed (step and
+    /// integrator unchanged). The caller starts it from the state it needs.
+    fn retuned_stepper(&mut self, omega: f64) -> Result<Option<Stepper>, SimulationError> {
+        let fm = self.model.mesh_frequency_per_input_speed * omega.abs();
+        if !(fm.is_finite() && fm > 0.0) {
+            return Ok(None);
+        }
+        self.nominal_step = 1.0 / (fm * self.set.dynamics.steps_per_mesh_cycle as f64);
+        let t = self.time;
+        Stepper::new(&self.set, 1.0 / fm)
+            .map(Some)
+            .map_err(|source| SimulationError::Integration { t, source })
+    }
+
+    /// Advances from `t` (which must be the current time) by `h` > 0 [s].
+    pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), SimulationError> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(SimulationError::InvalidInput {
+                name: "communicationStepSize".into(),
+                value: h.to_string(),
+                reason: "must be finite and greater than zero".into(),
+            });
+        }
+        if !t.is_finite() || (t - self.time).abs() > TIME_TOLERANCE * self.time.abs().max(h).max(1.0) {
+            return Err(SimulationError::InvalidInput {
+                name: "currentCommunicationPoint".into(),
+                value: t.to_string(),
+                reason: format!("must be the current time {} s", self.time),
+            });
+        }
+        let steps = ((h / self.nominal_step) - 1e-9).ceil().max(1.0);
+        // Also catches a non-finite or zero nominal step (NaN fails the test).
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(steps <= MAX_INTERNAL_STEPS as f64) {
+            return Err(SimulationError::InvalidInput {
+                name: "communicationStepSize".into(),
+                value: h.to_string(),
+                reason: format!(
+                    "needs {steps:.3e} internal steps of {:.3e} s, more than the {MAX_INTERNAL_STEPS} one \
+                     communication step may take: take steps of at most {:.3e} s",
+                    self.nominal_step,
+                    self.nominal_step * MAX_INTERNAL_STEPS as f64
+                ),
+            });
+        }
+        let steps = steps as u64;
+        // The caller's communication point is the time base (it was checked
+        // to be the current time), so no rounding accumulates across steps.
+        let start = t;
+        let end = start + h;
+        let mut f = vec![0.0; self.model.dim()];
+        let n = self.model.dim();
+        let (mut q_dense, mut v_dense) = (vec![0.0; n], vec![0.0; n]);
+        let budget = WORK_BASE + WORK_PER_INTERNAL_STEP * steps;
+        let nominal_speed = 1.0
+            / (self.nominal_step
+                * self.set.dynamics.steps_per_mesh_cycle as f64
+                * self.model.mesh_frequency_per_input_speed);
+        let work_start = match &self.stepper {
+            Stepper::Rk(r) => r.stats().rhs_evaluations,
+            Stepper::Alpha(_) => 0,
+        };
+        for k in 1..=steps {
+            // Internal step ends from integer counts; the last is exactly t + h.
+            let tk = if k == steps { end } else { start + h * (k as f64) / (steps as f64) };
+            let advanced = match &mut self.stepper {
+                // The adaptive method takes its own steps up to the
+                // communication point; the internal grid times inside them
+                // are read from its dense output (forcing step ends onto
+                // them would cost steps and change nothing it controls). Its
+                // work is bounded per communication step.
+                Stepper::Rk(r) => {
+                    let mut result = Ok(());
+                    while r.time() < tk {
+                        let used = r.stats().rhs_evaluations - work_start;
+                        if used > budget {
+                            let reached = r.time();
+                            let speed = r.v()[self.model.input_index] / self.model.input_lever;
+                            self.time = reached;
+                            self.refresh(&mut f);
+                            return Err(SimulationError::WorkBudget {
+                                t,
+                                reached,
+                                budget,
+                                internal: steps,
+                                nominal_speed,
+                                speed,
+                            });
+                        }
+                        result = r.step(&mut self.model, end);
+                        if result.is_err() {
+                            break;
+                        }
+                    }
+                    result.and_then(|()| {
+                        if r.time() == tk {
+                            q_dense.copy_from_slice(r.q());
+                            v_dense.copy_from_slice(r.v());
+                            Ok(())
+                        } else {
+                            r.dense_at(tk, &mut q_dense, &mut v_dense)
+                        }
+                    })
+                }
+                stepper => stepper.advance(&mut self.model, tk, 1).map(|()| {
+                    let (q, v) = stepper.state();
+                    q_dense.copy_from_slice(q);
+                    v_dense.copy_from_slice(v);
+                }),
+            };
+            if let Err(source) = advanced {
+                // Keep the last good state's time and mesh outputs.
+                self.time = self.stepper_time();
+                self.refresh(&mut f);
+                return Err(SimulationError::Integration { t: self.time, source });
+            }
+            self.model.force(tk, &q_dense, &v_dense, &mut f);
+            let m = &self.model.meshes;
+            if m.len() >= 2 {
+                self.window.push(m[0].position, m[0].force, m[1].force);
+            }
+        }
+        self.time = end;
+        // The outputs read the accepted state at the communication point.
+        self.refresh(&mut f);
+        Ok(())
+    }
+
+    fn stepper_time(&self) -> f64 {
+        self.stepper.time()
+    }
+
+    /// Re-evaluates the meshes at the accepted state (a cache hit when the
+    /// integrator's last evaluation was that state).
+    fn refresh(&mut self, f: &mut [f64]) {
+        let (q, v) = self.stepper.state();
+        self.model.force(self.time, q, v, f);
+    }
+
+    /// Torque the input member receives [N·m]: from its shaft in the speed
+    /// drive, else its input torque.
+    pub fn input_torque(&self) -> f64 {
+        let (q, v) = self.stepper.state();
+        match self.model.shaft_torque(self.time, q, v) {
+            Some(t) => t,
+            None => match self.set.input {
+                Member::Sun => self.torques[0],
+                Member::Ring => self.torques[1],
+                Member::Carrier => self.torques[2],
+            },
+        }
+    }
+
+    /// Tooth pairs carrying load in a mesh of planet `p`.
+    pub fn pairs_in_contact(&self, p: usize, mesh: MeshKind) -> u32 {
+        let Some(state) = self.mesh_state(p, mesh) else { return 0 };
+        let mut pairs = Vec::new();
+        self.model.mesh_model(mesh).force(state.position, state.approach, Some(&mut pairs));
+        pairs.iter().filter(|c| c.force != 0.0).count() as u32
+    }
+
+    /// Force [N] of the tracked tooth pair of planet 1's mesh: the pair of
+    /// gear 1's tooth 0 (sun tooth 0, or planet tooth 0 in the ring mesh),
+    /// which comes round once per revolution of that gear relative to the
+    /// carrier.
+    pub fn tracked_pair_force(&self, mesh: MeshKind) -> f64 {
+        let Some(state) = self.mesh_state(0, mesh) else { return 0.0 };
+        let model = self.model.mesh_model(mesh);
+        let teeth = match mesh {
+            MeshKind::SunPlanet => self.set.sun.teeth,
+            MeshKind::RingPlanet => self.set.planet.teeth,
+        };
+        let period = f64::from(teeth) * model.path().base_pitch;
+        let start = model.separation.drive.start;
+        let pos = start + (state.position - start).rem_euclid(period);
+        model.pair_force(pos, state.approach)
+    }
+
+    /// Static transmission error [m]: the approach of a mesh of planet `p` at
+    /// its current position under the scene's mean tooth force.
+    pub fn static_transmission_error(&self, p: usize, mesh: MeshKind) -> f64 {
+        let Some(state) = self.mesh_state(p, mesh) else { return 0.0 };
+        self.model.mesh_model(mesh).approach_for(state.position, self.set.mesh_load_per_planet())
+    }
+
+    /// Magnitude of a bearing's elastic force [N] (central members: 0 in the
+    /// torsional model, where they have no translations).
+    pub fn bearing_force(&self, bearing: Bearing) -> f64 {
+        let (q, _) = self.stepper.state();
+        let full = self.model.full_coordinates(q);
+        let lumped = &self.model.lumped;
+        match bearing {
+            Bearing::Member(m) => {
+                if lumped.fidelity == Fidelity::Torsional {
+                    return 0.0;
+                }
+                let j = match m {
+                    Member::Carrier => 0,
+                    Member::Ring => 1,
+                    Member::Sun => 2,
+                };
+                let (x, y) = (full[full_index(Coordinate::X(m))], full[full_index(Coordinate::Y(m))]);
+                lumped.central_bearing[j] * x.hypot(y)
+            }
+            Bearing::Planet(p) if p < lumped.planet_angles.len() => {
+                if lumped.fidelity == Fidelity::Torsional {
+                    return 0.0;
+                }
+                let n = lumped.planet_angles.len();
+                let [radial, tangential] = planet_bearing_vectors(n, p, lumped.planet_angles[p]);
+                let dot = |b: &[f64]| b.iter().zip(&full).map(|(a, c)| a * c).sum::<f64>();
+                lumped.planet_bearing_of(p) * dot(&radial).hypot(dot(&tangential))
+            }
+            Bearing::Planet(_) => 0.0,
+        }
+    }
+
+    /// Whole mesh cycles in the harmonic window so far (at most its length).
+    pub fn window_cycles(&self) -> usize {
+        self.window.sun.len() / self.window.samples_per_cycle
+    }
+
+    /// Harmonics 1..6 and separation fraction of planet 1's mesh force over
+    /// the window, once the window is full.
+    pub fn window_harmonics(&self, mesh: MeshKind) -> Option<(Harmonics, f64)> {
+        if !self.window.full() {
+            return None;
+        }
+        let data: Vec<f64> = match mesh {
+            MeshKind::SunPlanet => self.window.sun.iter().copied().collect(),
+            MeshKind::RingPlanet => self.window.ring.iter().copied().collect(),
+        };
+        let h = mesh_harmonics(&data, self.window.cycles, 6).ok()?;
+        Some((h, separation_fraction(&data)))
+    }
+
+    fn rotation(&self, m: Member, rate: bool) -> f64 {
+        let k = match m {
+            Member::Carrier => 0,
+            Member::Ring => 1,
+            Member::Sun => 2,
+        };
+        let (index, lever) = self.model.rotations[k];
+        let (q, v) = self.stepper.state();
+        index.map_or(0.0, |i| (if rate { v[i] } else { q[i] }) / lever)
+    }
+
+    /// Angular speed of a member [rad/s] (0 when held).
+    pub fn speed(&self, m: Member) -> f64 {
+        self.rotation(m, true)
+    }
+
+    /// Rotation of a member since the start [rad] (0 when held).
+    pub fn angle(&self, m: Member) -> f64 {
+        self.rotation(m, false)
+    }
+
+    /// Mesh force of one mesh of planet `p` [N] (0 for a planet that does not exist).
+    pub fn mesh_force(&self, p: usize, mesh: MeshKind) -> f64 {
+        self.mesh_state(p, mesh).map_or(0.0, |s| s.force)
+    }
+
+    /// Dynamic transmission error (approach along the line of action) of a mesh of planet `p` [m].
+    pub fn transmission_error(&self, p: usize, mesh: MeshKind) -> f64 {
+        self.mesh_state(p, mesh).map_or(0.0, |s| s.approach)
+    }
+
+    fn mesh_state(&self, p: usize, mesh: MeshKind) -> Option<crate::dynamics::equations::MeshState> {
+        let i = 2 * p + usize::from(mesh == MeshKind::RingPlanet);
+        (i < self.model.mesh_count()).then(|| self.model.meshes[i])
+    }
+
+    /// A restorable snapshot.
+    pub fn snapshot(&self) -> Snapshot {
+        let (q, v) = self.stepper.state();
+        Snapshot {
+            time: self.time,
+            q: q.to_vec(),
+            v: v.to_vec(),
+            integrator: self.stepper.internal(),
+            torques: self.torques,
+            speed_reference: self.speed_reference,
+            window_sun: self.window.sun.iter().copied().collect(),
+            window_ring: self.window.ring.iter().copied().collect(),
+            window_last: self.window.last.map_or(Vec::new(), |(a, b, c)| vec![a, b, c]),
+            drive: self.model.drive_state(),
+        }
+    }
+
+    /// Restores a snapshot taken from a simulation of the same gear set.
+    pub fn restore(&mut self, s: &Snapshot) -> Result<(), SimulationError> {
+        let n = self.model.dim();
+        if s.q.len() != n || s.v.len() != n || s.q.iter().chain(&s.v).any(|x| !x.is_finite()) {
+            return Err(SimulationError::InvalidInput {
+                name: "snapshot".into(),
+                value: format!("{} coordinates", s.q.len()),
+                reason: format!("must hold {n} finite coordinates and velocities of this model"),
+            });
+        }
+        // Every number is checked before anything changes: a snapshot read
+        // from bytes (a forged or damaged blob with a valid checksum) must not
+        // bring a NaN or an infinity into the state.
+        let parts: [(&str, &[f64]); 8] = [
+            ("time", std::slice::from_ref(&s.time)),
+            ("integrator state", &s.integrator),
+            ("torques", &s.torques),
+            ("speed reference", std::slice::from_ref(&s.speed_reference)),
+            ("harmonic window (sun mesh)", &s.window_sun),
+            ("harmonic window (ring mesh)", &s.window_ring),
+            ("harmonic window (last point)", &s.window_last),
+            ("speed drive state", &s.drive),
+        ];
+        for (part, values) in parts {
+            if let Some((i, x)) = values.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                return Err(SimulationError::InvalidInput {
+                    name: "snapshot".into(),
+                    value: format!("{part}[{i}] = {x}"),
+                    reason: "every number of a state must be finite".into(),
+                });
+            }
+        }
+        self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
+        self.speed_reference = s.speed_reference;
+        self.model.set_drive_state(&s.drive);
+        if self.set.dynamics.drive != Drive::Torque {
+            // The internal step follows the reference (see `set_speed_reference`).
+            if let Some(stepper) = self.retuned_stepper(s.speed_reference)? {
+                self.stepper = stepper;
+            }
+        }
+        self.stepper
+            .restore(&mut self.model, s.time, &s.q, &s.v, &s.integrator)
+            .map_err(|source| SimulationError::Integration { t: s.time, source })?;
+        self.time = s.time;
+        let mut f = vec![0.0; n];
+        self.model.force(s.time, &s.q, &s.v, &mut f);
+        let cap = self.window.cycles * self.window.samples_per_cycle;
+        if s.window_sun.len() == s.window_ring.len() && s.window_sun.len() <= cap {
+            self.window.sun = s.window_sun.iter().copied().collect();
+            self.window.ring = s.window_ring.iter().copied().collect();
+            self.window.last = match s.window_last.as_slice() {
+                [a, b, c] => Some((*a, *b, *c)),
+                _ => None,
+            };
+        } else {
+            self.window.sun.clear();
+            self.window.ring.clear();
+            self.window.last = None;
+        }
+        Ok(())
+    }
+
+    /// The gear set simulated.
+    pub fn gear_set(&self) -> &GearSet {
+        &self.set
+    }
+}

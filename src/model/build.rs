@@ -1,0 +1,690 @@
+//! The model built from a scene: every rule of the scene checked at once,
+//! every problem named by the user's key (`sun.tip_radius_mm`), and the
+//! values converted to SI. A [`GearSet`] exists only through
+//! [`Scene::validate`], so holding one means it passed every rule.
+
+use std::f64::consts::PI;
+use std::fmt;
+
+use crate::model::gear::{
+    Analysis, Bodies, Body, Chamfer, DynamicsSettings, GearKind, GearSet, Material, MeshKind, RootForm,
+    Supports, ToothForm,
+};
+use crate::model::mesh::PathOfContact;
+use crate::scene::{
+    default_chamfer, ChamferSpec, ExternalGearSpec, Problem, RingGearSpec, Scene, SceneError,
+};
+
+impl Scene {
+    /// Checks every rule and converts to SI.
+    pub fn validate(&self) -> Result<GearSet, SceneError> {
+        validate(self)
+    }
+
+    /// The scene with its derived defaults written out: the tip chamfers of
+    /// sun and planet and every mass and moment of inertia, so that each of
+    /// them has a key with a value (to edit, or to fit with `calibrate`).
+    pub fn explicit(&self) -> Result<Self, SceneError> {
+        let set = self.validate()?;
+        let mut s = self.clone();
+        for g in [&mut s.sun, &mut s.planet] {
+            if g.tip_chamfer.is_none() {
+                g.tip_chamfer = Some(default_chamfer(g.module_mm));
+            }
+        }
+        let b = &set.bodies;
+        let i = &mut s.inertia;
+        i.sun_mass_kg = Some(b.sun.mass);
+        i.sun_inertia_kg_m2 = Some(b.sun.inertia);
+        i.planet_mass_kg = Some(b.planet.mass);
+        i.planet_inertia_kg_m2 = Some(b.planet.inertia);
+        i.ring_mass_kg = Some(b.ring.mass);
+        i.ring_inertia_kg_m2 = Some(b.ring.inertia);
+        i.carrier_mass_kg = Some(b.carrier.mass);
+        i.carrier_inertia_kg_m2 = Some(b.carrier.inertia);
+        Ok(s)
+    }
+}
+
+struct Checker {
+    problems: Vec<Problem>,
+}
+
+impl Checker {
+    fn fail(&mut self, name: &str, value: impl fmt::Display, reason: impl Into<String>) {
+        self.problems.push(Problem { name: name.into(), value: value.to_string(), reason: reason.into() });
+    }
+
+    fn positive(&mut self, name: &str, v: f64) -> bool {
+        if !(v.is_finite() && v > 0.0) {
+            self.fail(name, v, "must be a finite number greater than zero");
+            false
+        } else {
+            true
+        }
+    }
+
+    fn in_range(&mut self, name: &str, v: f64, lo: f64, hi: f64, why: &str) -> bool {
+        if !(v.is_finite() && v > lo && v < hi) {
+            self.fail(name, v, format!("must lie strictly between {lo} and {hi} ({why})"));
+            false
+        } else {
+            true
+        }
+    }
+
+    fn chamfer(&mut self, key: &str, c: &ChamferSpec, addendum_mm: f64) -> Chamfer {
+        let name_h = format!("{key}.tip_chamfer.height_mm");
+        let name_a = format!("{key}.tip_chamfer.angle_deg");
+        if !(c.height_mm.is_finite() && c.height_mm >= 0.0 && c.height_mm < 0.5 * addendum_mm) {
+            self.fail(
+                &name_h,
+                c.height_mm,
+                format!("must be at least 0 and below half the addendum ({:.4} mm)", 0.5 * addendum_mm),
+            );
+        }
+        self.in_range(&name_a, c.angle_deg, 0.0, 90.0, "angle to the tip circle's tangent");
+        if !(c.edge_radius_mm.is_finite() && c.edge_radius_mm > 0.0 && c.edge_radius_mm <= 1.0) {
+            self.fail(
+                &format!("{key}.tip_chamfer.edge_radius_mm"),
+                c.edge_radius_mm,
+                "must lie above 0 and at most 1 mm (the rounding of the chamfer's edge)",
+            );
+        }
+        Chamfer {
+            height: c.height_mm * 1e-3,
+            angle: c.angle_deg.to_radians(),
+            edge_carries_load: c.edge_carries_load,
+            edge_radius: c.edge_radius_mm * 1e-3,
+        }
+    }
+
+    fn external(&mut self, key: &str, g: &ExternalGearSpec) -> ToothForm {
+        let n = |f: &str| format!("{key}.{f}");
+        if g.teeth < 6 {
+            self.fail(&n("teeth"), g.teeth, "must be at least 6");
+        }
+        let mut sizes_ok = self.positive(&n("module_mm"), g.module_mm);
+        sizes_ok &= self.positive(&n("tooth_thickness_mm"), g.tooth_thickness_mm);
+        sizes_ok &= self.positive(&n("tip_radius_mm"), g.tip_radius_mm);
+        sizes_ok &= self.positive(&n("root_radius_mm"), g.root_radius_mm);
+        sizes_ok &= self.positive(&n("bore_radius_mm"), g.bore_radius_mm);
+        sizes_ok &= self.positive(&n("face_width_mm"), g.face_width_mm);
+        if !(g.hob_tip_radius_mm.is_finite() && g.hob_tip_radius_mm >= 0.0) {
+            self.fail(
+                &n("hob_tip_radius_mm"),
+                g.hob_tip_radius_mm,
+                "must be a finite number, zero or greater",
+            );
+            sizes_ok = false;
+        }
+        let angle_ok =
+            self.in_range(&n("pressure_angle_deg"), g.pressure_angle_deg, 10.0, 35.0, "spur gear practice");
+        let reference = g.module_mm * f64::from(g.teeth) / 2.0;
+        let chamfer_spec = g.tip_chamfer.unwrap_or_else(|| default_chamfer(g.module_mm));
+        let chamfer = self.chamfer(key, &chamfer_spec, g.tip_radius_mm - reference);
+        let form = ToothForm {
+            kind: GearKind::External,
+            teeth: g.teeth,
+            module: g.module_mm * 1e-3,
+            pressure_angle: g.pressure_angle_deg.to_radians(),
+            tooth_thickness: g.tooth_thickness_mm * 1e-3,
+            tip_radius: g.tip_radius_mm * 1e-3,
+            root_radius: g.root_radius_mm * 1e-3,
+            body_radius: g.bore_radius_mm * 1e-3,
+            root_form: RootForm::Hob { tip_radius: g.hob_tip_radius_mm * 1e-3 },
+            chamfer: (chamfer.height > 0.0).then_some(chamfer),
+            face_width: g.face_width_mm * 1e-3,
+        };
+        if !(sizes_ok && angle_ok && g.teeth >= 6) {
+            return form;
+        }
+        let rb = form.base_radius() * 1e3;
+        if let Some(slope) = form.edge_relief().map(|e| e.slope).filter(|s| s.is_nan() || *s <= 0.0) {
+            let alpha_e = (rb / (form.involute_tip_radius() * 1e3)).clamp(-1.0, 1.0).acos().to_degrees();
+            self.fail(
+                &n("tip_chamfer.angle_deg"),
+                chamfer_spec.angle_deg,
+                format!(
+                    "must be below {:.2}° (90° less the involute's pressure angle at the chamfer's edge) \
+                     when the edge carries no load: the chamfer must fall away from the involute \
+                     (relief slope {slope:.3})",
+                    90.0 - alpha_e
+                ),
+            );
+        }
+        if g.tip_radius_mm <= rb {
+            self.fail(
+                &n("tip_radius_mm"),
+                g.tip_radius_mm,
+                format!("must exceed the base radius {rb:.4} mm, or the teeth have no involute flank"),
+            );
+        }
+        if g.root_radius_mm >= g.tip_radius_mm {
+            self.fail(
+                &n("root_radius_mm"),
+                g.root_radius_mm,
+                format!("must be below the tip radius {} mm", g.tip_radius_mm),
+            );
+        }
+        if g.bore_radius_mm >= g.root_radius_mm {
+            self.fail(
+                &n("bore_radius_mm"),
+                g.bore_radius_mm,
+                format!("must be below the root radius {} mm", g.root_radius_mm),
+            );
+        }
+        if g.tooth_thickness_mm >= PI * g.module_mm {
+            self.fail(
+                &n("tooth_thickness_mm"),
+                g.tooth_thickness_mm,
+                format!("must be below the circular pitch π·m = {:.4} mm", PI * g.module_mm),
+            );
+        } else if g.tip_radius_mm > rb && form.thickness_at(form.tip_radius) <= 0.0 {
+            self.fail(
+                &n("tip_radius_mm"),
+                g.tip_radius_mm,
+                "the tooth is pointed below this tip radius: reduce the tip radius or thicken the tooth",
+            );
+        }
+        if let RootForm::Hob { tip_radius } = form.root_form {
+            let dedendum = form.reference_radius() - form.root_radius;
+            if tip_radius > 0.0 && tip_radius >= dedendum {
+                self.fail(
+                    &n("hob_tip_radius_mm"),
+                    g.hob_tip_radius_mm,
+                    format!("must be below the dedendum {:.4} mm", dedendum * 1e3),
+                );
+            }
+        }
+        form
+    }
+
+    fn ring(&mut self, g: &RingGearSpec) -> ToothForm {
+        let n = |f: &str| format!("ring.{f}");
+        if g.teeth < 12 {
+            self.fail(&n("teeth"), g.teeth, "must be at least 12");
+        }
+        let mut ok = self.positive(&n("module_mm"), g.module_mm);
+        ok &= self.positive(&n("tooth_thickness_mm"), g.tooth_thickness_mm);
+        ok &= self.positive(&n("minor_radius_mm"), g.minor_radius_mm);
+        ok &= self.positive(&n("root_radius_mm"), g.root_radius_mm);
+        ok &= self.positive(&n("rim_radius_mm"), g.rim_radius_mm);
+        ok &= self.positive(&n("fillet_radius_mm"), g.fillet_radius_mm);
+        ok &= self.positive(&n("face_width_mm"), g.face_width_mm);
+        ok &= self.in_range(&n("pressure_angle_deg"), g.pressure_angle_deg, 10.0, 35.0, "spur gear practice");
+        let reference = g.module_mm * f64::from(g.teeth) / 2.0;
+        let chamfer = g.tip_chamfer.map(|c| self.chamfer("ring", &c, reference - g.minor_radius_mm));
+        let form = ToothForm {
+            kind: GearKind::Internal,
+            teeth: g.teeth,
+            module: g.module_mm * 1e-3,
+            pressure_angle: g.pressure_angle_deg.to_radians(),
+            tooth_thickness: g.tooth_thickness_mm * 1e-3,
+            tip_radius: g.minor_radius_mm * 1e-3,
+            root_radius: g.root_radius_mm * 1e-3,
+            body_radius: g.rim_radius_mm * 1e-3,
+            root_form: RootForm::Fillet { radius: g.fillet_radius_mm * 1e-3 },
+            chamfer: chamfer.filter(|c| c.height > 0.0),
+            face_width: g.face_width_mm * 1e-3,
+        };
+        if !(ok && g.teeth >= 12) {
+            return form;
+        }
+        let rb = form.base_radius() * 1e3;
+        if g.minor_radius_mm <= rb {
+            self.fail(
+                &n("minor_radius_mm"),
+                g.minor_radius_mm,
+                format!("must exceed the ring's base radius {rb:.4} mm, or its teeth have no involute flank"),
+            );
+        }
+        if g.root_radius_mm <= g.minor_radius_mm {
+            self.fail(
+                &n("root_radius_mm"),
+                g.root_radius_mm,
+                format!("must exceed the minor radius {} mm", g.minor_radius_mm),
+            );
+        }
+        if g.rim_radius_mm <= g.root_radius_mm {
+            self.fail(
+                &n("rim_radius_mm"),
+                g.rim_radius_mm,
+                format!("must exceed the root radius {} mm", g.root_radius_mm),
+            );
+        }
+        if g.tooth_thickness_mm >= PI * g.module_mm {
+            self.fail(
+                &n("tooth_thickness_mm"),
+                g.tooth_thickness_mm,
+                format!("must be below the circular pitch π·m = {:.4} mm", PI * g.module_mm),
+            );
+        }
+        if g.fillet_radius_mm >= 0.5 * (g.root_radius_mm - g.minor_radius_mm) {
+            self.fail(
+                &n("fillet_radius_mm"),
+                g.fillet_radius_mm,
+                format!(
+                    "must be below half the tooth depth, {:.4} mm",
+                    0.5 * (g.root_radius_mm - g.minor_radius_mm)
+                ),
+            );
+        }
+        form
+    }
+}
+
+/// The scene key of a gear's tip radius (the ring's is its minor radius).
+fn tip_key(gear: &str) -> String {
+    if gear == "ring" {
+        "ring.minor_radius_mm".into()
+    } else {
+        format!("{gear}.tip_radius_mm")
+    }
+}
+
+/// Checks every rule of a scene and converts it to SI.
+fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
+    let mut c = Checker { problems: Vec::new() };
+    let sun = c.external("sun", &scene.sun);
+    let planet = c.external("planet", &scene.planet);
+    let ring = c.ring(&scene.ring);
+    // Same base pitch on all gears: a mesh needs it, whatever else is wrong.
+    for (key, g) in [("planet", &planet), ("ring", &ring)] {
+        let (p, p0) = (g.base_pitch(), sun.base_pitch());
+        if p.is_finite() && p0.is_finite() && p > 0.0 && p0 > 0.0 && (p - p0).abs() > 1e-9 {
+            c.fail(
+                &format!("{key}.module_mm"),
+                g.module * 1e3,
+                format!(
+                    "module and pressure angle must give the sun's base pitch {:.5} mm (this gives {:.5} mm)",
+                    p0 * 1e3,
+                    p * 1e3
+                ),
+            );
+        }
+    }
+    let gears_ok = c.problems.is_empty();
+
+    let m = &scene.material;
+    c.in_range(
+        "material.youngs_modulus_gpa",
+        m.youngs_modulus_gpa,
+        0.0,
+        1.0e4,
+        "an engineering metal or polymer",
+    );
+    c.in_range("material.poisson_ratio", m.poisson_ratio, 0.0, 0.5, "isotropic elastic material");
+    c.positive("material.density_kg_per_m3", m.density_kg_per_m3);
+    let material = Material {
+        youngs_modulus: m.youngs_modulus_gpa * 1e9,
+        poisson_ratio: m.poisson_ratio,
+        density: m.density_kg_per_m3,
+    };
+
+    let a = &scene.analysis;
+    if !(8..=100_000).contains(&a.positions_per_mesh_cycle) {
+        c.fail(
+            "analysis.positions_per_mesh_cycle",
+            a.positions_per_mesh_cycle,
+            "must be between 8 and 100000",
+        );
+    }
+    if !(5..=10_000).contains(&a.profile_points) {
+        c.fail("analysis.profile_points", a.profile_points, "must be between 5 and 10000");
+    }
+    if !(1..=1000).contains(&a.face_slices) {
+        c.fail("analysis.face_slices", a.face_slices, "must be between 1 and 1000");
+    }
+
+    let sp = &scene.supports;
+    for (name, v) in [
+        ("supports.sun_radial_n_per_m", sp.sun_radial_n_per_m),
+        ("supports.ring_radial_n_per_m", sp.ring_radial_n_per_m),
+        ("supports.carrier_radial_n_per_m", sp.carrier_radial_n_per_m),
+        ("supports.planet_bearing_n_per_m", sp.planet_bearing_n_per_m),
+    ] {
+        c.positive(name, v);
+    }
+    for (name, v) in [
+        ("supports.bearing_damping_ratio", Some(sp.bearing_damping_ratio)),
+        ("supports.sun_damping_ratio", sp.sun_damping_ratio),
+        ("supports.ring_damping_ratio", sp.ring_damping_ratio),
+        ("supports.carrier_damping_ratio", sp.carrier_damping_ratio),
+        ("supports.planet_damping_ratio", sp.planet_damping_ratio),
+    ] {
+        if let Some(v) = v {
+            if !(v.is_finite() && (0.0..1.0).contains(&v)) {
+                c.fail(name, v, "must be at least 0 and below 1");
+            }
+        }
+    }
+    if let Some(list) = &sp.planet_bearings_n_per_m {
+        if list.len() != scene.planets.count as usize {
+            c.fail(
+                "supports.planet_bearings_n_per_m",
+                format!("{list:?}"),
+                format!("must list one stiffness per planet (planets.count = {})", scene.planets.count),
+            );
+        }
+        for (i, v) in list.iter().enumerate() {
+            c.positive(&format!("supports.planet_bearings_n_per_m[{i}]"), *v);
+        }
+    }
+    let inertia = &scene.inertia;
+    for (name, v) in [
+        ("inertia.sun_mass_kg", inertia.sun_mass_kg),
+        ("inertia.sun_inertia_kg_m2", inertia.sun_inertia_kg_m2),
+        ("inertia.planet_mass_kg", inertia.planet_mass_kg),
+        ("inertia.planet_inertia_kg_m2", inertia.planet_inertia_kg_m2),
+        ("inertia.ring_mass_kg", inertia.ring_mass_kg),
+        ("inertia.ring_inertia_kg_m2", inertia.ring_inertia_kg_m2),
+        ("inertia.carrier_mass_kg", inertia.carrier_mass_kg),
+        ("inertia.carrier_inertia_kg_m2", inertia.carrier_inertia_kg_m2),
+    ] {
+        if let Some(v) = v {
+            c.positive(name, v);
+        }
+    }
+    let ms = &scene.mesh_stiffness;
+    for (name, v) in [
+        ("mesh_stiffness.sun_planet_scale", ms.sun_planet_scale),
+        ("mesh_stiffness.ring_planet_scale", ms.ring_planet_scale),
+    ] {
+        c.in_range(name, v, 0.1, 10.0, "a correction factor on the energy method's pair stiffness");
+    }
+    let d = &scene.dynamics;
+    if !(d.mesh_damping_ratio.is_finite() && (0.0..1.0).contains(&d.mesh_damping_ratio)) {
+        c.fail("dynamics.mesh_damping_ratio", d.mesh_damping_ratio, "must be at least 0 and below 1");
+    }
+    if !d.input_speed_rpm.is_finite() || d.input_speed_rpm.abs() > 1.0e6 {
+        c.fail(
+            "dynamics.input_speed_rpm",
+            d.input_speed_rpm,
+            "must be a finite speed below 1e6 rpm in magnitude",
+        );
+    }
+    c.positive("dynamics.shaft_stiffness_nm_per_rad", d.shaft_stiffness_nm_per_rad);
+    if !(d.rho_infinity.is_finite() && (0.0..=1.0).contains(&d.rho_infinity)) {
+        c.fail("dynamics.rho_infinity", d.rho_infinity, "must lie between 0 and 1 (spectral radius)");
+    }
+    if !(4..=100_000).contains(&d.steps_per_mesh_cycle) {
+        c.fail("dynamics.steps_per_mesh_cycle", d.steps_per_mesh_cycle, "must be between 4 and 100000");
+    }
+    if !(d.relative_tolerance.is_finite() && d.relative_tolerance >= 1e-14 && d.relative_tolerance <= 1e-1) {
+        c.fail("dynamics.relative_tolerance", d.relative_tolerance, "must lie between 1e-14 and 0.1");
+    }
+    if !(d.run_in_revolutions.is_finite() && d.run_in_revolutions >= 0.0) {
+        c.fail("dynamics.run_in_revolutions", d.run_in_revolutions, "must be zero or more");
+    }
+    c.positive("dynamics.measured_revolutions", d.measured_revolutions);
+    if !(d.steady_tolerance.is_finite() && (0.0..1.0).contains(&d.steady_tolerance)) {
+        c.fail("dynamics.steady_tolerance", d.steady_tolerance, "must be at least 0 and below 1");
+    }
+    if !(8..=100_000).contains(&d.samples_per_mesh_cycle) {
+        c.fail("dynamics.samples_per_mesh_cycle", d.samples_per_mesh_cycle, "must be between 8 and 100000");
+    }
+
+    let op = &scene.operation;
+    if op.held == op.input {
+        c.fail(
+            "operation.input",
+            op.input.name(),
+            format!("must differ from the held member ({})", op.held.name()),
+        );
+    }
+    if !op.input_torque_nm.is_finite() {
+        c.fail("operation.input_torque_nm", op.input_torque_nm, "must be a finite number");
+    }
+
+    // Planet layout and the assembly condition.
+    let count = scene.planets.count;
+    let mut angles = Vec::new();
+    if !(1..=32).contains(&count) {
+        c.fail("planets.count", count, "must be between 1 and 32");
+    } else {
+        angles = match &scene.planets.angles_deg {
+            None => (0..count).map(|i| 2.0 * PI * f64::from(i) / f64::from(count)).collect(),
+            Some(list) => {
+                if list.len() != count as usize {
+                    c.fail(
+                        "planets.angles_deg",
+                        format!("{list:?}"),
+                        format!("must list exactly planets.count = {count} angles"),
+                    );
+                }
+                list.iter().map(|d| d.to_radians()).collect()
+            }
+        };
+        if angles.iter().any(|a| !a.is_finite()) {
+            c.fail("planets.angles_deg", format!("{:?}", scene.planets.angles_deg), "must be finite numbers");
+            angles.clear();
+        }
+    }
+
+    let centre_ok = c.positive("centre_distance_mm", scene.centre_distance_mm);
+    if !(gears_ok && centre_ok) {
+        return Err(SceneError::Invalid { problems: c.problems });
+    }
+
+    let angles_len = angles.len();
+    let set = GearSet {
+        name: scene.name.clone(),
+        sun,
+        planet,
+        ring,
+        planet_angles: angles,
+        centre_distance: scene.centre_distance_mm * 1e-3,
+        material,
+        held: op.held,
+        input: op.input,
+        input_torque: op.input_torque_nm,
+        stiffness_scale: [ms.sun_planet_scale, ms.ring_planet_scale],
+        analysis: Analysis {
+            positions_per_mesh_cycle: a.positions_per_mesh_cycle as usize,
+            profile_points: a.profile_points as usize,
+            face_slices: a.face_slices as usize,
+        },
+        supports: Supports {
+            sun_radial: sp.sun_radial_n_per_m,
+            ring_radial: sp.ring_radial_n_per_m,
+            carrier_radial: sp.carrier_radial_n_per_m,
+            planet_bearing: sp.planet_bearing_n_per_m,
+            planet_bearings: sp
+                .planet_bearings_n_per_m
+                .clone()
+                .unwrap_or_else(|| vec![sp.planet_bearing_n_per_m; angles_len]),
+            damping_ratios: [
+                sp.carrier_damping_ratio.unwrap_or(sp.bearing_damping_ratio),
+                sp.ring_damping_ratio.unwrap_or(sp.bearing_damping_ratio),
+                sp.sun_damping_ratio.unwrap_or(sp.bearing_damping_ratio),
+                sp.planet_damping_ratio.unwrap_or(sp.bearing_damping_ratio),
+            ],
+        },
+        bodies: Bodies {
+            sun: Body { mass: 0.0, inertia: 0.0 },
+            planet: Body { mass: 0.0, inertia: 0.0 },
+            ring: Body { mass: 0.0, inertia: 0.0 },
+            carrier: Body { mass: 0.0, inertia: 0.0 },
+        },
+        dynamics: DynamicsSettings {
+            fidelity: d.fidelity,
+            mesh_damping_ratio: d.mesh_damping_ratio,
+            drive: d.drive,
+            input_speed: d.input_speed_rpm * std::f64::consts::PI / 30.0,
+            shaft_stiffness: d.shaft_stiffness_nm_per_rad,
+            integrator: d.integrator,
+            rho_infinity: d.rho_infinity,
+            steps_per_mesh_cycle: d.steps_per_mesh_cycle as usize,
+            relative_tolerance: d.relative_tolerance,
+            run_in_revolutions: d.run_in_revolutions,
+            steady_tolerance: d.steady_tolerance,
+            measured_revolutions: d.measured_revolutions,
+            samples_per_mesh_cycle: d.samples_per_mesh_cycle as usize,
+        },
+    };
+    // Bodies from the geometry, then the user's overrides.
+    let mut set = set;
+    let derived = Bodies::from_geometry(&set);
+    let pick = |v: Option<f64>, d: f64| v.unwrap_or(d);
+    set.bodies = Bodies {
+        sun: Body {
+            mass: pick(inertia.sun_mass_kg, derived.sun.mass),
+            inertia: pick(inertia.sun_inertia_kg_m2, derived.sun.inertia),
+        },
+        planet: Body {
+            mass: pick(inertia.planet_mass_kg, derived.planet.mass),
+            inertia: pick(inertia.planet_inertia_kg_m2, derived.planet.inertia),
+        },
+        ring: Body {
+            mass: pick(inertia.ring_mass_kg, derived.ring.mass),
+            inertia: pick(inertia.ring_inertia_kg_m2, derived.ring.inertia),
+        },
+        carrier: Body {
+            mass: pick(inertia.carrier_mass_kg, derived.carrier.mass),
+            inertia: pick(inertia.carrier_inertia_kg_m2, derived.carrier.inertia),
+        },
+    };
+
+    // Centre distance must be reachable by both meshes.
+    let a_mm = scene.centre_distance_mm;
+    let ext = (set.sun.base_radius() + set.planet.base_radius()) * 1e3;
+    let int = (set.ring.base_radius() - set.planet.base_radius()) * 1e3;
+    if a_mm <= ext {
+        c.fail(
+            "centre_distance_mm",
+            a_mm,
+            format!("must exceed the sum of sun and planet base radii, {ext:.4} mm"),
+        );
+    }
+    if a_mm <= int {
+        c.fail(
+            "centre_distance_mm",
+            a_mm,
+            format!("must exceed the ring base radius less the planet's, {int:.4} mm"),
+        );
+    }
+    if !c.problems.is_empty() {
+        return Err(SceneError::Invalid { problems: c.problems });
+    }
+
+    for mesh in MeshKind::ALL {
+        let j = set.circumferential_backlash(mesh);
+        if j < 0.0 {
+            let (key1, key2) = match mesh {
+                MeshKind::SunPlanet => ("sun", "planet"),
+                MeshKind::RingPlanet => ("planet", "ring"),
+            };
+            c.fail(
+                &format!("{key1}.tooth_thickness_mm"),
+                format!("{} (with {key2})", set.mesh_gears(mesh).0.tooth_thickness * 1e3),
+                format!(
+                    "the {} mesh has negative backlash ({:.4} mm at the operating pitch circle): thin the teeth of {key1} or {key2} or increase centre_distance_mm",
+                    mesh.name(),
+                    j * 1e3
+                ),
+            );
+        }
+        let path = PathOfContact::new(&set, mesh);
+        let eps = path.nominal_contact_ratio();
+        if eps < 1.0 {
+            c.fail(
+                &format!("{}.tip_radius_mm", if mesh == MeshKind::SunPlanet { "sun" } else { "planet" }),
+                format!("{} (contact ratio {eps:.4})", path.gear1_tip_radius_mm()),
+                format!("the {} mesh's contact ratio must be at least 1: lengthen the teeth", mesh.name()),
+            );
+        }
+        // Tip/root interference: each gear's start of active profile must lie
+        // on its involute, above the form circle where the fillet begins.
+        let (g1, g2) = set.mesh_gears(mesh);
+        let (k1, k2) = match mesh {
+            MeshKind::SunPlanet => ("sun", "planet"),
+            MeshKind::RingPlanet => ("planet", "ring"),
+        };
+        let (r1, r2) = path.active_profile_start_radii();
+        let f1 = g1.form_radius();
+        let f2 = g2.form_radius();
+        let interferes1 = r1 < f1;
+        let interferes2 = match g2.kind {
+            GearKind::External => r2 < f2,
+            GearKind::Internal => r2 > f2,
+        };
+        if interferes1 {
+            c.fail(
+                &tip_key(k2),
+                g2.tip_radius * 1e3,
+                format!(
+                    "tip/root interference in the {} mesh: the {k2} tip reaches {k1} radius {:.4} mm, below its form radius {:.4} mm where the fillet begins",
+                    mesh.name(), r1 * 1e3, f1 * 1e3
+                ),
+            );
+        }
+        if interferes2 {
+            c.fail(
+                &tip_key(k1),
+                g1.tip_radius * 1e3,
+                format!(
+                    "tip/root interference in the {} mesh: the {k1} tip reaches {k2} radius {:.4} mm, beyond its form radius {:.4} mm where the fillet begins",
+                    mesh.name(), r2 * 1e3, f2 * 1e3
+                ),
+            );
+        }
+        // Root clearance: the mating tip circle must not reach the root circle.
+        for (clearance, tip_gear, root_key) in path.root_clearances() {
+            if clearance <= 0.0 {
+                c.fail(
+                    &tip_key(tip_gear),
+                    format!("clearance {:.4} mm", clearance * 1e3),
+                    format!(
+                        "the {tip_gear} tip circle must clear the {root_key} root circle in the {} mesh",
+                        mesh.name()
+                    ),
+                );
+            }
+        }
+    }
+
+    // Assembly: planet n at ψ_n fits when (Z_s + Z_r)·ψ_n / 2π is an integer.
+    let zsum = f64::from(set.sun.teeth + set.ring.teeth);
+    for (i, psi) in set.planet_angles.iter().enumerate() {
+        let k = zsum * psi / (2.0 * PI);
+        if (k - k.round()).abs() > 1e-6 {
+            c.fail(
+                &format!("planets.angles_deg[{i}]"),
+                format!("{:.6}", psi.to_degrees()),
+                format!(
+                    "planets can only be assembled at multiples of 360°/(Z_sun + Z_ring) = {:.6}°: (Z_sun + Z_ring)·ψ/360° = {k:.6} is not an integer",
+                    360.0 / zsum
+                ),
+            );
+        }
+    }
+    // Neighbouring planets must not touch.
+    let mut sorted = set.planet_angles.clone();
+    sorted.sort_by(f64::total_cmp);
+    if sorted.len() > 1 {
+        for i in 0..sorted.len() {
+            let next = if i + 1 < sorted.len() { sorted[i + 1] } else { sorted[0] + 2.0 * PI };
+            let gap = next - sorted[i];
+            let chord = 2.0 * set.centre_distance * (gap / 2.0).sin();
+            if chord <= 2.0 * set.planet.tip_radius {
+                c.fail(
+                    "planets.angles_deg",
+                    format!("{:.4}° and {:.4}°", sorted[i].to_degrees(), next.to_degrees().rem_euclid(360.0)),
+                    format!(
+                        "neighbouring planets overlap: centres {:.4} mm apart, tips need more than {:.4} mm",
+                        chord * 1e3,
+                        2.0 * set.planet.tip_radius * 1e3
+                    ),
+                );
+                break;
+            }
+        }
+    }
+
+    if c.problems.is_empty() {
+        Ok(set)
+    } else {
+        Err(SceneError::Invalid { problems: c.problems })
+    }
+}

@@ -1,0 +1,21 @@
+//! Stage 2, model: what the gear set is. A validated, immutable description
+//! in SI units (radians, metres, newtons, kilograms) built from a validated
+//! [`crate::scene`]: the tooth forms, the bodies, the supports, the
+//! material, the lumped description of the degrees of freedom, and the
+//! elementary involute geometry that proves a description feasible (the
+//! path of contact and its contact ratio, the form circle where the root
+//! fillet begins).
+//!
+//! May import: [`crate::files`], [`crate::scene`].
+//!
+//! - [`build`]: the scene's rules, and the gear set built from a valid scene.
+//! - [`gear`]: tooth forms, bodies, supports, material, run settings, the gear set.
+//! - [`involute`]: the involute function and its inverse relations.
+//! - [`lumped`]: degrees of freedom, fidelity, the lumped (mean-stiffness) set.
+//! - [`mesh`]: the path of contact of one mesh along its line of action.
+
+pub mod build;
+pub mod gear;
+pub mod involute;
+pub mod lumped;
+pub mod mesh;

@@ -1,0 +1,68 @@
+//! The words a scene is written in: which member is held, driven or
+//! loaded, how the input is driven, which integrator runs and which degrees
+//! of freedom a model carries. They are part of the scene file's format;
+//! the model re-exports them where it uses them.
+
+use serde::{Deserialize, Serialize};
+
+/// A member of the planetary set that can be held, driven or loaded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Member {
+    /// The central external gear.
+    Sun,
+    /// The internal gear.
+    Ring,
+    /// The planet carrier.
+    Carrier,
+}
+
+impl Member {
+    /// The name used in files and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Member::Sun => "sun",
+            Member::Ring => "ring",
+            Member::Carrier => "carrier",
+        }
+    }
+}
+
+/// How the input member is driven in the dynamic model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Drive {
+    /// Constant input torque; the output carries the balancing torque and the
+    /// running speed is set by the initial condition.
+    Torque,
+    /// The input member is driven through a torsional shaft from a source
+    /// turning at the set speed; the output carries the balancing torque.
+    Speed,
+    /// Constant input torque as [`Drive::Torque`], and each new speed
+    /// reference steps the set's rigid-body speed to it, keeping the elastic
+    /// state (deflections and vibration velocities): the continuation of a
+    /// speed sweep (docs/MODEL.md §3) with the published torque boundary
+    /// condition, which a stiff shaft from a constant-speed source would
+    /// change (it clamps the input member and shifts the rotational modes).
+    SpeedSteps,
+}
+
+/// Time integrator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegratorKind {
+    /// Generalized-α (Chung–Hulbert), fixed steps per mesh cycle.
+    GeneralizedAlpha,
+    /// Adaptive Runge–Kutta 5(4) (Dormand–Prince) with contact events.
+    Rk45,
+}
+
+/// Which degrees of freedom a model carries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Fidelity {
+    /// One rotation per body (planets pinned to the carrier).
+    Torsional,
+    /// Two in-plane translations and one rotation per body.
+    TransverseTorsional,
+}

@@ -1,0 +1,730 @@
+//! The worn-profile state (docs/MODEL.md §5): the profile deviations of every
+//! flank, the geometry state κ, the cycles and input revolutions run, the
+//! history of the updates and the gear set it belongs to; and its JSON
+//! document, versioned and checksummed. Reading and writing files is the
+//! shell's ([`crate::files`]); this module turns a state into text and back.
+//!
+//! # The document (SI units: m, rad)
+//!
+//! ```text
+//! { "format": "planetwear-worn-profile", "version": 1,
+//!   "checksum": "fnv1a64:<16 hex digits>",
+//!   "content": {
+//!     "gear_set": { "name", "fingerprint", "parameters": { "sun.teeth": 34.0, ... } },
+//!     "kappa": 6, "revolutions": <input revolutions run>,
+//!     "cycles": { "sun", "planet", "ring" }            (tooth cycles run per gear)
+//!     "flanks": { "sun_drive": [ {"roll": [...], "depth": [...]} per face slice ],
+//!                 "sun_coast", "planet_sun_side", "planet_ring_side", "ring_drive", "ring_coast" },
+//!     "history": [ { "kappa", "revolutions", "cycles", "limiting_flank", "ended_by",
+//!                    "new_wear": [ {"flank", "slice", "depth", "roll"} ], "total_wear": [...] } ] } }
+//! ```
+//!
+//! The six flanks are the physical flanks; the planet's two appear in both
+//! meshes ([`WornState::mesh_flanks`]). Depth is material removed normal to
+//! the involute against the flank's own roll angle, linear between grid
+//! points and constant beyond the ends ([`ProfileDeviation`]).
+//!
+//! The checksum is FNV-1a 64 of the content written compactly with its keys
+//! sorted ([`content_checksum`]): any change of a value, any truncation is
+//! caught, while reformatting the file is not an error. The gear set's
+//! fingerprint is FNV-1a 64 of the named geometry and material parameters
+//! that wear depends on (tooth forms, planet angles, centre distance, E, ν),
+//! in name order with each value's bits: the name of the scene and the
+//! operating point (torque, speeds) are not part of it, so a worn set can be
+//! run at any load. A state for another gear set is refused with the
+//! parameters that differ.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::contact::ltca::SetModel;
+use crate::contact::separation::MeshFlanks;
+use crate::geometry::profile::{ProfileDeviation, ProfileEnds};
+use crate::model::gear::{GearSet, RootForm, ToothForm};
+use crate::wear::flank::{active_profile, Flank, GearCycles, UpdateEnd};
+
+/// The `format` name of the document.
+pub const FORMAT: &str = "planetwear-worn-profile";
+/// The version of the document this build writes and reads.
+pub const VERSION: u64 = 1;
+
+/// Why a worn-profile state was refused.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum WornStateError {
+    /// The text is not JSON.
+    #[error("not a JSON document (line {line}, column {column}): {reason}")]
+    NotJson {
+        /// Line of the error.
+        line: usize,
+        /// Column of the error.
+        column: usize,
+        /// What the parser found.
+        reason: String,
+    },
+    /// The text ends before the document does.
+    #[error("the document is truncated: it ends at line {line}, column {column} before it is complete")]
+    Truncated {
+        /// Last line.
+        line: usize,
+        /// Last column.
+        column: usize,
+    },
+    /// Another kind of document.
+    #[error("format is {found}, not \"{expected}\": this is not a worn-profile state")]
+    Format {
+        /// The `format` found (or what stands in its place).
+        found: String,
+        /// The format expected.
+        expected: &'static str,
+    },
+    /// A version this build cannot read.
+    #[error(
+        "worn-profile state version {found} cannot be read by this build, which reads version {supported}"
+    )]
+    Version {
+        /// The `version` found.
+        found: String,
+        /// The version this build reads.
+        supported: u64,
+    },
+    /// The content does not match its checksum.
+    #[error("the checksum does not match the content (stored {stored}, computed {computed}): the file was altered or corrupted")]
+    Checksum {
+        /// Checksum in the document.
+        stored: String,
+        /// Checksum of the content read.
+        computed: String,
+    },
+    /// A value that is not a finite number.
+    #[error("{field} is not a finite number")]
+    NonFinite {
+        /// Where, e.g. `flanks.sun_drive[0].depth[3]`.
+        field: String,
+    },
+    /// A value below zero where only zero or more is allowed.
+    #[error("{field} = {value:e} is negative: depths, cycles and revolutions are zero or more")]
+    Negative {
+        /// Where.
+        field: String,
+        /// Value.
+        value: f64,
+    },
+    /// A deviation grid of the wrong shape.
+    #[error("{field}: {reason}")]
+    GridShape {
+        /// Which grid.
+        field: String,
+        /// What is wrong and what is allowed.
+        reason: String,
+    },
+    /// The content does not have the document's structure.
+    #[error("the content does not have the structure of a worn-profile state: {reason}")]
+    Malformed {
+        /// The parser's account.
+        reason: String,
+    },
+    /// Parts of the content contradict each other.
+    #[error("inconsistent worn-profile state: {reason}")]
+    Inconsistent {
+        /// What contradicts what.
+        reason: String,
+    },
+    /// The state belongs to another gear set.
+    #[error(
+        "the worn-profile state belongs to gear set '{state_set}' (fingerprint {state_fingerprint}), not to '{expected_set}' (fingerprint {expected_fingerprint}): {}",
+        describe_differences(.differences)
+    )]
+    Foreign {
+        /// Name of the state's gear set.
+        state_set: String,
+        /// Its fingerprint.
+        state_fingerprint: String,
+        /// Name of this gear set.
+        expected_set: String,
+        /// This gear set's fingerprint.
+        expected_fingerprint: String,
+        /// The parameters that differ.
+        differences: Vec<ParameterDifference>,
+    },
+}
+
+/// A gear-set parameter whose value differs between a state and a set.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParameterDifference {
+    /// Parameter name, e.g. `sun.teeth`.
+    pub name: String,
+    /// Value in the state, `None` where absent [SI unit of the parameter].
+    pub state: Option<f64>,
+    /// Value of this gear set, `None` where absent [SI unit of the parameter].
+    pub expected: Option<f64>,
+}
+
+fn describe_differences(d: &[ParameterDifference]) -> String {
+    if d.is_empty() {
+        return "the parameters agree but the fingerprint does not (the state was made by another fingerprint rule)"
+            .into();
+    }
+    let show = |v: Option<f64>| v.map_or("absent".to_string(), |x| format!("{x}"));
+    let mut parts: Vec<String> = d
+        .iter()
+        .take(6)
+        .map(|p| format!("{} is {} in the state and {} here", p.name, show(p.state), show(p.expected)))
+        .collect();
+    if d.len() > 6 {
+        parts.push(format!("and {} more", d.len() - 6));
+    }
+    parts.join("; ")
+}
+
+/// Relative difference below which two gear-set parameters are the same
+/// (unit conversions round in the last bits; any design change is far larger).
+pub const SAME_PARAMETER: f64 = 1e-12;
+
+/// The gear set a state belongs to: its name, fingerprint and the
+/// parameters the fingerprint is made of.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GearSetPrint {
+    /// Scene name (not part of the fingerprint).
+    pub name: String,
+    /// FNV-1a 64 of the parameters, `fnv1a64:` and 16 hex digits.
+    pub fingerprint: String,
+    /// Geometry and material parameters by name [SI: m, rad, Pa, counts].
+    pub parameters: BTreeMap<String, f64>,
+}
+
+fn form_parameters(out: &mut BTreeMap<String, f64>, gear: &str, f: &ToothForm) {
+    let mut put = |k: &str, v: f64| {
+        out.insert(format!("{gear}.{k}"), v);
+    };
+    put("teeth", f64::from(f.teeth));
+    put("module", f.module);
+    put("pressure_angle", f.pressure_angle);
+    put("tooth_thickness", f.tooth_thickness);
+    put("tip_radius", f.tip_radius);
+    put("root_radius", f.root_radius);
+    put("body_radius", f.body_radius);
+    put("face_width", f.face_width);
+    match f.root_form {
+        RootForm::Hob { tip_radius } => put("hob_tip_radius", tip_radius),
+        RootForm::Fillet { radius } => put("fillet_radius", radius),
+    }
+    let (h, a) = f.chamfer.map_or((0.0, 0.0), |c| (c.height, c.angle));
+    put("chamfer_height", h);
+    put("chamfer_angle", a);
+    // Present only for a relieved chamfer edge, so the prints of sets whose
+    // edges carry load (all sets before the option existed) are unchanged.
+    if !f.tip_corner_carries_load() {
+        put("chamfer_edge_relieved", 1.0);
+    }
+}
+
+impl GearSetPrint {
+    /// The print of a gear set.
+    pub fn of(set: &GearSet) -> Self {
+        let mut p = BTreeMap::new();
+        form_parameters(&mut p, "sun", &set.sun);
+        form_parameters(&mut p, "planet", &set.planet);
+        form_parameters(&mut p, "ring", &set.ring);
+        p.insert("planets".into(), set.planet_angles.len() as f64);
+        for (i, a) in set.planet_angles.iter().enumerate() {
+            p.insert(format!("planet_angle.{i}"), *a);
+        }
+        p.insert("centre_distance".into(), set.centre_distance);
+        p.insert("material.youngs_modulus".into(), set.material.youngs_modulus);
+        p.insert("material.poisson_ratio".into(), set.material.poisson_ratio);
+        // Present only when not 1, so the prints of sets without a correction
+        // (all sets before the option existed) are unchanged.
+        for (mesh, scale) in ["sun_planet", "ring_planet"].iter().zip(set.stiffness_scale) {
+            if scale != 1.0 {
+                p.insert(format!("mesh_stiffness.{mesh}_scale"), scale);
+            }
+        }
+        let fingerprint = Self::fingerprint_of(&p);
+        Self { name: set.name.clone(), fingerprint, parameters: p }
+    }
+
+    /// The fingerprint of a parameter list: FNV-1a 64 over `name=bits;` in
+    /// name order, the value's bits little-endian.
+    pub fn fingerprint_of(parameters: &BTreeMap<String, f64>) -> String {
+        let mut bytes = Vec::new();
+        for (k, v) in parameters {
+            bytes.extend_from_slice(k.as_bytes());
+            bytes.push(b'=');
+            bytes.extend_from_slice(&v.to_bits().to_le_bytes());
+            bytes.push(b';');
+        }
+        format!("fnv1a64:{:016x}", crate::files::hash::fnv1a64(&bytes))
+    }
+}
+
+/// The largest depth of a flank and where it sits.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlankExtreme {
+    /// The flank.
+    pub flank: Flank,
+    /// Face slice.
+    pub slice: usize,
+    /// Depth [m].
+    pub depth: f64,
+    /// Roll angle of the grid point [rad].
+    pub roll: f64,
+}
+
+/// One update of the worn geometry.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct UpdateRecord {
+    /// The geometry state the update made.
+    pub kappa: u32,
+    /// Input revolutions of the update [rev].
+    pub revolutions: f64,
+    /// Tooth cycles of each gear in the update [-]; C^κ is the limiting
+    /// flank's gear's.
+    pub cycles: GearCycles,
+    /// The flank whose wear per revolution is largest (it set the update's length).
+    pub limiting_flank: Flank,
+    /// What ended the update.
+    pub ended_by: UpdateEnd,
+    /// Largest new wear of each wearing flank and where.
+    pub new_wear: Vec<FlankExtreme>,
+    /// Largest total wear of every flank after the update and where.
+    pub total_wear: Vec<FlankExtreme>,
+}
+
+/// Profile deviations of the six physical flanks, one per face slice.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlankDeviations {
+    /// Sun drive flank.
+    pub sun_drive: Vec<ProfileDeviation>,
+    /// Sun coast flank.
+    pub sun_coast: Vec<ProfileDeviation>,
+    /// Planet flank meeting the sun.
+    pub planet_sun_side: Vec<ProfileDeviation>,
+    /// Planet flank meeting the ring.
+    pub planet_ring_side: Vec<ProfileDeviation>,
+    /// Ring drive flank.
+    pub ring_drive: Vec<ProfileDeviation>,
+    /// Ring coast flank.
+    pub ring_coast: Vec<ProfileDeviation>,
+}
+
+impl FlankDeviations {
+    /// The deviations of `flank`, one per slice.
+    pub fn get(&self, flank: Flank) -> &Vec<ProfileDeviation> {
+        match flank {
+            Flank::SunDrive => &self.sun_drive,
+            Flank::SunCoast => &self.sun_coast,
+            Flank::PlanetSunSide => &self.planet_sun_side,
+            Flank::PlanetRingSide => &self.planet_ring_side,
+            Flank::RingDrive => &self.ring_drive,
+            Flank::RingCoast => &self.ring_coast,
+        }
+    }
+
+    /// The deviations of `flank`, mutable.
+    pub fn get_mut(&mut self, flank: Flank) -> &mut Vec<ProfileDeviation> {
+        match flank {
+            Flank::SunDrive => &mut self.sun_drive,
+            Flank::SunCoast => &mut self.sun_coast,
+            Flank::PlanetSunSide => &mut self.planet_sun_side,
+            Flank::PlanetRingSide => &mut self.planet_ring_side,
+            Flank::RingDrive => &mut self.ring_drive,
+            Flank::RingCoast => &mut self.ring_coast,
+        }
+    }
+}
+
+/// The worn-profile state of a gear set.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WornState {
+    /// The gear set it belongs to.
+    pub gear_set: GearSetPrint,
+    /// Geometry state κ (0: unworn), the number of updates made.
+    pub kappa: u32,
+    /// Input revolutions run [rev].
+    pub revolutions: f64,
+    /// Tooth cycles run per gear [-].
+    pub cycles: GearCycles,
+    /// Flank deviations.
+    pub flanks: FlankDeviations,
+    /// The updates, oldest first.
+    pub history: Vec<UpdateRecord>,
+}
+
+impl WornState {
+    /// The unworn state: every flank's grid of `profile_points` points,
+    /// uniform in roll angle over its active profile, zero depth, in each
+    /// of `face_slices` slices.
+    pub fn unworn(set: &GearSet, profile_points: usize, face_slices: usize) -> Self {
+        let n = profile_points.max(2);
+        let grid = |flank: Flank| {
+            let (lo, hi) = active_profile(set, flank);
+            let roll: Vec<f64> = (0..n).map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64).collect();
+            vec![ProfileDeviation::new(roll, vec![0.0; n]); face_slices.max(1)]
+        };
+        Self {
+            gear_set: GearSetPrint::of(set),
+            kappa: 0,
+            revolutions: 0.0,
+            cycles: GearCycles::default(),
+            flanks: FlankDeviations {
+                sun_drive: grid(Flank::SunDrive),
+                sun_coast: grid(Flank::SunCoast),
+                planet_sun_side: grid(Flank::PlanetSunSide),
+                planet_ring_side: grid(Flank::PlanetRingSide),
+                ring_drive: grid(Flank::RingDrive),
+                ring_coast: grid(Flank::RingCoast),
+            },
+            history: Vec::new(),
+        }
+    }
+
+    /// The state with every flank's deviation read as `ends` says beyond its grid.
+    pub fn with_profile_ends(mut self, ends: ProfileEnds) -> Self {
+        for flank in Flank::ALL {
+            for dev in self.flanks.get_mut(flank) {
+                dev.ends = ends;
+            }
+        }
+        self
+    }
+
+    /// Number of face slices.
+    pub fn face_slices(&self) -> usize {
+        self.flanks.sun_drive.len()
+    }
+
+    /// The deviations as the four flanks of each mesh, per face slice, for
+    /// [`SetModel::with_flanks`] and [`crate::contact::ltca::MeshModel::sliced`]:
+    /// (sun–planet slices, ring–planet slices).
+    pub fn mesh_flanks(&self) -> (Vec<MeshFlanks>, Vec<MeshFlanks>) {
+        let f = &self.flanks;
+        let sun_planet = (0..self.face_slices())
+            .map(|j| MeshFlanks {
+                gear1_drive: f.sun_drive[j].clone(),
+                gear1_back: f.sun_coast[j].clone(),
+                gear2_drive: f.planet_sun_side[j].clone(),
+                gear2_back: f.planet_ring_side[j].clone(),
+            })
+            .collect();
+        let ring_planet = (0..self.face_slices())
+            .map(|j| MeshFlanks {
+                gear1_drive: f.planet_ring_side[j].clone(),
+                gear1_back: f.planet_sun_side[j].clone(),
+                gear2_drive: f.ring_drive[j].clone(),
+                gear2_back: f.ring_coast[j].clone(),
+            })
+            .collect();
+        (sun_planet, ring_planet)
+    }
+
+    /// Contact models of both meshes with this state's deviations.
+    pub fn set_model(&self, set: &GearSet) -> SetModel {
+        let (sp, rp) = self.mesh_flanks();
+        SetModel::with_flanks(set, &sp, &rp)
+    }
+
+    /// Refuses a state made for another gear set, naming what differs.
+    /// Parameters agree when they differ by at most [`SAME_PARAMETER`] of
+    /// their size: a set entered in other units (degrees, millimetres, as
+    /// through the FMU's parameters) converts back with rounding in the last
+    /// bits and is the same set.
+    pub fn check_gear_set(&self, set: &GearSet) -> Result<(), WornStateError> {
+        let here = GearSetPrint::of(set);
+        if here.fingerprint == self.gear_set.fingerprint {
+            return Ok(());
+        }
+        let mut differences = Vec::new();
+        let names: std::collections::BTreeSet<&String> =
+            here.parameters.keys().chain(self.gear_set.parameters.keys()).collect();
+        for name in names {
+            let (a, b) = (self.gear_set.parameters.get(name).copied(), here.parameters.get(name).copied());
+            let same = match (a, b) {
+                (Some(x), Some(y)) => (x - y).abs() <= SAME_PARAMETER * x.abs().max(y.abs()),
+                _ => false,
+            };
+            if !same {
+                differences.push(ParameterDifference { name: name.clone(), state: a, expected: b });
+            }
+        }
+        if differences.is_empty() {
+            return Ok(());
+        }
+        Err(WornStateError::Foreign {
+            state_set: self.gear_set.name.clone(),
+            state_fingerprint: self.gear_set.fingerprint.clone(),
+            expected_set: here.name,
+            expected_fingerprint: here.fingerprint,
+            differences,
+        })
+    }
+
+    /// The deepest point of `flank` over its slices.
+    pub fn deepest_on(&self, flank: Flank) -> FlankExtreme {
+        let mut top = FlankExtreme { flank, slice: 0, depth: 0.0, roll: 0.0 };
+        let mut first = true;
+        for (j, dev) in self.flanks.get(flank).iter().enumerate() {
+            for (d, xi) in dev.depth.iter().zip(&dev.roll) {
+                if first || *d > top.depth {
+                    top = FlankExtreme { flank, slice: j, depth: *d, roll: *xi };
+                    first = false;
+                }
+            }
+        }
+        top
+    }
+
+    /// The deepest point of any flank.
+    pub fn deepest(&self) -> FlankExtreme {
+        Flank::ALL
+            .iter()
+            .map(|f| self.deepest_on(*f))
+            .fold(None, |m: Option<FlankExtreme>, e| match m {
+                Some(m) if m.depth >= e.depth => Some(m),
+                _ => Some(e),
+            })
+            .unwrap_or(FlankExtreme { flank: Flank::SunDrive, slice: 0, depth: 0.0, roll: 0.0 })
+    }
+
+    /// Checks every value: finite, not negative where a count or depth,
+    /// grids of matching shape with increasing roll angles, the counts and
+    /// the history in agreement.
+    pub fn validate(&self) -> Result<(), WornStateError> {
+        let finite = |field: &dyn Fn() -> String, v: f64| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(WornStateError::NonFinite { field: field() })
+            }
+        };
+        let amount = |field: &dyn Fn() -> String, v: f64| {
+            finite(field, v)?;
+            if v < 0.0 {
+                return Err(WornStateError::Negative { field: field(), value: v });
+            }
+            Ok(())
+        };
+        for (name, v) in &self.gear_set.parameters {
+            finite(&|| format!("gear_set.parameters.{name}"), *v)?;
+        }
+        let slices = self.face_slices();
+        for flank in Flank::ALL {
+            let devs = self.flanks.get(flank);
+            let fname = flank.name();
+            if devs.len() != slices || slices == 0 {
+                return Err(WornStateError::GridShape {
+                    field: format!("flanks.{fname}"),
+                    reason: format!(
+                        "{} face slices where flanks.sun_drive has {slices}: every flank needs the same number, at least one",
+                        devs.len()
+                    ),
+                });
+            }
+            for (j, dev) in devs.iter().enumerate() {
+                let at = |what: &str, i: usize| format!("flanks.{fname}[{j}].{what}[{i}]");
+                if dev.roll.len() != dev.depth.len() || dev.roll.len() < 2 {
+                    return Err(WornStateError::GridShape {
+                        field: format!("flanks.{fname}[{j}]"),
+                        reason: format!(
+                            "{} roll angles and {} depths: both need the same length, at least 2",
+                            dev.roll.len(),
+                            dev.depth.len()
+                        ),
+                    });
+                }
+                for (i, xi) in dev.roll.iter().enumerate() {
+                    finite(&|| at("roll", i), *xi)?;
+                    if i > 0 && *xi <= dev.roll[i - 1] {
+                        return Err(WornStateError::GridShape {
+                            field: at("roll", i),
+                            reason: format!(
+                                "roll angle {xi} rad does not exceed the one before ({} rad): the grid must increase",
+                                dev.roll[i - 1]
+                            ),
+                        });
+                    }
+                }
+                for (i, d) in dev.depth.iter().enumerate() {
+                    amount(&|| at("depth", i), *d)?;
+                }
+            }
+        }
+        amount(&|| "revolutions".into(), self.revolutions)?;
+        amount(&|| "cycles.sun".into(), self.cycles.sun)?;
+        amount(&|| "cycles.planet".into(), self.cycles.planet)?;
+        amount(&|| "cycles.ring".into(), self.cycles.ring)?;
+        if self.history.len() != self.kappa as usize {
+            return Err(WornStateError::Inconsistent {
+                reason: format!(
+                    "kappa is {} but the history holds {} updates",
+                    self.kappa,
+                    self.history.len()
+                ),
+            });
+        }
+        let mut revolutions = 0.0;
+        for (i, u) in self.history.iter().enumerate() {
+            let at = |what: &str| format!("history[{i}].{what}");
+            if u.kappa as usize != i + 1 {
+                return Err(WornStateError::Inconsistent {
+                    reason: format!(
+                        "history[{i}].kappa is {} where update {} made kappa {}",
+                        u.kappa,
+                        i + 1,
+                        i + 1
+                    ),
+                });
+            }
+            amount(&|| at("revolutions"), u.revolutions)?;
+            amount(&|| at("cycles.sun"), u.cycles.sun)?;
+            amount(&|| at("cycles.planet"), u.cycles.planet)?;
+            amount(&|| at("cycles.ring"), u.cycles.ring)?;
+            for (k, e) in u.new_wear.iter().chain(&u.total_wear).enumerate() {
+                amount(&|| at(&format!("wear[{k}].depth")), e.depth)?;
+                finite(&|| at(&format!("wear[{k}].roll")), e.roll)?;
+            }
+            revolutions += u.revolutions;
+        }
+        if (revolutions - self.revolutions).abs() > 1e-9 * self.revolutions.abs().max(1.0) {
+            return Err(WornStateError::Inconsistent {
+                reason: format!(
+                    "revolutions is {} but the updates in the history add up to {revolutions}",
+                    self.revolutions
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// The state as its JSON document. A state with a non-finite or
+    /// negative value or a malformed grid is refused rather than written.
+    pub fn to_json(&self) -> Result<String, WornStateError> {
+        self.validate()?;
+        let content =
+            serde_json::to_value(self).map_err(|e| WornStateError::Malformed { reason: e.to_string() })?;
+        let checksum = content_checksum(&content);
+        let doc = serde_json::json!({
+            "format": FORMAT,
+            "version": VERSION,
+            "checksum": checksum,
+            "content": content,
+        });
+        serde_json::to_string_pretty(&doc).map_err(|e| WornStateError::Malformed { reason: e.to_string() })
+    }
+
+    /// Reads a JSON document for the gear set `set`: refuses text that is
+    /// not JSON or is cut short, another format or version, a checksum
+    /// mismatch, non-finite or negative values, malformed grids, and a state
+    /// of another gear set.
+    pub fn from_json(text: &str, set: &GearSet) -> Result<Self, WornStateError> {
+        let state = Self::from_json_any_set(text)?;
+        state.check_gear_set(set)?;
+        Ok(state)
+    }
+
+    /// Reads a JSON document with every check but the gear set's.
+    pub fn from_json_any_set(text: &str) -> Result<Self, WornStateError> {
+        let doc: Value = serde_json::from_str(text).map_err(|e| {
+            let (line, column) = (e.line(), e.column());
+            if e.is_eof() {
+                WornStateError::Truncated { line, column }
+            } else if e.to_string().contains("number out of range") {
+                WornStateError::NonFinite { field: format!("the number at line {line}, column {column}") }
+            } else {
+                WornStateError::NotJson { line, column, reason: e.to_string() }
+            }
+        })?;
+        let format = match doc.get("format") {
+            Some(Value::String(s)) if s == FORMAT => s.clone(),
+            Some(Value::String(s)) => format!("\"{s}\""),
+            Some(other) => other.to_string(),
+            None => "absent".into(),
+        };
+        if format != FORMAT {
+            return Err(WornStateError::Format { found: format, expected: FORMAT });
+        }
+        match doc.get("version") {
+            Some(Value::Number(n)) if n.as_u64() == Some(VERSION) => {}
+            Some(v) => return Err(WornStateError::Version { found: v.to_string(), supported: VERSION }),
+            None => return Err(WornStateError::Version { found: "absent".into(), supported: VERSION }),
+        }
+        let content = doc
+            .get("content")
+            .ok_or_else(|| WornStateError::Malformed { reason: "the document has no \"content\"".into() })?;
+        let stored = match doc.get("checksum") {
+            Some(Value::String(s)) => s.clone(),
+            _ => String::from("absent"),
+        };
+        let computed = content_checksum(content);
+        if stored != computed {
+            return Err(WornStateError::Checksum { stored, computed });
+        }
+        if let Some(field) = first_null(content, String::new()) {
+            return Err(WornStateError::NonFinite { field });
+        }
+        let state: WornState = serde_json::from_value(content.clone())
+            .map_err(|e| WornStateError::Malformed { reason: e.to_string() })?;
+        state.validate()?;
+        Ok(state)
+    }
+}
+
+/// The checksum of a document's content: FNV-1a 64 of its compact JSON
+/// text with keys in sorted order, as `fnv1a64:` and 16 hex digits.
+pub fn content_checksum(content: &Value) -> String {
+    // serde_json's map keeps keys sorted (no `preserve_order`), so this text
+    // is canonical; floats are written in their shortest round-trip form.
+    let text = serde_json::to_string(content).unwrap_or_default();
+    format!("fnv1a64:{:016x}", crate::files::hash::fnv1a64(text.as_bytes()))
+}
+
+/// Path of the first `null` in a JSON value: serde_json writes non-finite
+/// floats as `null`, and the document has no optional values.
+fn first_null(v: &Value, path: String) -> Option<String> {
+    match v {
+        Value::Null => Some(if path.is_empty() { "content".into() } else { path }),
+        Value::Array(a) => a.iter().enumerate().find_map(|(i, x)| first_null(x, format!("{path}[{i}]"))),
+        Value::Object(m) => m.iter().find_map(|(k, x)| {
+            first_null(x, if path.is_empty() { k.clone() } else { format!("{path}.{k}") })
+        }),
+        _ => None,
+    }
+}
+
+/// Why a worn-profile state file could not be written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum StateFileError {
+    /// The file system refused.
+    #[error("worn-profile state file {0}")]
+    Io(#[from] crate::files::FileError),
+    /// The file was read but its content was refused.
+    #[error("worn-profile state file '{}': {source}", path.display())]
+    State {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why it was refused.
+        #[source]
+        source: Box<WornStateError>,
+    },
+}
+
+/// Writes a worn-profile state to `path` (atomically). A state with a
+/// non-finite or negative value or a malformed grid is refused and nothing
+/// is written.
+pub fn write_worn_state(path: &std::path::Path, state: &WornState) -> Result<(), StateFileError> {
+    let text = state
+        .to_json()
+        .map_err(|source| StateFileError::State { path: path.to_path_buf(), source: Box::new(source) })?;
+    Ok(crate::files::write_durable(path, text.as_bytes())?)
+}
+
+/// Reads the worn-profile state at `path` for the gear set `set`, with every
+/// check of [`WornState::from_json`] (through [`crate::files::read_input`]).
+pub fn read_worn_state(path: &std::path::Path, set: &GearSet) -> Result<WornState, StateFileError> {
+    let bytes = crate::files::read_input(path)
+        .map_err(|source| crate::files::FileError { path: path.to_path_buf(), source })?;
+    let text = String::from_utf8_lossy(&bytes);
+    WornState::from_json(&text, set)
+        .map_err(|source| StateFileError::State { path: path.to_path_buf(), source: Box::new(source) })
+}
