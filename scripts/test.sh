@@ -10,9 +10,10 @@ echo "== cargo clippy"
 cargo clippy --release --all-targets --quiet -- -D warnings
 echo "== cargo test"
 cargo test --release
-echo "== build and pack the FMU (fmu/planetwear.fmu)"
+echo "== build and pack the FMU (fmu/planetwear.fmu; its library from the stripped, LTO profile fmu)"
 cargo build --release --quiet
-target/release/planetwear fmu pack --out fmu/planetwear.fmu
+cargo build --profile fmu --lib --quiet
+target/release/planetwear fmu pack --out fmu/planetwear.fmu --library target/fmu/libplanetwear.so
 echo "== cargo test: the packed FMU under the fmi crate"
 cargo test --release --test fmu_import -- --include-ignored
 echo "== fuzz under valgrind: the packed FMU's C interface, memcheck and leak check (docs/FUZZING.md)"
