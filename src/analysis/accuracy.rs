@@ -66,7 +66,7 @@ pub enum AccuracyError {
     Integration {
         /// The method and setting.
         method: String,
-        /// Input speed [rpm].
+        /// Input speed \[rpm\].
         speed_rpm: f64,
         /// The integrator's error.
         source: SolverError,
@@ -76,7 +76,7 @@ pub enum AccuracyError {
     Spectrum {
         /// The method and setting.
         method: String,
-        /// Input speed [rpm].
+        /// Input speed \[rpm\].
         speed_rpm: f64,
         /// Cause.
         source: SpectrumError,
@@ -111,7 +111,7 @@ pub struct Protocol {
     /// Samples per mesh cycle in the window (more than 12 for six harmonics).
     pub samples_per_cycle: u32,
     /// Offset of the sample grid from the cycle boundaries, as a fraction of
-    /// the sample interval, in [0, 1) [1].
+    /// the sample interval, in [0, 1) \[1\].
     pub sample_phase: f64,
 }
 
@@ -149,7 +149,7 @@ impl Protocol {
         Ok(())
     }
 
-    /// Sample times of the window for mesh period `period` [s].
+    /// Sample times of the window for mesh period `period` \[s\].
     pub fn sample_times(&self, period: f64) -> Vec<f64> {
         let s = f64::from(self.samples_per_cycle);
         let r = f64::from(self.run_in_cycles);
@@ -158,7 +158,7 @@ impl Protocol {
             .collect()
     }
 
-    /// End time of a run for mesh period `period` [s].
+    /// End time of a run for mesh period `period` \[s\].
     pub fn end_time(&self, period: f64) -> f64 {
         f64::from(self.run_in_cycles + self.window_cycles) * period
     }
@@ -170,14 +170,14 @@ impl Protocol {
 pub enum Method {
     /// Generalized-α (Chung–Hulbert) with a fixed number of steps per mesh cycle.
     GeneralizedAlpha {
-        /// Spectral radius at infinite frequency [1].
+        /// Spectral radius at infinite frequency \[1\].
         rho_infinity: f64,
         /// Steps per mesh cycle.
         steps_per_mesh_cycle: u32,
     },
     /// Adaptive Dormand–Prince 5(4) with contact events.
     Rk45 {
-        /// Relative tolerance [1].
+        /// Relative tolerance \[1\].
         relative_tolerance: f64,
     },
 }
@@ -235,29 +235,29 @@ fn short(x: f64) -> String {
 /// The mesh-force harmonics of one run and what it cost.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Measured {
-    /// Harmonics of the sun–planet and the ring–planet mesh force of planet 1 [N].
+    /// Harmonics of the sun–planet and the ring–planet mesh force of planet 1 \[N\].
     pub harmonics: Vec<Harmonics>,
-    /// Fraction of the window's samples with no tooth force, per mesh [1].
+    /// Fraction of the window's samples with no tooth force, per mesh \[1\].
     pub separation: Vec<f64>,
     /// Integrator work.
     pub work: Work,
-    /// CPU time of the run (median of the repeats) [s].
+    /// CPU time of the run (median of the repeats) \[s\].
     pub cpu_seconds: f64,
 }
 
 /// The study's reference solution at one operating point.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Reference {
-    /// Relative tolerance of the adaptive method [1].
+    /// Relative tolerance of the adaptive method \[1\].
     pub tolerance: f64,
     /// Its harmonics and cost.
     pub measured: Measured,
     /// Smallest distance between a sample time and a located contact event,
-    /// as a fraction of the sample interval [1].
+    /// as a fraction of the sample interval \[1\].
     pub closest_event: f64,
     /// Contact events located in the window.
     pub events_in_window: usize,
-    /// Their times [s].
+    /// Their times \[s\].
     #[serde(skip)]
     pub window_events: Vec<f64>,
 }
@@ -282,7 +282,7 @@ pub struct IndependentSolution {
 pub trait IndependentIntegrator {
     /// Name, method and tolerance, for the report.
     fn name(&self) -> String;
-    /// Integrates `sys` and returns the states at `times` [s].
+    /// Integrates `sys` and returns the states at `times` \[s\].
     fn solve(
         &self,
         sys: &mut dyn SecondOrderSystem,
@@ -297,13 +297,13 @@ pub trait IndependentIntegrator {
 pub struct Agreement {
     /// The independent integrator.
     pub name: String,
-    /// E_h between it and the reference [1].
+    /// E_h between it and the reference \[1\].
     pub error: f64,
     /// Its accepted steps.
     pub steps: u64,
     /// Its right-hand-side evaluations.
     pub rhs_evaluations: u64,
-    /// Its CPU time [s].
+    /// Its CPU time \[s\].
     pub cpu_seconds: f64,
 }
 
@@ -513,7 +513,7 @@ fn harmonics_of(
     Ok((harmonics, force.iter().map(|f| separation_fraction(f)).collect()))
 }
 
-/// The mesh period at input speed `speed_rpm` [s].
+/// The mesh period at input speed `speed_rpm` \[s\].
 pub fn mesh_period(model: &PlanetaryDynamics, speed_rpm: f64) -> f64 {
     1.0 / (model.mesh_frequency_per_input_speed * speed_rpm.abs() * std::f64::consts::PI / 30.0)
 }
@@ -584,7 +584,7 @@ pub fn measure(
 
 /// The reference at one operating point: the adaptive method at relative
 /// tolerance `tolerance` (absolute tolerances 1e-6 m and 1e-3 m/s per unit
-/// of it) in the rigid-body frame ([`RigidFrame`]), contact events recorded
+/// of it) in the rigid-body frame (`RigidFrame`), contact events recorded
 /// to check that no sample sits on one.
 pub fn reference(
     model: &PlanetaryDynamics,
@@ -635,8 +635,8 @@ pub fn reference(
 }
 
 /// The sample phase farthest from the contact events of a window starting
-/// at `window_start` [s]: the events folded onto one sample interval
-/// `interval` [s], the middle of the widest gap between them. With no events,
+/// at `window_start` \[s\]: the events folded onto one sample interval
+/// `interval` \[s\], the middle of the widest gap between them. With no events,
 /// the golden-ratio phase of [`Protocol::default`].
 pub fn clear_phase(events: &[f64], window_start: f64, interval: f64) -> f64 {
     let mut x: Vec<f64> = events.iter().map(|t| ((t - window_start) / interval).rem_euclid(1.0)).collect();
@@ -697,7 +697,7 @@ pub fn confirm(
     })
 }
 
-/// E_h = max over meshes of max_k |A_k − A_k,ref| / A_1,ref [1].
+/// E_h = max over meshes of max_k |A_k − A_k,ref| / A_1,ref \[1\].
 pub fn harmonic_error(run: &[Harmonics], reference: &[Harmonics]) -> f64 {
     run.iter()
         .zip(reference)
@@ -730,7 +730,7 @@ pub struct OperatingPoint {
     pub description: String,
     /// The gear set.
     pub set: GearSet,
-    /// Input speed [rpm].
+    /// Input speed \[rpm\].
     pub speed_rpm: f64,
 }
 
@@ -741,13 +741,13 @@ pub struct StudyPlan {
     pub protocol: Protocol,
     /// Repeats per setting for the median CPU time.
     pub repeats: usize,
-    /// Relative tolerance of the reference [1].
+    /// Relative tolerance of the reference \[1\].
     pub reference_tolerance: f64,
-    /// Generalized-α spectral radii [1].
+    /// Generalized-α spectral radii \[1\].
     pub rho_infinity: Vec<f64>,
     /// Generalized-α steps per mesh cycle.
     pub steps_per_mesh_cycle: Vec<u32>,
-    /// Adaptive method's relative tolerances [1].
+    /// Adaptive method's relative tolerances \[1\].
     pub relative_tolerances: Vec<f64>,
 }
 
@@ -805,7 +805,7 @@ impl StudyPlan {
 pub struct SettingResult {
     /// The setting.
     pub method: Method,
-    /// E_h against the reference [1]; `None` when the run failed.
+    /// E_h against the reference \[1\]; `None` when the run failed.
     pub error: Option<f64>,
     /// Its harmonics, cost and work; `None` when the run failed.
     pub measured: Option<Measured>,
@@ -823,9 +823,9 @@ pub struct PointResult {
     pub description: String,
     /// Fidelity level.
     pub fidelity: Fidelity,
-    /// Input speed [rpm].
+    /// Input speed \[rpm\].
     pub speed_rpm: f64,
-    /// Mesh frequency [Hz].
+    /// Mesh frequency \[Hz\].
     pub mesh_frequency: f64,
     /// Degrees of freedom.
     pub dof: usize,
@@ -833,10 +833,10 @@ pub struct PointResult {
     pub protocol: Protocol,
     /// The reference.
     pub reference: Reference,
-    /// E_h of the adaptive method at 10× the reference tolerance against the reference [1].
+    /// E_h of the adaptive method at 10× the reference tolerance against the reference \[1\].
     pub self_check: f64,
     /// E_h between the reference's window and the window one run-in later:
-    /// how periodic (steady) the response is [1].
+    /// how periodic (steady) the response is \[1\].
     pub drift: f64,
     /// The independent confirmation, if one was run.
     pub independent: Option<Agreement>,
@@ -921,13 +921,13 @@ pub fn study_point(
 
 impl PointResult {
     /// How far the reference can be trusted: the larger of its self-check
-    /// and its disagreement with the independent integrator [1].
+    /// and its disagreement with the independent integrator \[1\].
     pub fn resolution(&self) -> f64 {
         self.independent.as_ref().map_or(self.self_check, |a| a.error.max(self.self_check))
     }
 
     /// Errors below this are not reported: 100 × [`Self::resolution`], so
-    /// that every reported error is at least 100 times the reference's [1].
+    /// that every reported error is at least 100 times the reference's \[1\].
     pub fn floor(&self) -> f64 {
         100.0 * self.resolution()
     }
@@ -997,7 +997,7 @@ pub fn time_to_reach(results: &[&SettingResult], target: f64) -> Option<f64> {
 
 /// The default chosen from a study: among the settings that reach E_h ≤
 /// `target` at every operating point, the one with the least total CPU time
-/// over the points. Returns the method and its total time [s].
+/// over the points. Returns the method and its total time \[s\].
 pub fn cheapest_meeting(points: &[PointResult], target: f64) -> Option<(Method, f64)> {
     let first = points.first()?;
     let mut best: Option<(Method, f64)> = None;

@@ -34,7 +34,7 @@ pub enum ModeClass {
 /// One natural mode.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Mode {
-    /// Natural frequency [Hz].
+    /// Natural frequency \[Hz\].
     pub frequency: f64,
     /// Class.
     pub class: ModeClass,

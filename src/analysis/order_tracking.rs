@@ -38,11 +38,11 @@ pub const HARMONICS: usize = 6;
 pub struct WindowMeasure {
     /// Mesh cycles from the start at which the window ends.
     pub end_cycle: usize,
-    /// Sun–planet mesh force: mean and harmonics 1..6 [N].
+    /// Sun–planet mesh force: mean and harmonics 1..6 \[N\].
     pub sun: Harmonics,
     /// Fraction of the sun–planet mesh's samples at zero force.
     pub sun_separation: f64,
-    /// Ring–planet mesh force: mean and harmonics 1..6 [N].
+    /// Ring–planet mesh force: mean and harmonics 1..6 \[N\].
     pub ring: Harmonics,
     /// Fraction of the ring–planet mesh's samples at zero force.
     pub ring_separation: f64,
@@ -57,7 +57,7 @@ pub struct TrackedRun {
     pub work: Work,
 }
 
-/// A sample: time [s], sun–planet and ring–planet mesh force [N].
+/// A sample: time \[s\], sun–planet and ring–planet mesh force \[N\].
 type Sample = (f64, f64, f64);
 
 /// Runs the set from the FMU's initial state at input speed `omega` [rad/s]

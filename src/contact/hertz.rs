@@ -8,20 +8,20 @@ use serde::{Deserialize, Serialize};
 /// Result of a Hertzian line contact.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LineContact {
-    /// Half-width of the contact band [m].
+    /// Half-width of the contact band \[m\].
     pub half_width: f64,
-    /// Peak pressure [Pa].
+    /// Peak pressure \[Pa\].
     pub peak_pressure: f64,
 }
 
-/// Contact modulus E* of two materials [Pa].
+/// Contact modulus E* of two materials \[Pa\].
 pub fn contact_modulus(e1: f64, nu1: f64, e2: f64, nu2: f64) -> f64 {
     1.0 / ((1.0 - nu1 * nu1) / e1 + (1.0 - nu2 * nu2) / e2)
 }
 
 /// Line contact under load per length `w` [N/m] between curvature radii
-/// `rho1`, `rho2` [m] (`concave2` for an internal flank), contact modulus
-/// `e_star` [Pa]. Zero load gives a zero band.
+/// `rho1`, `rho2` \[m\] (`concave2` for an internal flank), contact modulus
+/// `e_star` \[Pa\]. Zero load gives a zero band.
 pub fn line_contact(w: f64, rho1: f64, rho2: f64, concave2: bool, e_star: f64) -> LineContact {
     let curvature = 1.0 / rho1 + if concave2 { -1.0 / rho2 } else { 1.0 / rho2 };
     if w <= 0.0 || curvature <= 0.0 {
@@ -32,7 +32,7 @@ pub fn line_contact(w: f64, rho1: f64, rho2: f64, concave2: bool, e_star: f64) -
     LineContact { half_width: b, peak_pressure: 2.0 * w / (std::f64::consts::PI * b) }
 }
 
-/// Pressure [Pa] at distance `x` [m] from the band's centre.
+/// Pressure \[Pa\] at distance `x` \[m\] from the band's centre.
 pub fn pressure_at(contact: &LineContact, x: f64) -> f64 {
     if contact.half_width == 0.0 || x.abs() >= contact.half_width {
         0.0

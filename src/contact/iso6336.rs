@@ -20,9 +20,9 @@ pub struct IsoPair {
     pub x1: f64,
     /// Profile shift coefficient of gear 2.
     pub x2: f64,
-    /// Helix angle [rad].
+    /// Helix angle \[rad\].
     pub helix: f64,
-    /// Normal pressure angle of the basic rack [rad].
+    /// Normal pressure angle of the basic rack \[rad\].
     pub rack_pressure_angle: f64,
     /// Basic rack dedendum over normal module, h_fP / m_n.
     pub rack_dedendum: f64,

@@ -53,9 +53,9 @@ pub struct MeshModel {
 pub struct PairContact {
     /// Pair index relative to the reference tooth (0), the next tooth of gear 1 is 1.
     pub index: i32,
-    /// Drive-flank position on the line of action [m].
+    /// Drive-flank position on the line of action \[m\].
     pub position: f64,
-    /// Force along the line of action [N]; negative on the back flank.
+    /// Force along the line of action \[N\]; negative on the back flank.
     pub force: f64,
     /// Stiffness of the pair in contact [N/m] (0 when open).
     pub stiffness: f64,
@@ -79,7 +79,7 @@ struct PairLaw {
 /// Samples per base pitch of the contact tables.
 pub const TABLE_SAMPLES_PER_PITCH: usize = 400;
 
-/// One slice's contact: the sign of the force, the penetration [m], the
+/// One slice's contact: the sign of the force, the penetration \[m\], the
 /// pair stiffness table, the separation table of the flank in contact and
 /// the slope of its edge relief [-].
 type SliceContact<'a> = (f64, f64, &'a [f64], &'a [f64], f64);
@@ -144,11 +144,11 @@ impl MeshModel {
         k_lo..=k_hi
     }
 
-    /// Which flank of one slice touches under approach `delta` [m], given the
-    /// slice's drive and back separations `gd`, `gb` [m] at the pair's
+    /// Which flank of one slice touches under approach `delta` \[m\], given the
+    /// slice's drive and back separations `gd`, `gb` \[m\] at the pair's
     /// position, each with its edge relief and the relief's slope
     /// ([`MeshSeparation::drive_relief_at`]): the sign of the force, the
-    /// penetration [m], the pair stiffness table, the slice's separation
+    /// penetration \[m\], the pair stiffness table, the slice's separation
     /// table of that flank and the slope of its edge relief [-].
     #[inline(always)]
     fn slice_contact<'a>(
@@ -168,8 +168,8 @@ impl MeshModel {
         }
     }
 
-    /// Force [N] of each face slice of the pair at position `pos` [m] under
-    /// approach `delta` [m], written to `out` (one value per slice, negative
+    /// Force \[N\] of each face slice of the pair at position `pos` \[m\] under
+    /// approach `delta` \[m\], written to `out` (one value per slice, negative
     /// on the back flank, zero outside the tables); they add up to
     /// [`Self::pair_force`]. The wear model reads the line load of each slice
     /// from here.
@@ -197,13 +197,13 @@ impl MeshModel {
         }
     }
 
-    /// Face width carried by the mesh, the narrower of its two gears [m].
+    /// Face width carried by the mesh, the narrower of its two gears \[m\].
     pub fn face_width(&self) -> f64 {
         self.face_width
     }
 
-    /// Everything the contact law says about the pair at position `pos` [m]
-    /// under approach `delta` [m], summed over the face slices: one table
+    /// Everything the contact law says about the pair at position `pos` \[m\]
+    /// under approach `delta` \[m\], summed over the face slices: one table
     /// cell lookup serves every table (they share one grid).
     #[inline(always)]
     fn pair(&self, pos: f64, delta: f64) -> PairLaw {
@@ -241,8 +241,8 @@ impl MeshModel {
         law
     }
 
-    /// Force [N] of the single tooth pair at position `pos` [m] under
-    /// approach `delta` [m] (zero outside the tables).
+    /// Force \[N\] of the single tooth pair at position `pos` \[m\] under
+    /// approach `delta` \[m\] (zero outside the tables).
     pub fn pair_force(&self, pos: f64, delta: f64) -> f64 {
         let t = &self.separation.drive;
         if pos < t.start || pos > t.end() {
@@ -251,8 +251,8 @@ impl MeshModel {
         self.pair(pos, delta).force
     }
 
-    /// Mesh force [N] and tangent stiffness [N/m] at approach `delta` [m],
-    /// with the reference pair at position `s` [m]; pairs are filled into
+    /// Mesh force \[N\] and tangent stiffness [N/m] at approach `delta` \[m\],
+    /// with the reference pair at position `s` \[m\]; pairs are filled into
     /// `pairs` when given.
     pub fn force(&self, s: f64, delta: f64, mut pairs: Option<&mut Vec<PairContact>>) -> (f64, f64) {
         if let Some(p) = pairs.as_deref_mut() {
@@ -278,7 +278,7 @@ impl MeshModel {
         (f, k)
     }
 
-    /// Mesh force [N], its derivatives ∂F/∂δ [N/m] and ∂F/∂s [N/m] (the
+    /// Mesh force \[N\], its derivatives ∂F/∂δ [N/m] and ∂F/∂s [N/m] (the
     /// exact derivatives of the interpolated contact law, contact status
     /// frozen), and the event values of the pairs: for pair k the value
     /// δ − g_drive (drive flank) and −δ − g_back (back flank) are written to
@@ -307,7 +307,7 @@ impl MeshModel {
         (f, kd, ks)
     }
 
-    /// Mesh force [N] and its derivatives ∂F/∂δ [N/m] and ∂F/∂s [N/m], as
+    /// Mesh force \[N\] and its derivatives ∂F/∂δ [N/m] and ∂F/∂s [N/m], as
     /// [`Self::force_with_derivatives`] without the event values: the
     /// dynamic model's hot path, with a single face slice read from the
     /// interleaved tables.
@@ -371,7 +371,7 @@ impl MeshModel {
     }
 
     /// Elastic energy stored in the mesh's pairs, V = Σ ½k(s_k)(δ − g(s_k))²
-    /// [J], and its partial derivative ∂V/∂s at fixed δ [N]: the power
+    /// \[J\], and its partial derivative ∂V/∂s at fixed δ \[N\]: the power
     /// ∂V/∂s · ṡ is the work rate of the time-varying stiffness and
     /// separation that an energy balance must account for.
     pub fn contact_energy(&self, s: f64, delta: f64) -> (f64, f64) {
@@ -398,14 +398,14 @@ impl MeshModel {
             .sum()
     }
 
-    /// Approach [m] at which the mesh carries `load` [N] with the reference
+    /// Approach \[m\] at which the mesh carries `load` \[N\] with the reference
     /// pair at `s`.
     pub fn approach_for(&self, s: f64, load: f64) -> f64 {
         solve_increasing(|d| self.force(s, d, None), load, 0.0)
     }
 
-    /// First and last position [m] at which one tooth pair carries load
-    /// while the mesh transmits `load` [N] along its line of action: the
+    /// First and last position \[m\] at which one tooth pair carries load
+    /// while the mesh transmits `load` \[N\] along its line of action: the
     /// loaded engagement, corner contact included. Found by a scan over the
     /// path ± one base pitch and bisection to 1e-12 of a base pitch, so it
     /// varies smoothly with the geometry (the share of a sampled cycle moves
@@ -418,14 +418,14 @@ impl MeshModel {
         loaded_span(lo, hi, 400, loaded, Refine::Width(1e-12 * pb)).unwrap_or((p.start, p.end))
     }
 
-    /// Loaded contact ratio at `load` [N]: the loaded engagement over the
+    /// Loaded contact ratio at `load` \[N\]: the loaded engagement over the
     /// base pitch [-].
     pub fn loaded_contact_ratio(&self, load: f64) -> f64 {
         let (a, b) = self.loaded_engagement(load);
         (b - a) / self.path().base_pitch
     }
 
-    /// Share of the mesh cycle with two or more pairs loaded at `load` [N]:
+    /// Share of the mesh cycle with two or more pairs loaded at `load` \[N\]:
     /// ε − 1 for a loaded contact ratio ε between 1 and 2 [-].
     pub fn double_contact_share(&self, load: f64) -> f64 {
         (self.loaded_contact_ratio(load) - 1.0).clamp(0.0, 1.0)
@@ -435,7 +435,7 @@ impl MeshModel {
 /// How [`loaded_span`] refines an end found by its scan.
 #[derive(Clone, Copy, Debug)]
 pub enum Refine {
-    /// Bisect until the bracket is at most this wide [m].
+    /// Bisect until the bracket is at most this wide \[m\].
     Width(f64),
     /// Bisect this many times.
     Steps(usize),
@@ -549,13 +549,13 @@ impl CycleStats {
 pub struct MeshLtca {
     /// Mesh name.
     pub name: String,
-    /// Load along the line of action [N].
+    /// Load along the line of action \[N\].
     pub load: f64,
-    /// Reference-pair positions over one cycle [m].
+    /// Reference-pair positions over one cycle \[m\].
     pub position: Vec<f64>,
-    /// Roll angle of gear 1 at the reference position [rad].
+    /// Roll angle of gear 1 at the reference position \[rad\].
     pub roll_angle_gear1: Vec<f64>,
-    /// Loaded static transmission error: the approach along the line of action [m].
+    /// Loaded static transmission error: the approach along the line of action \[m\].
     pub transmission_error: Vec<f64>,
     /// Tangent mesh stiffness of the loaded mesh [N/m].
     pub mesh_stiffness_loaded: Vec<f64>,
@@ -563,19 +563,19 @@ pub struct MeshLtca {
     pub mesh_stiffness_nominal: Vec<f64>,
     /// Pairs carrying load at each position.
     pub pairs_in_contact: Vec<u32>,
-    /// Largest Hertzian peak pressure of any pair [Pa].
+    /// Largest Hertzian peak pressure of any pair \[Pa\].
     pub peak_pressure: Vec<f64>,
-    /// Largest Hertzian half-width of any pair [m].
+    /// Largest Hertzian half-width of any pair \[m\].
     pub half_width: Vec<f64>,
-    /// One tooth pair's load through its whole engagement: positions [m].
+    /// One tooth pair's load through its whole engagement: positions \[m\].
     pub pair_path_position: Vec<f64>,
-    /// ... its gear-1 roll angles [rad].
+    /// ... its gear-1 roll angles \[rad\].
     pub pair_path_roll_gear1: Vec<f64>,
-    /// ... its load [N].
+    /// ... its load \[N\].
     pub pair_path_load: Vec<f64>,
-    /// ... its Hertzian peak pressure [Pa].
+    /// ... its Hertzian peak pressure \[Pa\].
     pub pair_path_peak_pressure: Vec<f64>,
-    /// ... its Hertzian half-width [m].
+    /// ... its Hertzian half-width \[m\].
     pub pair_path_half_width: Vec<f64>,
 }
 
@@ -604,7 +604,7 @@ fn hertz_of(model: &MeshModel, set: &GearSet, pos: f64, line_load: f64) -> (f64,
     (c.peak_pressure, c.half_width)
 }
 
-/// LTCA of one mesh carrying `load` [N] along its line of action, at
+/// LTCA of one mesh carrying `load` \[N\] along its line of action, at
 /// `samples` positions over one mesh cycle.
 pub fn mesh_ltca(set: &GearSet, model: &MeshModel, load: f64, samples: usize) -> MeshLtca {
     let p = model.path().clone();
@@ -672,10 +672,10 @@ pub struct SetModel {
     pub sun_planet: MeshModel,
     /// Ring–planet mesh model.
     pub ring_planet: MeshModel,
-    /// Planet angles [rad].
+    /// Planet angles \[rad\].
     pub planet_angles: Vec<f64>,
     base_radius_sun: f64,
-    /// Offset [m] from a planet's sun-mesh position to its ring-mesh position.
+    /// Offset \[m\] from a planet's sun-mesh position to its ring-mesh position.
     pub ring_shift: f64,
 }
 
@@ -710,22 +710,22 @@ impl SetModel {
         }
     }
 
-    /// Sun-mesh reference position of planet `n` at sun travel `lambda` [m].
+    /// Sun-mesh reference position of planet `n` at sun travel `lambda` \[m\].
     pub fn sun_position(&self, n: usize, lambda: f64) -> f64 {
         let p = self.sun_planet.path();
         let s = lambda - self.base_radius_sun * self.planet_angles[n];
         p.start + (s - p.start).rem_euclid(p.base_pitch)
     }
 
-    /// Ring-mesh reference position of planet `n` at sun travel `lambda` [m].
+    /// Ring-mesh reference position of planet `n` at sun travel `lambda` \[m\].
     pub fn ring_position(&self, n: usize, lambda: f64) -> f64 {
         let p = self.ring_planet.path();
         let s = self.sun_position(n, lambda) + self.ring_shift;
         p.start + (s - p.start).rem_euclid(p.base_pitch)
     }
 
-    /// Static equilibrium of the whole set at sun travel `lambda` [m] under
-    /// the total tooth force `total` [N] (n·F, shared by the planets),
+    /// Static equilibrium of the whole set at sun travel `lambda` \[m\] under
+    /// the total tooth force `total` \[N\] (n·F, shared by the planets),
     /// starting the iterations from `guess` (a neighbouring equilibrium or
     /// [`SetEquilibrium::unloaded`]).
     pub fn equilibrium(&self, total: f64, lambda: f64, guess: &SetEquilibrium) -> SetEquilibrium {
@@ -761,7 +761,7 @@ impl SetModel {
         out
     }
 
-    /// Load [N] through planet `n` when the sun has advanced `u_s` [m]
+    /// Load \[N\] through planet `n` when the sun has advanced `u_s` \[m\]
     /// elastically, with the approach of its sun mesh.
     pub fn planet_load(&self, n: usize, lambda: f64, u_s: f64, guess: f64) -> (f64, f64) {
         let ss = self.sun_position(n, lambda);
@@ -779,12 +779,12 @@ impl SetModel {
 /// Static equilibrium of the whole set at one sun travel.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SetEquilibrium {
-    /// Sun rotation as displacement along the line of action [m].
+    /// Sun rotation as displacement along the line of action \[m\].
     pub sun_approach: f64,
-    /// Approach of each planet's sun mesh [m]; its ring mesh's approach is
+    /// Approach of each planet's sun mesh \[m\]; its ring mesh's approach is
     /// `sun_approach` minus this.
     pub sun_mesh_approach: Vec<f64>,
-    /// Load through each planet [N].
+    /// Load through each planet \[N\].
     pub planet_load: Vec<f64>,
 }
 
@@ -798,14 +798,14 @@ impl SetEquilibrium {
 /// Whole-set LTCA result over one mesh cycle.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SetLtca {
-    /// Sun travel along the line of action [m].
+    /// Sun travel along the line of action \[m\].
     pub travel: Vec<f64>,
-    /// Sun rotation as displacement along the line of action [m] (the set's
+    /// Sun rotation as displacement along the line of action \[m\] (the set's
     /// static transmission error at the sun).
     pub sun_approach: Vec<f64>,
-    /// Load of each planet at each position [N]: `planet_load[n][i]`.
+    /// Load of each planet at each position \[N\]: `planet_load[n][i]`.
     pub planet_load: Vec<Vec<f64>>,
-    /// Mean load of each planet over the cycle [N].
+    /// Mean load of each planet over the cycle \[N\].
     pub planet_mean_load: Vec<f64>,
     /// Largest instantaneous planet load over the mean planet load.
     pub load_sharing_factor: f64,

@@ -27,7 +27,7 @@ use crate::model::gear::{EdgeRelief, GearKind, GearSet, MeshKind, ToothForm};
 use crate::model::mesh::PathOfContact;
 
 /// Separation used where no contact is possible within half an angular
-/// pitch [m]; far above any elastic approach.
+/// pitch \[m\]; far above any elastic approach.
 pub const NO_CONTACT: f64 = 1.0e-3;
 
 /// Profile deviations of the four flanks that meet in one mesh.
@@ -46,16 +46,16 @@ pub struct MeshFlanks {
 /// A separation sampled on a uniform grid of positions.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SeparationTable {
-    /// Position of the first sample [m].
+    /// Position of the first sample \[m\].
     pub start: f64,
-    /// Spacing of the samples [m].
+    /// Spacing of the samples \[m\].
     pub step: f64,
-    /// Separation at each sample [m].
+    /// Separation at each sample \[m\].
     pub values: Vec<f64>,
 }
 
 impl SeparationTable {
-    /// Separation at position `s` [m], linear between samples,
+    /// Separation at position `s` \[m\], linear between samples,
     /// [`NO_CONTACT`] outside the table.
     pub fn at(&self, s: f64) -> f64 {
         let x = (s - self.start) / self.step;
@@ -67,7 +67,7 @@ impl SeparationTable {
         self.values[i] + t * (self.values[i + 1] - self.values[i])
     }
 
-    /// The interpolation cell of position `s` [m], clamped to the table: the
+    /// The interpolation cell of position `s` \[m\], clamped to the table: the
     /// index i of its left sample and the fraction t across it. Tables that
     /// share this grid (the contact law's separations and stiffnesses) are
     /// all read with the same (i, t).
@@ -89,12 +89,12 @@ impl SeparationTable {
         (self.values[i + 1] - self.values[i]) / self.step
     }
 
-    /// Positions [m] of the samples.
+    /// Positions \[m\] of the samples.
     pub fn positions(&self) -> impl Iterator<Item = f64> + '_ {
         (0..self.values.len()).map(|i| self.start + i as f64 * self.step)
     }
 
-    /// Last position of the table [m].
+    /// Last position of the table \[m\].
     pub fn end(&self) -> f64 {
         self.start + (self.values.len() - 1) as f64 * self.step
     }
@@ -107,22 +107,22 @@ impl SeparationTable {
 pub struct MeshSeparation {
     /// The path of contact.
     pub path: PathOfContact,
-    /// Drive flank separation vs position on the drive line of action [m].
+    /// Drive flank separation vs position on the drive line of action \[m\].
     pub drive: SeparationTable,
-    /// Back flank separation vs position on the back line of action [m].
+    /// Back flank separation vs position on the back line of action \[m\].
     pub back: SeparationTable,
-    /// Normal backlash j_n of the perfect involutes [m].
+    /// Normal backlash j_n of the perfect involutes \[m\].
     pub normal_backlash: f64,
-    /// Positions [m] (drive-position coordinate of the gear-1 tooth) between
+    /// Positions \[m\] (drive-position coordinate of the gear-1 tooth) between
     /// which that tooth's back flank is on the back path of contact.
     pub back_range: (f64, f64),
     /// The back flank of the tooth at drive position s touches the back line
-    /// of action at position `back_mirror − s` [m].
+    /// of action at position `back_mirror − s` \[m\].
     pub back_mirror: f64,
-    /// Drive positions [m] beyond which the drive flanks are relieved (a
+    /// Drive positions \[m\] beyond which the drive flanks are relieved (a
     /// tip chamfer whose edge carries no load); ±∞ without relief.
     pub drive_window: (f64, f64),
-    /// Drive positions [m] beyond which the back flanks are relieved.
+    /// Drive positions \[m\] beyond which the back flanks are relieved.
     pub back_window: (f64, f64),
     /// Reliefs before and after the drive window
     /// ([`crate::model::gear::ToothForm::edge_relief`] of gear 2 and
@@ -132,7 +132,7 @@ pub struct MeshSeparation {
     pub back_relief: (Option<EdgeRelief>, Option<EdgeRelief>),
 }
 
-/// Relief [m] and its derivative along the drive position [-] at `pos` for
+/// Relief \[m\] and its derivative along the drive position [-] at `pos` for
 /// a window `w` of unrelieved positions and the reliefs `e` before and
 /// after it.
 #[inline(always)]
@@ -257,7 +257,7 @@ fn position_offset(g1: &ToothForm, path: &PathOfContact) -> f64 {
 }
 
 impl MeshSeparation {
-    /// Relief of the drive flanks [m] at drive position `pos` [m] and its
+    /// Relief of the drive flanks \[m\] at drive position `pos` \[m\] and its
     /// derivative along `pos` [-]: zero on the involute path or without a
     /// relieved edge.
     #[inline(always)]
@@ -265,7 +265,7 @@ impl MeshSeparation {
         relief(self.drive_window, &self.drive_relief, pos)
     }
 
-    /// Relief of the back flanks [m] at drive position `pos` [m] and its
+    /// Relief of the back flanks \[m\] at drive position `pos` \[m\] and its
     /// derivative along `pos` [-].
     #[inline(always)]
     pub fn back_relief_at(&self, pos: f64) -> (f64, f64) {

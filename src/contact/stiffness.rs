@@ -54,7 +54,7 @@ impl ToothCompliance {
 }
 
 /// Coefficients L*, M*, P*, Q* of Sainsot's fillet-foundation formula for a
-/// root half angle θ_f [rad] and h_f = r_f / r_bore.
+/// root half angle θ_f \[rad\] and h_f = r_f / r_bore.
 pub fn sainsot_coefficients(theta_f: f64, h_f: f64) -> [f64; 4] {
     const C: [[f64; 6]; 4] = [
         [-5.574e-5, -1.9986e-3, -2.3015e-4, 4.7702e-3, 0.0271, 6.8045],
@@ -81,7 +81,7 @@ pub fn foundation_ratio(form: &ToothForm) -> f64 {
 /// Compliance of one tooth as a function of the contact roll angle.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ToothComplianceCurve {
-    /// Roll angles of the samples [rad].
+    /// Roll angles of the samples \[rad\].
     pub roll: Vec<f64>,
     /// Compliance at each sample.
     pub compliance: Vec<ToothCompliance>,

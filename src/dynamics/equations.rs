@@ -7,7 +7,7 @@
 //!
 //! with δ = bᵀq the mesh approach along the line of action, F the tooth
 //! forces of all pairs of that mesh at their real positions
-//! ([`MeshModel::force_with_derivatives`]), c_m the viscous mesh damping of
+//! ([`MeshModel::force_with_derivatives`](crate::contact::ltca::MeshModel::force_with_derivatives)), c_m the viscous mesh damping of
 //! the mesh mode (damping ratio ζ_m on the mean stiffness and the two gears'
 //! rotational masses), acting only while a pair touches. Positions follow
 //! from the gears' rotations relative to the carrier:
@@ -41,19 +41,19 @@ struct Link {
 /// Per-mesh state of the last force evaluation.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MeshState {
-    /// Position of the reference pair [m].
+    /// Position of the reference pair \[m\].
     pub position: f64,
-    /// Approach along the line of action [m].
+    /// Approach along the line of action \[m\].
     pub approach: f64,
     /// Rate of the approach [m/s].
     pub approach_rate: f64,
-    /// Elastic mesh force (sum of the tooth forces) [N].
+    /// Elastic mesh force (sum of the tooth forces) \[N\].
     pub force: f64,
     /// Tangent stiffness ∂F/∂δ [N/m].
     pub stiffness: f64,
     /// ∂F/∂s [N/m].
     pub position_derivative: f64,
-    /// Damping force [N] (zero out of contact).
+    /// Damping force \[N\] (zero out of contact).
     pub damping_force: f64,
 }
 
@@ -76,14 +76,14 @@ pub struct PlanetaryDynamics {
     speed_drive: Option<SpeedDrive>,
     /// Index of the input member's rotation among the reduced coordinates.
     pub input_index: usize,
-    /// Lever of the input member's rotation: u = lever·θ [m].
+    /// Lever of the input member's rotation: u = lever·θ \[m\].
     pub input_lever: f64,
     /// Rigid-body velocity pattern: reduced velocities per rad/s of the input member.
     pub rigid_velocity: Vec<f64>,
     /// Mesh frequency per rad/s of input speed [Hz·s/rad].
     pub mesh_frequency_per_input_speed: f64,
     /// Index of the rotation u of carrier, ring, sun among the reduced
-    /// coordinates (None when held) and its lever, u = lever·θ [m].
+    /// coordinates (None when held) and its lever, u = lever·θ \[m\].
     pub rotations: [(Option<usize>, f64); 3],
     /// State of every mesh after the last force evaluation (planet-major: sun, ring).
     pub meshes: Vec<MeshState>,
@@ -102,9 +102,9 @@ struct SpeedDrive {
     damping: f64,
     /// Source speed on u [m/s].
     speed: f64,
-    /// Source position on u at t = 0 [m].
+    /// Source position on u at t = 0 \[m\].
     offset: f64,
-    /// Mean generalised input force the shaft carries [N].
+    /// Mean generalised input force the shaft carries \[N\].
     preload: f64,
 }
 
@@ -371,8 +371,8 @@ impl PlanetaryDynamics {
 
     /// Energy bookkeeping at a state: kinetic energy, elastic energy of the
     /// supports (and the speed drive's shaft), elastic energy of the tooth
-    /// contacts [J], and the work rate of the time-varying mesh stiffness and
-    /// separation, Σ ∂V/∂s · ṡ [W].
+    /// contacts \[J\], and the work rate of the time-varying mesh stiffness and
+    /// separation, Σ ∂V/∂s · ṡ \[W\].
     pub fn energy(&self, t: f64, q: &[f64], v: &[f64]) -> (f64, f64, f64, f64) {
         let kinetic: f64 = 0.5 * self.mass.iter().zip(v).map(|(m, v)| m * v * v).sum::<f64>();
         let mut support = 0.0;
@@ -397,7 +397,7 @@ impl PlanetaryDynamics {
         (kinetic, support, contact, power)
     }
 
-    /// Work rate of the constant external forces at velocities `v` [W].
+    /// Work rate of the constant external forces at velocities `v` \[W\].
     pub fn external_power(&self, v: &[f64]) -> f64 {
         self.f_ext.iter().zip(v).map(|(f, v)| f * v).sum()
     }
@@ -447,7 +447,7 @@ impl PlanetaryDynamics {
         }
     }
 
-    /// The speed drive's source state (angle offset [m] and speed [m/s] on
+    /// The speed drive's source state (angle offset \[m\] and speed [m/s] on
     /// u), empty for the torque drive.
     pub fn drive_state(&self) -> Vec<f64> {
         self.speed_drive.map_or(Vec::new(), |d| vec![d.offset, d.speed])
@@ -462,7 +462,7 @@ impl PlanetaryDynamics {
         }
     }
 
-    /// Changes the speed drive's source speed at time `t` [s] keeping the
+    /// Changes the speed drive's source speed at time `t` \[s\] keeping the
     /// source's angle continuous (no jump in the shaft's wind-up).
     pub fn change_drive_speed(&mut self, omega: f64, t: f64) {
         let lever = self.input_lever;

@@ -56,7 +56,7 @@ pub enum ResponseError {
     /// The integrator failed (non-finite state, Newton divergence, step too small).
     #[error("integration failed at {speed_rpm} rpm: {source}")]
     Integration {
-        /// Input speed [rpm].
+        /// Input speed \[rpm\].
         speed_rpm: f64,
         /// The integrator's error.
         source: SolverError,
@@ -64,7 +64,7 @@ pub enum ResponseError {
     /// The spectrum could not be formed.
     #[error("spectrum at {speed_rpm} rpm: {source}")]
     Spectrum {
-        /// Input speed [rpm].
+        /// Input speed \[rpm\].
         speed_rpm: f64,
         /// Cause.
         source: SpectrumError,
@@ -99,28 +99,28 @@ pub struct MeshResponse {
     pub planet: usize,
     /// Which mesh.
     pub mesh: MeshKind,
-    /// Mean and harmonics 1..6 of the mesh force [N].
+    /// Mean and harmonics 1..6 of the mesh force \[N\].
     pub harmonics: Harmonics,
     /// Fraction of the window with no tooth force.
     pub separation: f64,
-    /// Largest mesh force [N].
+    /// Largest mesh force \[N\].
     pub max_force: f64,
 }
 
 /// Steady-state response at one speed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SteadyState {
-    /// Input speed [rpm].
+    /// Input speed \[rpm\].
     pub input_speed_rpm: f64,
-    /// Mesh frequency [Hz].
+    /// Mesh frequency \[Hz\].
     pub mesh_frequency: f64,
     /// Mean speed of the input member over the window, from its rotation [rad/s].
     pub mean_input_speed: f64,
     /// Mesh cycles in the window.
     pub cycles: usize,
-    /// Sample times in the window [s].
+    /// Sample times in the window \[s\].
     pub time: Vec<f64>,
-    /// Mesh forces [N]: `mesh_force[mesh][sample]` (planet-major, sun then ring).
+    /// Mesh forces \[N\]: `mesh_force[mesh][sample]` (planet-major, sun then ring).
     pub mesh_force: Vec<Vec<f64>>,
     /// Measures per mesh.
     pub meshes: Vec<MeshResponse>,
@@ -231,7 +231,7 @@ impl Stepper {
         }
     }
 
-    /// Time of the last accepted step [s].
+    /// Time of the last accepted step \[s\].
     pub(crate) fn time(&self) -> f64 {
         match self {
             Stepper::Alpha(a) => a.time(),

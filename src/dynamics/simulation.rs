@@ -43,9 +43,9 @@ pub enum SimulationError {
          the input member turns at {speed} rad/s"
     )]
     WorkBudget {
-        /// Start of the step [s].
+        /// Start of the step \[s\].
         t: f64,
-        /// Time reached [s].
+        /// Time reached \[s\].
         reached: f64,
         /// The budget [force evaluations].
         budget: u64,
@@ -59,7 +59,7 @@ pub enum SimulationError {
     /// The integrator could not complete the step.
     #[error("step from t = {t} s failed: {source}")]
     Integration {
-        /// Start of the step [s].
+        /// Start of the step \[s\].
         t: f64,
         /// The integrator's error.
         source: SolverError,
@@ -78,7 +78,7 @@ pub const WORK_BASE: u64 = 100_000;
 /// A restorable snapshot of a simulation (plain data, no pointers).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Snapshot {
-    /// Time [s].
+    /// Time \[s\].
     pub time: f64,
     /// Coordinates.
     pub q: Vec<f64>,
@@ -91,11 +91,11 @@ pub struct Snapshot {
     pub torques: [f64; 3],
     /// Speed reference of the speed drive [rad/s].
     pub speed_reference: f64,
-    /// Harmonic window: planet 1's sun and ring mesh-force samples, oldest first [N].
+    /// Harmonic window: planet 1's sun and ring mesh-force samples, oldest first \[N\].
     pub window_sun: Vec<f64>,
     /// See `window_sun`.
     pub window_ring: Vec<f64>,
-    /// The window's last (travel [m], sun force [N], ring force [N]), if any.
+    /// The window's last (travel \[m\], sun force \[N\], ring force \[N\]), if any.
     pub window_last: Vec<f64>,
     /// The speed drive's source state (empty for the torque drive).
     pub drive: Vec<f64>,
@@ -193,7 +193,7 @@ const TIME_TOLERANCE: f64 = 1e-9;
 pub const MAX_INTERNAL_STEPS: u64 = 10_000_000;
 
 impl Simulation {
-    /// Starts at time `t0` [s] from the static deflection with the input
+    /// Starts at time `t0` \[s\] from the static deflection with the input
     /// member turning at `input_speed` [rad/s]; internal steps follow the
     /// scene's steps per mesh cycle at that speed.
     pub fn new(
@@ -274,7 +274,7 @@ impl Simulation {
         Ok(())
     }
 
-    /// Current time [s].
+    /// Current time \[s\].
     pub fn time(&self) -> f64 {
         self.time
     }
@@ -379,7 +379,7 @@ impl Simulation {
             .map_err(|source| SimulationError::Integration { t, source })
     }
 
-    /// Advances from `t` (which must be the current time) by `h` > 0 [s].
+    /// Advances from `t` (which must be the current time) by `h` > 0 \[s\].
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), SimulationError> {
         if !(h.is_finite() && h > 0.0) {
             return Err(SimulationError::InvalidInput {
@@ -526,7 +526,7 @@ impl Simulation {
         pairs.iter().filter(|c| c.force != 0.0).count() as u32
     }
 
-    /// Force [N] of the tracked tooth pair of planet 1's mesh: the pair of
+    /// Force \[N\] of the tracked tooth pair of planet 1's mesh: the pair of
     /// gear 1's tooth 0 (sun tooth 0, or planet tooth 0 in the ring mesh),
     /// which comes round once per revolution of that gear relative to the
     /// carrier.
@@ -543,14 +543,14 @@ impl Simulation {
         model.pair_force(pos, state.approach)
     }
 
-    /// Static transmission error [m]: the approach of a mesh of planet `p` at
+    /// Static transmission error \[m\]: the approach of a mesh of planet `p` at
     /// its current position under the scene's mean tooth force.
     pub fn static_transmission_error(&self, p: usize, mesh: MeshKind) -> f64 {
         let Some(state) = self.mesh_state(p, mesh) else { return 0.0 };
         self.model.mesh_model(mesh).approach_for(state.position, self.set.mesh_load_per_planet())
     }
 
-    /// Magnitude of a bearing's elastic force [N] (central members: 0 in the
+    /// Magnitude of a bearing's elastic force \[N\] (central members: 0 in the
     /// torsional model, where they have no translations).
     pub fn bearing_force(&self, bearing: Bearing) -> f64 {
         let (q, _) = self.stepper.state();
@@ -617,17 +617,17 @@ impl Simulation {
         self.rotation(m, true)
     }
 
-    /// Rotation of a member since the start [rad] (0 when held).
+    /// Rotation of a member since the start \[rad\] (0 when held).
     pub fn angle(&self, m: Member) -> f64 {
         self.rotation(m, false)
     }
 
-    /// Mesh force of one mesh of planet `p` [N] (0 for a planet that does not exist).
+    /// Mesh force of one mesh of planet `p` \[N\] (0 for a planet that does not exist).
     pub fn mesh_force(&self, p: usize, mesh: MeshKind) -> f64 {
         self.mesh_state(p, mesh).map_or(0.0, |s| s.force)
     }
 
-    /// Dynamic transmission error (approach along the line of action) of a mesh of planet `p` [m].
+    /// Dynamic transmission error (approach along the line of action) of a mesh of planet `p` \[m\].
     pub fn transmission_error(&self, p: usize, mesh: MeshKind) -> f64 {
         self.mesh_state(p, mesh).map_or(0.0, |s| s.approach)
     }

@@ -72,7 +72,7 @@ pub fn mesh_harmonics(signal: &[f64], cycles: usize, count: usize) -> Result<Har
     Ok(Harmonics { mean: x[0].re / n, amplitude, rms })
 }
 
-/// Phases [rad] of mesh harmonics 1..=`count` of a signal spanning exactly
+/// Phases \[rad\] of mesh harmonics 1..=`count` of a signal spanning exactly
 /// `cycles` mesh cycles: the harmonic i is F^(i) cos(i·2π t/T_m + φ_i).
 pub fn mesh_phases(signal: &[f64], cycles: usize, count: usize) -> Result<Vec<f64>, SpectrumError> {
     check(signal, cycles, count)?;

@@ -103,7 +103,7 @@ where
     Ok(())
 }
 
-/// Largest input file the library reads [bytes]: a scene or a worn-profile
+/// Largest input file the library reads \[bytes\]: a scene or a worn-profile
 /// state is kilobytes to a few megabytes.
 pub const MAX_INPUT_BYTES: u64 = 64 << 20;
 

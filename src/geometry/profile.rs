@@ -29,7 +29,7 @@ pub enum Region {
     RootLand,
     /// Root fillet.
     Fillet,
-    /// Involute, with the point's roll angle [rad].
+    /// Involute, with the point's roll angle \[rad\].
     Involute(f64),
     /// Tip chamfer.
     Chamfer,
@@ -58,13 +58,13 @@ impl ProfileEnds {
 }
 
 /// A profile deviation along the roll angle: material removed normal to the
-/// involute (wear, tip relief) is positive [m]. Linear between grid points;
+/// involute (wear, tip relief) is positive \[m\]. Linear between grid points;
 /// beyond the ends as `ends` says (the end value by default).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ProfileDeviation {
-    /// Roll angles of the grid points, increasing [rad].
+    /// Roll angles of the grid points, increasing \[rad\].
     pub roll: Vec<f64>,
-    /// Deviation at each grid point [m].
+    /// Deviation at each grid point \[m\].
     pub depth: Vec<f64>,
     /// What the deviation is beyond the grid's ends.
     #[serde(default, skip_serializing_if = "ProfileEnds::is_hold")]
@@ -82,7 +82,7 @@ impl ProfileDeviation {
         Self { roll, depth, ends: ProfileEnds::Hold }
     }
 
-    /// Deviation [m] at roll angle `xi` [rad].
+    /// Deviation \[m\] at roll angle `xi` \[rad\].
     pub fn at(&self, xi: f64) -> f64 {
         if self.ends == ProfileEnds::Unworn {
             match (self.roll.first(), self.roll.last()) {
@@ -122,16 +122,16 @@ pub fn interpolate(x: &[f64], y: &[f64], at: f64) -> f64 {
 /// The outline of the upper flank of one tooth, root to tip.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlankOutline {
-    /// Points [m], gear frame, tooth centreline on +x.
+    /// Points \[m\], gear frame, tooth centreline on +x.
     pub points: Vec<[f64; 2]>,
     /// Region of each point.
     pub regions: Vec<Region>,
-    /// Polar angle of the point where the fillet meets the root circle [rad]:
+    /// Polar angle of the point where the fillet meets the root circle \[rad\]:
     /// half the angle the tooth's root chord subtends.
     pub root_half_angle: f64,
-    /// Radius where the fillet meets the involute [m].
+    /// Radius where the fillet meets the involute \[m\].
     pub form_radius: f64,
-    /// Roll angles [rad] of the ends of the involute: form circle and chamfer start.
+    /// Roll angles \[rad\] of the ends of the involute: form circle and chamfer start.
     pub involute_roll_range: (f64, f64),
 }
 

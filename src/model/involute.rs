@@ -6,12 +6,12 @@
 //! action"). Its polar angle, measured from the start of the involute on the
 //! base circle, is `inv α_r = tan α_r − α_r`.
 
-/// The involute function `inv α = tan α − α` of a pressure angle [rad].
+/// The involute function `inv α = tan α − α` of a pressure angle \[rad\].
 pub fn inv(alpha: f64) -> f64 {
     alpha.tan() - alpha
 }
 
-/// Inverts the involute function by Newton's method: the pressure angle [rad]
+/// Inverts the involute function by Newton's method: the pressure angle \[rad\]
 /// whose involute is `value` (which must be non-negative).
 pub fn inv_inverse(value: f64) -> f64 {
     // Start from the cubic expansion inv α ≈ α³/3, which is close for small α
@@ -32,8 +32,8 @@ pub fn inv_inverse(value: f64) -> f64 {
     alpha
 }
 
-/// Roll angle [rad] of the flank point at radius `r` [m] of an involute with
-/// base radius `r_b` [m]; zero inside the base circle.
+/// Roll angle \[rad\] of the flank point at radius `r` \[m\] of an involute with
+/// base radius `r_b` \[m\]; zero inside the base circle.
 pub fn roll_angle(r: f64, r_b: f64) -> f64 {
     if r <= r_b {
         0.0
@@ -42,12 +42,12 @@ pub fn roll_angle(r: f64, r_b: f64) -> f64 {
     }
 }
 
-/// Radius [m] of the involute point with roll angle `xi` [rad].
+/// Radius \[m\] of the involute point with roll angle `xi` \[rad\].
 pub fn radius_at_roll(xi: f64, r_b: f64) -> f64 {
     r_b * (1.0 + xi * xi).sqrt()
 }
 
-/// Pressure angle [rad] of the involute at radius `r` [m] (zero inside the
+/// Pressure angle \[rad\] of the involute at radius `r` \[m\] (zero inside the
 /// base circle).
 pub fn pressure_angle_at(r: f64, r_b: f64) -> f64 {
     if r <= r_b {

@@ -29,13 +29,13 @@ use crate::model::gear::Member;
 /// The constants of a linear (mean-stiffness) lumped planetary model.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LumpedSet {
-    /// Masses of carrier, ring, sun [kg].
+    /// Masses of carrier, ring, sun \[kg\].
     pub central_mass: [f64; 3],
-    /// Rotational masses I/r² of carrier, ring, sun [kg].
+    /// Rotational masses I/r² of carrier, ring, sun \[kg\].
     pub central_rotational_mass: [f64; 3],
-    /// Planet mass [kg].
+    /// Planet mass \[kg\].
     pub planet_mass: f64,
-    /// Planet rotational mass I/r_b² [kg].
+    /// Planet rotational mass I/r_b² \[kg\].
     pub planet_rotational_mass: f64,
     /// Bearing stiffness of carrier, ring, sun per translation direction [N/m].
     pub central_bearing: [f64; 3],
@@ -51,11 +51,11 @@ pub struct LumpedSet {
     pub sun_mesh: f64,
     /// Ring–planet mesh stiffness (mean) [N/m].
     pub ring_mesh: f64,
-    /// Sun–planet pressure angle α_s [rad].
+    /// Sun–planet pressure angle α_s \[rad\].
     pub sun_pressure_angle: f64,
-    /// Ring–planet pressure angle α_r [rad].
+    /// Ring–planet pressure angle α_r \[rad\].
     pub ring_pressure_angle: f64,
-    /// Planet angles ψ_n [rad].
+    /// Planet angles ψ_n \[rad\].
     pub planet_angles: Vec<f64>,
     /// The held member, if any (its rotation removed).
     pub held: Option<Member>,

@@ -15,25 +15,25 @@ pub struct PathOfContact {
     pub mesh: MeshKind,
     /// External or internal (the kind of gear 2).
     pub kind: GearKind,
-    /// Base radius of gear 1 [m].
+    /// Base radius of gear 1 \[m\].
     pub base_radius_1: f64,
-    /// Base radius of gear 2 [m].
+    /// Base radius of gear 2 \[m\].
     pub base_radius_2: f64,
-    /// Centre distance [m].
+    /// Centre distance \[m\].
     pub centre_distance: f64,
-    /// Operating pressure angle [rad].
+    /// Operating pressure angle \[rad\].
     pub pressure_angle: f64,
-    /// Distance between the base-circle tangency points, a·sin α_w [m].
+    /// Distance between the base-circle tangency points, a·sin α_w \[m\].
     pub tangency_distance: f64,
-    /// Base pitch [m].
+    /// Base pitch \[m\].
     pub base_pitch: f64,
-    /// Start of contact with sharp tips [m].
+    /// Start of contact with sharp tips \[m\].
     pub start_sharp: f64,
-    /// End of contact with sharp tips [m].
+    /// End of contact with sharp tips \[m\].
     pub end_sharp: f64,
-    /// Start of contact on the involutes, chamfers excluded [m].
+    /// Start of contact on the involutes, chamfers excluded \[m\].
     pub start: f64,
-    /// End of contact on the involutes, chamfers excluded [m].
+    /// End of contact on the involutes, chamfers excluded \[m\].
     pub end: f64,
     tip_1: f64,
     root_1: f64,
@@ -97,17 +97,17 @@ impl PathOfContact {
         (self.end - self.start) / self.base_pitch
     }
 
-    /// Position of the pitch point, r_b1·tan α_w [m].
+    /// Position of the pitch point, r_b1·tan α_w \[m\].
     pub fn pitch_point(&self) -> f64 {
         self.base_radius_1 * self.pressure_angle.tan()
     }
 
-    /// Radius of curvature of gear 1's flank at position `s` [m].
+    /// Radius of curvature of gear 1's flank at position `s` \[m\].
     pub fn rho_1(&self, s: f64) -> f64 {
         s
     }
 
-    /// Radius of curvature of gear 2's flank at position `s` [m] (positive;
+    /// Radius of curvature of gear 2's flank at position `s` \[m\] (positive;
     /// the ring flank is concave).
     pub fn rho_2(&self, s: f64) -> f64 {
         match self.kind {
@@ -116,33 +116,33 @@ impl PathOfContact {
         }
     }
 
-    /// Roll angle of gear 1 at position `s` [rad].
+    /// Roll angle of gear 1 at position `s` \[rad\].
     pub fn roll_1(&self, s: f64) -> f64 {
         self.rho_1(s) / self.base_radius_1
     }
 
-    /// Roll angle of gear 2 at position `s` [rad].
+    /// Roll angle of gear 2 at position `s` \[rad\].
     pub fn roll_2(&self, s: f64) -> f64 {
         self.rho_2(s) / self.base_radius_2
     }
 
-    /// Radius of gear 1's contact point at `s` [m].
+    /// Radius of gear 1's contact point at `s` \[m\].
     pub fn radius_1(&self, s: f64) -> f64 {
         (self.base_radius_1.powi(2) + self.rho_1(s).powi(2)).sqrt()
     }
 
-    /// Radius of gear 2's contact point at `s` [m].
+    /// Radius of gear 2's contact point at `s` \[m\].
     pub fn radius_2(&self, s: f64) -> f64 {
         (self.base_radius_2.powi(2) + self.rho_2(s).powi(2)).sqrt()
     }
 
-    /// Radii [m] of the start of active profile of gear 1 (at the start of
+    /// Radii \[m\] of the start of active profile of gear 1 (at the start of
     /// contact) and of gear 2 (at the end of contact), sharp tips.
     pub fn active_profile_start_radii(&self) -> (f64, f64) {
         (self.radius_1(self.start_sharp), self.radius_2(self.end_sharp))
     }
 
-    /// Radial clearance [m] between each tip circle and the mating root
+    /// Radial clearance \[m\] between each tip circle and the mating root
     /// circle, with the name of the tip's gear and the root's gear.
     pub fn root_clearances(&self) -> [(f64, &'static str, &'static str); 2] {
         let a = self.centre_distance;

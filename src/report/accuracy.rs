@@ -119,9 +119,9 @@ pub struct DefaultChoice {
     pub family: String,
     /// The chosen setting, if any setting meets the target everywhere.
     pub method: Option<Method>,
-    /// Its total CPU time over the operating points [s].
+    /// Its total CPU time over the operating points \[s\].
     pub total_cpu_seconds: Option<f64>,
-    /// Its E_h at each operating point (name, E_h) [1].
+    /// Its E_h at each operating point (name, E_h) \[1\].
     pub errors: Vec<(String, f64)>,
 }
 
@@ -134,7 +134,7 @@ pub struct Study {
     pub points: Vec<PointResult>,
     /// The cheapest setting meeting [`DEFAULT_TARGET`] everywhere, overall and per family.
     pub defaults: Vec<DefaultChoice>,
-    /// Wall time of the study [s].
+    /// Wall time of the study \[s\].
     pub wall_seconds: f64,
 }
 

@@ -67,7 +67,7 @@ pub const DRIFT_CYCLES: usize = 34;
 /// Relative tolerance of the references' own run.
 pub const REFERENCE_RELATIVE_TOLERANCE: f64 = 1e-8;
 
-/// The cases: (κ, input speed [rpm]).
+/// The cases: (κ, input speed \[rpm\]).
 pub const CASES: [(usize, f64); 8] =
     [(0, 1500.0), (0, 3000.0), (0, 5000.0), (0, 14500.0), (3, 3000.0), (3, 5000.0), (6, 3000.0), (6, 5000.0)];
 
@@ -106,7 +106,7 @@ pub struct Protocol {
     pub parameters: BTreeMap<String, serde_json::Value>,
     /// FMU inputs held constant for the whole run (name → value).
     pub inputs: BTreeMap<String, f64>,
-    /// Start time [s].
+    /// Start time \[s\].
     pub start_time: f64,
     /// Communication step [mesh cycles] (doStep of one mesh period of the case's speed).
     pub communication_step_cycles: usize,
@@ -151,11 +151,11 @@ pub struct Case {
     pub name: String,
     /// Worn-profile state: wear updates applied.
     pub kappa: usize,
-    /// Input (sun) speed [rpm].
+    /// Input (sun) speed \[rpm\].
     pub speed_rpm: f64,
-    /// Mesh frequency [Hz].
+    /// Mesh frequency \[Hz\].
     pub mesh_frequency_hz: f64,
-    /// The communication step: one mesh period [s].
+    /// The communication step: one mesh period \[s\].
     pub communication_step_s: f64,
     /// FMU parameters of this case (name → value), on top of the protocol's.
     pub parameters: BTreeMap<String, serde_json::Value>,

@@ -12,9 +12,9 @@ use super::{Fidelity, Member};
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CentralSpec {
-    /// Mass [kg].
+    /// Mass \[kg\].
     pub mass_kg: f64,
-    /// Rotational mass I/r² [kg] (r: base radius, or centre distance for the carrier).
+    /// Rotational mass I/r² \[kg\] (r: base radius, or centre distance for the carrier).
     pub rotational_mass_kg: f64,
     /// Bearing stiffness per translation direction [N/m].
     pub bearing_n_per_m: f64,
@@ -27,15 +27,15 @@ pub struct CentralSpec {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlanetSpec {
-    /// Mass [kg].
+    /// Mass \[kg\].
     pub mass_kg: f64,
-    /// Rotational mass I/r_b² [kg].
+    /// Rotational mass I/r_b² \[kg\].
     pub rotational_mass_kg: f64,
     /// Planet bearing stiffness, radial and tangential [N/m].
     pub bearing_n_per_m: f64,
     /// Number of planets (equally spaced unless `angles_deg` is given).
     pub count: u32,
-    /// Planet angles [deg].
+    /// Planet angles \[deg\].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub angles_deg: Option<Vec<f64>>,
 }
@@ -61,9 +61,9 @@ pub struct LumpedSpec {
     pub sun_mesh_n_per_m: f64,
     /// Ring–planet mesh stiffness [N/m].
     pub ring_mesh_n_per_m: f64,
-    /// Sun–planet pressure angle [deg].
+    /// Sun–planet pressure angle \[deg\].
     pub sun_pressure_angle_deg: f64,
-    /// Ring–planet pressure angle [deg].
+    /// Ring–planet pressure angle \[deg\].
     pub ring_pressure_angle_deg: f64,
 }
 

@@ -35,7 +35,7 @@ pub struct Scene {
     pub ring: RingGearSpec,
     /// Number and placement of the planets.
     pub planets: PlanetLayoutSpec,
-    /// Centre distance sun–planet = ring–planet [mm]. The operating pressure
+    /// Centre distance sun–planet = ring–planet \[mm\]. The operating pressure
     /// angles of both meshes follow from it and the base radii.
     pub centre_distance_mm: f64,
     /// Material of all gears.
@@ -128,29 +128,29 @@ impl Default for MeshStiffnessSpec {
     }
 }
 
-/// Optional overrides of masses [kg] and polar moments of inertia [kg·m²].
+/// Optional overrides of masses \[kg\] and polar moments of inertia [kg·m²].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct InertiaSpec {
-    /// Sun mass [kg].
+    /// Sun mass \[kg\].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sun_mass_kg: Option<f64>,
     /// Sun polar moment of inertia [kg·m²].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sun_inertia_kg_m2: Option<f64>,
-    /// Planet mass [kg].
+    /// Planet mass \[kg\].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub planet_mass_kg: Option<f64>,
     /// Planet polar moment of inertia [kg·m²].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub planet_inertia_kg_m2: Option<f64>,
-    /// Ring mass [kg].
+    /// Ring mass \[kg\].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ring_mass_kg: Option<f64>,
     /// Ring polar moment of inertia [kg·m²].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ring_inertia_kg_m2: Option<f64>,
-    /// Carrier mass without planets [kg].
+    /// Carrier mass without planets \[kg\].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub carrier_mass_kg: Option<f64>,
     /// Carrier polar moment of inertia without planets [kg·m²].
@@ -168,7 +168,7 @@ pub struct DynamicsSpec {
     pub mesh_damping_ratio: f64,
     /// How the input is driven.
     pub drive: Drive,
-    /// Input speed [rpm] of a single run (sweeps set their own).
+    /// Input speed \[rpm\] of a single run (sweeps set their own).
     pub input_speed_rpm: f64,
     /// Torsional stiffness of the input shaft for the speed drive [N·m/rad].
     pub shaft_stiffness_nm_per_rad: f64,
@@ -219,23 +219,23 @@ impl Default for DynamicsSpec {
 pub struct ExternalGearSpec {
     /// Number of teeth.
     pub teeth: u32,
-    /// Module [mm].
+    /// Module \[mm\].
     pub module_mm: f64,
-    /// Pressure angle of the generating rack [deg]; with the standard centre
+    /// Pressure angle of the generating rack \[deg\]; with the standard centre
     /// distance it is also the operating pressure angle.
     pub pressure_angle_deg: f64,
-    /// Circular tooth thickness at the reference circle m·Z/2 [mm]; it carries
+    /// Circular tooth thickness at the reference circle m·Z/2 \[mm\]; it carries
     /// the backlash allowance.
     pub tooth_thickness_mm: f64,
-    /// Tip radius [mm].
+    /// Tip radius \[mm\].
     pub tip_radius_mm: f64,
-    /// Root radius [mm].
+    /// Root radius \[mm\].
     pub root_radius_mm: f64,
-    /// Bore (inner) radius of the gear body [mm].
+    /// Bore (inner) radius of the gear body \[mm\].
     pub bore_radius_mm: f64,
-    /// Tip radius of the hob that generated the root fillet [mm].
+    /// Tip radius of the hob that generated the root fillet \[mm\].
     pub hob_tip_radius_mm: f64,
-    /// Face width [mm].
+    /// Face width \[mm\].
     pub face_width_mm: f64,
     /// Tip chamfer; `None` (omitted) means the default of docs/PARAMETERS.md.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -248,21 +248,21 @@ pub struct ExternalGearSpec {
 pub struct RingGearSpec {
     /// Number of teeth.
     pub teeth: u32,
-    /// Module [mm].
+    /// Module \[mm\].
     pub module_mm: f64,
-    /// Pressure angle of the generating tool [deg].
+    /// Pressure angle of the generating tool \[deg\].
     pub pressure_angle_deg: f64,
-    /// Circular tooth thickness of a ring tooth at the reference circle [mm].
+    /// Circular tooth thickness of a ring tooth at the reference circle \[mm\].
     pub tooth_thickness_mm: f64,
-    /// Minor radius: the radius of the ring's tooth tips [mm].
+    /// Minor radius: the radius of the ring's tooth tips \[mm\].
     pub minor_radius_mm: f64,
-    /// Root radius [mm].
+    /// Root radius \[mm\].
     pub root_radius_mm: f64,
-    /// Outside radius of the rim [mm].
+    /// Outside radius of the rim \[mm\].
     pub rim_radius_mm: f64,
-    /// Radius of the root fillet [mm].
+    /// Radius of the root fillet \[mm\].
     pub fillet_radius_mm: f64,
-    /// Face width [mm].
+    /// Face width \[mm\].
     pub face_width_mm: f64,
     /// Tip chamfer of the ring teeth; omitted means none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -275,9 +275,9 @@ pub struct RingGearSpec {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ChamferSpec {
-    /// Radial height of the chamfer [mm].
+    /// Radial height of the chamfer \[mm\].
     pub height_mm: f64,
-    /// Angle between the chamfer and the tip circle's tangent [deg].
+    /// Angle between the chamfer and the tip circle's tangent \[deg\].
     pub angle_deg: f64,
     /// Whether the edge where the chamfer meets the involute may touch the
     /// mating flank (corner contact outside the involute path). `false`
@@ -286,13 +286,13 @@ pub struct ChamferSpec {
     #[serde(default = "edge_carries_load_default", skip_serializing_if = "is_true")]
     pub edge_carries_load: bool,
     /// Radius to which the edge between involute and chamfer is rounded
-    /// [mm]; read only when the edge carries no load: it sets how the
+    /// \[mm\]; read only when the edge carries no load: it sets how the
     /// relief begins (docs/PARAMETERS.md).
     #[serde(default = "edge_radius_default", skip_serializing_if = "is_edge_radius_default")]
     pub edge_radius_mm: f64,
 }
 
-/// Default rounding radius of a chamfer's edge [mm]: a deburred edge.
+/// Default rounding radius of a chamfer's edge \[mm\]: a deburred edge.
 pub const EDGE_RADIUS_MM: f64 = 0.05;
 
 fn edge_radius_default() -> f64 {
@@ -312,7 +312,7 @@ fn is_true(v: &bool) -> bool {
 }
 
 impl ChamferSpec {
-    /// A chamfer of radial height `height_mm` [mm] at `angle_deg` [deg] to
+    /// A chamfer of radial height `height_mm` \[mm\] at `angle_deg` \[deg\] to
     /// the tip circle's tangent whose edge may carry load.
     pub fn new(height_mm: f64, angle_deg: f64) -> Self {
         Self { height_mm, angle_deg, edge_carries_load: true, edge_radius_mm: EDGE_RADIUS_MM }
@@ -325,7 +325,7 @@ impl ChamferSpec {
 pub struct PlanetLayoutSpec {
     /// Number of planets.
     pub count: u32,
-    /// Angular positions of the planet centres [deg], counter-clockwise from
+    /// Angular positions of the planet centres \[deg\], counter-clockwise from
     /// the first; omitted means equally spaced.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub angles_deg: Option<Vec<f64>>,
@@ -335,7 +335,7 @@ pub struct PlanetLayoutSpec {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
-    /// Young's modulus [GPa].
+    /// Young's modulus \[GPa\].
     pub youngs_modulus_gpa: f64,
     /// Poisson's ratio [-].
     pub poisson_ratio: f64,

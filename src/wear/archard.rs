@@ -9,7 +9,7 @@
 //! loaded engagement, from its first to its last contact (corner contact
 //! included). At R + 1 pair positions s_0..s_R, spread evenly over that range
 //! (s_0 and s_R are the first and last contact, so the load is zero there),
-//! the whole-set quasi-static LTCA ([`SetModel::equilibrium`]) is solved with
+//! the whole-set quasi-static LTCA ([`SetModel::equilibrium`](crate::contact::ltca::SetModel::equilibrium)) is solved with
 //! the current flank deviations in the separation tables: the load of the
 //! pair, per face slice, follows from the real load sharing between the
 //! pairs of a mesh and between the planets. Each planet's pair is followed
@@ -132,9 +132,9 @@ pub struct WearSettings {
     pub profile_points: usize,
     /// Face slices J, each with its own deviations (1: a 2-D profile grid) [-].
     pub face_slices: usize,
-    /// Largest new wear of one update, ε^κ [m].
+    /// Largest new wear of one update, ε^κ \[m\].
     pub update_depth: f64,
-    /// Total wear of any point at which the wear stepper stops, ε_tot [m].
+    /// Total wear of any point at which the wear stepper stops, ε_tot \[m\].
     pub total_depth: f64,
     /// Which flanks wear.
     pub wearing: WearingFlanks,
@@ -178,7 +178,7 @@ pub enum PressureSource {
     /// pair's elastic load as a function of its position, averaged over the
     /// window's mesh cycles ([`crate::wear::dynamic`]).
     Dynamic {
-        /// Input speed [rpm].
+        /// Input speed \[rpm\].
         speed_rpm: f64,
     },
 }
@@ -292,7 +292,7 @@ pub enum WearError {
     /// No wearing flank wears: nothing carries load or nothing slides.
     #[error("no wearing flank wears in a cycle (largest wear per revolution {rate:e} m): check input_torque and the wearing flanks")]
     NoWear {
-        /// Largest wear per input revolution [m].
+        /// Largest wear per input revolution \[m\].
         rate: f64,
     },
     /// The cycle was not computed on this state.
@@ -308,7 +308,7 @@ pub enum WearError {
     /// The dynamic run of a dynamic pressure source failed.
     #[error("dynamic tooth loads at {speed_rpm} rpm: {reason}")]
     DynamicRun {
-        /// Input speed [rpm].
+        /// Input speed \[rpm\].
         speed_rpm: f64,
         /// What failed (the dynamic model's or the integrator's error).
         reason: String,
@@ -316,27 +316,27 @@ pub enum WearError {
     /// The total wear limit is already reached.
     #[error("the deepest wear {depth:e} m already reaches total_depth = {limit:e} m: no further update")]
     TotalWearReached {
-        /// Deepest wear of the state [m].
+        /// Deepest wear of the state \[m\].
         depth: f64,
-        /// The limit [m].
+        /// The limit \[m\].
         limit: f64,
     },
 }
 /// The Hertzian band on one flank at one pair position.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Band {
-    /// Arc length along the flank from its base circle to the band's centre [m].
+    /// Arc length along the flank from its base circle to the band's centre \[m\].
     pub centre: f64,
-    /// The line contact: half-width [m] and peak pressure [Pa].
+    /// The line contact: half-width \[m\] and peak pressure \[Pa\].
     pub contact: LineContact,
 }
 /// What one passage does to the points of a flank.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Passage {
-    /// Depth worn at each point [m].
+    /// Depth worn at each point \[m\].
     pub wear: Vec<f64>,
     /// Sliding distance of each point: how far the mating surface slid past
-    /// it while it was inside the band [m].
+    /// it while it was inside the band \[m\].
     pub sliding: Vec<f64>,
 }
 /// Fraction of a step (t from 0 to 1) during which a point at distance x(t)
@@ -355,9 +355,9 @@ pub fn fraction_inside(x0: f64, x1: f64, b0: f64, b1: f64) -> f64 {
     }
     (hi - lo).max(0.0)
 }
-/// Sliding distance [m] of each point (arc positions `arc` [m]) in each
+/// Sliding distance \[m\] of each point (arc positions `arc` \[m\]) in each
 /// step: `slip[r]` (the relative displacement of the surfaces between band
-/// positions r and r + 1 [m]) times the fraction of the step the point is
+/// positions r and r + 1 \[m\]) times the fraction of the step the point is
 /// inside the band. `out[r][g]`.
 pub fn sliding_map(arc: &[f64], bands: &[Band], slip: &[f64]) -> Vec<Vec<f64>> {
     bands
@@ -379,8 +379,8 @@ pub fn sliding_map(arc: &[f64], bands: &[Band], slip: &[f64]) -> Vec<Vec<f64>> {
         .collect()
 }
 /// Wear and sliding distance of the points of a flank at arc positions
-/// `arc` [m] through one passage of the band (`bands`, one per pair
-/// position, `slip` between consecutive ones [m]) with Archard coefficient
+/// `arc` \[m\] through one passage of the band (`bands`, one per pair
+/// position, `slip` between consecutive ones \[m\]) with Archard coefficient
 /// `archard` [m²/N]: Δh = Σ_r ½ k s_{r→r+1} (P_r + P_{r+1}) (docs/MODEL.md §4.3).
 pub fn passage_wear(arc: &[f64], bands: &[Band], slip: &[f64], archard: f64) -> Passage {
     let mut out = Passage { wear: vec![0.0; arc.len()], sliding: vec![0.0; arc.len()] };
@@ -407,15 +407,15 @@ pub fn passage_wear(arc: &[f64], bands: &[Band], slip: &[f64], archard: f64) -> 
 pub struct MeshPassage {
     /// The mesh.
     pub mesh: MeshKind,
-    /// Pair positions s_0..s_R on the line of action, first to last contact [m].
+    /// Pair positions s_0..s_R on the line of action, first to last contact \[m\].
     pub position: Vec<f64>,
-    /// Roll angle of the contact point on gear 1's flank at each position [rad].
+    /// Roll angle of the contact point on gear 1's flank at each position \[rad\].
     pub roll_gear1: Vec<f64>,
-    /// Roll angle of the contact point on gear 2's flank at each position [rad].
+    /// Roll angle of the contact point on gear 2's flank at each position \[rad\].
     pub roll_gear2: Vec<f64>,
-    /// Relative slip of the two surfaces between consecutive positions [m].
+    /// Relative slip of the two surfaces between consecutive positions \[m\].
     pub slip: Vec<f64>,
-    /// The pair's load at each position, per planet, all slices: `pair_load[planet][r]` [N].
+    /// The pair's load at each position, per planet, all slices: `pair_load[planet][r]` \[N\].
     pub pair_load: Vec<Vec<f64>>,
 }
 /// The wear of one flank (one face slice) in one cycle.
@@ -425,24 +425,24 @@ pub struct FlankWear {
     pub flank: Flank,
     /// Face slice.
     pub slice: usize,
-    /// Grid roll angles [rad].
+    /// Grid roll angles \[rad\].
     pub roll: Vec<f64>,
-    /// Grid arc lengths from the base circle [m].
+    /// Grid arc lengths from the base circle \[m\].
     pub arc: Vec<f64>,
-    /// Depth worn per tooth cycle at each grid point, mean over the planets [m].
+    /// Depth worn per tooth cycle at each grid point, mean over the planets \[m\].
     pub wear_per_cycle: Vec<f64>,
-    /// Depth worn per cycle by each planet's passage: `[planet][point]` [m].
+    /// Depth worn per cycle by each planet's passage: `[planet][point]` \[m\].
     pub wear_per_planet: Vec<Vec<f64>>,
-    /// Sliding distance per passage, each planet: `[planet][point]` [m].
+    /// Sliding distance per passage, each planet: `[planet][point]` \[m\].
     pub sliding: Vec<Vec<f64>>,
     /// The band at each position, each planet: `[planet][r]`.
     pub bands: Vec<Vec<Band>>,
-    /// Relative slip of the surfaces between consecutive positions [m].
+    /// Relative slip of the surfaces between consecutive positions \[m\].
     pub slip: Vec<f64>,
 }
 impl FlankWear {
     /// Contact pressure at each grid point at each position for `planet`:
-    /// `[r][point]` [Pa].
+    /// `[r][point]` \[Pa\].
     pub fn pressure_map(&self, planet: usize) -> Vec<Vec<f64>> {
         self.bands[planet]
             .iter()
@@ -451,12 +451,12 @@ impl FlankWear {
     }
 
     /// Sliding distance of each grid point in each step for `planet`:
-    /// `[r][point]` [m].
+    /// `[r][point]` \[m\].
     pub fn sliding_map(&self, planet: usize) -> Vec<Vec<f64>> {
         sliding_map(&self.arc, &self.bands[planet], &self.slip)
     }
 
-    /// Largest wear per cycle [m] and the roll angle [rad] where it sits.
+    /// Largest wear per cycle \[m\] and the roll angle \[rad\] where it sits.
     pub fn max_wear(&self) -> (f64, f64) {
         self.wear_per_cycle.iter().zip(&self.roll).fold(
             (0.0, self.roll.first().copied().unwrap_or(0.0)),
@@ -496,7 +496,7 @@ impl CycleWear {
 pub enum Limit {
     /// A whole update: the largest new wear reaches ε^κ.
     Update,
-    /// At most this many input revolutions [rev].
+    /// At most this many input revolutions \[rev\].
     Revolutions(f64),
 }
 /// When a run of updates stops (it always stops at ε_tot).
@@ -504,7 +504,7 @@ pub enum Limit {
 pub enum Stop {
     /// When the geometry state reaches κ.
     Kappa(u32),
-    /// After this many more input revolutions [rev]; the last update is
+    /// After this many more input revolutions \[rev\]; the last update is
     /// partial.
     Revolutions(f64),
     /// Only at ε_tot.
@@ -513,13 +513,13 @@ pub enum Stop {
 /// The tooth-pair loads of one wear cycle: where the pairs of a mesh are
 /// first and last loaded, and each planet's pair load per face slice at
 /// given positions. The whole-set quasi-static LTCA gives them
-/// ([`QuasiStaticLoads`]), or a dynamic run ([`crate::wear::dynamic`]); the
+/// (the quasi-static loads of [`crate::wear::stepper`]), or a dynamic run ([`crate::wear::dynamic`]); the
 /// bands, sliding distances and wear follow from them in one place.
 pub(crate) trait PairLoads {
-    /// First and last loaded position of the pairs of `mesh` over all planets [m].
+    /// First and last loaded position of the pairs of `mesh` over all planets \[m\].
     fn engagement(&self, mesh: MeshKind) -> (f64, f64);
 
-    /// Per-slice drive-flank loads [N] (never negative) of each planet's
-    /// pair of `mesh` at each of `position` [m]: `[planet][slice][r]`.
+    /// Per-slice drive-flank loads \[N\] (never negative) of each planet's
+    /// pair of `mesh` at each of `position` \[m\]: `[planet][slice][r]`.
     fn slice_loads(&self, mesh: MeshKind, position: &[f64]) -> Vec<Vec<Vec<f64>>>;
 }

@@ -16,19 +16,19 @@ pub struct FlankComparison {
     pub flank: Flank,
     /// Face slice.
     pub slice: usize,
-    /// Grid roll angles [rad].
+    /// Grid roll angles \[rad\].
     pub roll: Vec<f64>,
-    /// Wear per tooth cycle from the quasi-static loads, mean over the planets [m].
+    /// Wear per tooth cycle from the quasi-static loads, mean over the planets \[m\].
     pub quasi_static: Vec<f64>,
-    /// Wear per tooth cycle from the dynamic loads, mean over the planets [m].
+    /// Wear per tooth cycle from the dynamic loads, mean over the planets \[m\].
     pub dynamic: Vec<f64>,
-    /// Largest quasi-static wear per cycle [m].
+    /// Largest quasi-static wear per cycle \[m\].
     pub quasi_static_max: f64,
-    /// Roll angle of the largest quasi-static wear per cycle [rad].
+    /// Roll angle of the largest quasi-static wear per cycle \[rad\].
     pub quasi_static_max_roll: f64,
-    /// Largest dynamic wear per cycle [m].
+    /// Largest dynamic wear per cycle \[m\].
     pub dynamic_max: f64,
-    /// Roll angle of the largest dynamic wear per cycle [rad].
+    /// Roll angle of the largest dynamic wear per cycle \[rad\].
     pub dynamic_max_roll: f64,
     /// Largest dynamic over largest quasi-static wear per cycle [-].
     pub ratio: f64,
@@ -41,25 +41,25 @@ pub struct FlankComparison {
 pub struct MeshComparison {
     /// The mesh.
     pub mesh: MeshKind,
-    /// Largest quasi-static pair load over the passage and the planets [N].
+    /// Largest quasi-static pair load over the passage and the planets \[N\].
     pub quasi_static_max_pair_load: f64,
-    /// Largest dynamic pair load over the passage and the planets [N].
+    /// Largest dynamic pair load over the passage and the planets \[N\].
     pub dynamic_max_pair_load: f64,
-    /// Mean dynamic mesh force, mean over the planets [N].
+    /// Mean dynamic mesh force, mean over the planets \[N\].
     pub mean_mesh_force: f64,
-    /// F^(rms) of the dynamic mesh force, largest over the planets [N].
+    /// F^(rms) of the dynamic mesh force, largest over the planets \[N\].
     pub rms_mesh_force: f64,
-    /// Quasi-static passage: first and last loaded position [m].
+    /// Quasi-static passage: first and last loaded position \[m\].
     pub quasi_static_passage: (f64, f64),
     /// Dynamic passage: first and last loaded position (the unloaded samples
-    /// just outside) [m].
+    /// just outside) \[m\].
     pub dynamic_passage: (f64, f64),
 }
 /// Wear per cycle from the quasi-static and from the dynamic tooth loads on
 /// one state.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SourceComparison {
-    /// Input speed of the dynamic run [rpm].
+    /// Input speed of the dynamic run \[rpm\].
     pub speed_rpm: f64,
     /// Each wearing flank and slice.
     pub flanks: Vec<FlankComparison>,
@@ -84,7 +84,7 @@ impl SourceComparison {
     }
 }
 /// The wear per cycle of `state` from the quasi-static loads and from the
-/// dynamic loads at `speed_rpm` [rpm]: profiles, maxima and where they sit,
+/// dynamic loads at `speed_rpm` \[rpm\]: profiles, maxima and where they sit,
 /// their ratio, and the largest pair load of each source.
 pub fn compare_sources(
     wear: &WearModel,

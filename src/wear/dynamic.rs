@@ -5,7 +5,7 @@
 //! from the steady state of the nonlinear dynamic model at an input speed:
 //!
 //! 1. The dynamic model is built on the state's worn geometry
-//!    ([`WornState::set_model`] → [`PlanetaryDynamics::new`]) with the gear
+//!    ([`WornState::set_model`](crate::wear::state::WornState::set_model) → [`PlanetaryDynamics::new`]) with the gear
 //!    set's dynamics settings, and run to steady state at the speed
 //!    ([`steady_state_observed`]: run-in, then a window of whole mesh cycles).
 //! 2. At every sample of the window, each mesh's reference position s and
@@ -22,7 +22,7 @@
 //!    samples covers the whole passage of a pair (its pair k at offset
 //!    k·p_b), at S samples per cycle, i.e. p_b/S apart. A response that does
 //!    not repeat every mesh cycle (subharmonic) is averaged all the same.
-//! 4. The wear cycle ([`WearModel`]) takes the pair's first and last loaded
+//! 4. The wear cycle ([`WearModel`](crate::wear::stepper::WearModel)) takes the pair's first and last loaded
 //!    position from these profiles (the unloaded samples just outside, so the
 //!    load is zero at both ends of the passage, as in the quasi-static path)
 //!    and reads each planet's pair load per slice at its R + 1 positions by
@@ -58,20 +58,20 @@ pub struct PairLoadProfile {
     /// The mesh.
     pub mesh: MeshKind,
     /// Pair positions on the line of action, increasing, over the contact
-    /// tables (wider than the passage) [m].
+    /// tables (wider than the passage) \[m\].
     pub position: Vec<f64>,
     /// Drive-flank load of each face slice at each position, mean over the
-    /// window's cycles: `slice_load[slice][i]` [N].
+    /// window's cycles: `slice_load[slice][i]` \[N\].
     pub slice_load: Vec<Vec<f64>>,
-    /// Mean elastic mesh force over the window [N].
+    /// Mean elastic mesh force over the window \[N\].
     pub mean_mesh_force: f64,
-    /// F^(rms) of the mesh force, harmonics 1..6 [N].
+    /// F^(rms) of the mesh force, harmonics 1..6 \[N\].
     pub rms_mesh_force: f64,
-    /// Largest mesh force of the window [N].
+    /// Largest mesh force of the window \[N\].
     pub max_mesh_force: f64,
 }
 impl PairLoadProfile {
-    /// The pair's load (all slices) at each position [N].
+    /// The pair's load (all slices) at each position \[N\].
     pub fn pair_load(&self) -> Vec<f64> {
         (0..self.position.len()).map(|i| self.slice_load.iter().map(|v| v[i]).sum()).collect()
     }
@@ -82,13 +82,13 @@ impl PairLoadProfile {
         self.position.windows(2).zip(f.windows(2)).map(|(x, y)| 0.5 * (y[0] + y[1]) * (x[1] - x[0])).sum()
     }
 
-    /// Largest pair load [N].
+    /// Largest pair load \[N\].
     pub fn max_pair_load(&self) -> f64 {
         self.pair_load().into_iter().fold(0.0, f64::max)
     }
 
     /// First and last position with load, widened to the unloaded samples
-    /// just outside [m]; `None` when the pair never carries load.
+    /// just outside \[m\]; `None` when the pair never carries load.
     fn loaded_range(&self) -> Option<(f64, f64)> {
         let load = self.pair_load();
         let first = load.iter().position(|f| *f > 0.0)?;
@@ -99,9 +99,9 @@ impl PairLoadProfile {
 /// The tooth-pair loads of a dynamic steady state, each planet and mesh.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DynamicPairLoads {
-    /// Input speed [rpm].
+    /// Input speed \[rpm\].
     pub speed_rpm: f64,
-    /// Mesh frequency [Hz].
+    /// Mesh frequency \[Hz\].
     pub mesh_frequency: f64,
     /// Mesh cycles in the window, averaged [-].
     pub cycles: usize,
@@ -176,7 +176,7 @@ pub fn samples_per_cycle(set: &GearSet, positions: usize) -> usize {
     set.dynamics.samples_per_mesh_cycle.max((positions as f64 / ratio).ceil() as usize)
 }
 /// Runs the dynamic model on `contact` (the contact models of a worn or
-/// unworn set) to steady state at `speed_rpm` [rpm] and records each planet's
+/// unworn set) to steady state at `speed_rpm` \[rpm\] and records each planet's
 /// tooth-pair load per face slice through its passage, at
 /// [`samples_per_cycle`] samples per mesh cycle for `positions` wear
 /// positions. Gives the contact models back for the wear cycle.

@@ -146,8 +146,8 @@ pub fn cycles_per_input_revolution(set: &GearSet) -> GearCycles {
     let mesh_cycles = zs * u.abs();
     GearCycles { sun: n * mesh_cycles / zs, planet: mesh_cycles / zp, ring: n * mesh_cycles / zr }
 }
-/// Roll angles [rad] of the contact point on gear 1's and on gear 2's flank
-/// when the pair's drive-flank position is `s` [m].
+/// Roll angles \[rad\] of the contact point on gear 1's and on gear 2's flank
+/// when the pair's drive-flank position is `s` \[m\].
 ///
 /// On the involute path they are ρ1/r_b1 and ρ2/r_b2. Outside it the tip
 /// corner (the end of the involute) of one gear touches the other's flank:
@@ -182,12 +182,12 @@ pub fn contact_rolls(path: &PathOfContact, s: f64) -> (f64, f64) {
         (path.roll_1(s), path.roll_2(s))
     }
 }
-/// Arc length [m] along an involute of base radius `base_radius` [m] from
-/// the base circle to roll angle `roll` [rad]: σ = r_b ξ²/2.
+/// Arc length \[m\] along an involute of base radius `base_radius` \[m\] from
+/// the base circle to roll angle `roll` \[rad\]: σ = r_b ξ²/2.
 pub fn involute_arc(base_radius: f64, roll: f64) -> f64 {
     0.5 * base_radius * roll * roll
 }
-/// Roll-angle range [rad] of a flank's active profile on the unloaded path
+/// Roll-angle range \[rad\] of a flank's active profile on the unloaded path
 /// with the involute ends: from its lowest to its highest contact point
 /// (start of active profile to the end of the involute at the tip or
 /// chamfer). A coast flank takes its drive flank's range (symmetric teeth,

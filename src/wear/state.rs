@@ -266,9 +266,9 @@ pub struct FlankExtreme {
     pub flank: Flank,
     /// Face slice.
     pub slice: usize,
-    /// Depth [m].
+    /// Depth \[m\].
     pub depth: f64,
-    /// Roll angle of the grid point [rad].
+    /// Roll angle of the grid point \[rad\].
     pub roll: f64,
 }
 
@@ -277,7 +277,7 @@ pub struct FlankExtreme {
 pub struct UpdateRecord {
     /// The geometry state the update made.
     pub kappa: u32,
-    /// Input revolutions of the update [rev].
+    /// Input revolutions of the update \[rev\].
     pub revolutions: f64,
     /// Tooth cycles of each gear in the update [-]; C^κ is the limiting
     /// flank's gear's.
@@ -342,7 +342,7 @@ pub struct WornState {
     pub gear_set: GearSetPrint,
     /// Geometry state κ (0: unworn), the number of updates made.
     pub kappa: u32,
-    /// Input revolutions run [rev].
+    /// Input revolutions run \[rev\].
     pub revolutions: f64,
     /// Tooth cycles run per gear [-].
     pub cycles: GearCycles,

@@ -163,7 +163,7 @@ impl WearModel {
         out
     }
 
-    /// Sun travel [m] at which planet `planet`'s pair of `mesh` sits at `s`.
+    /// Sun travel \[m\] at which planet `planet`'s pair of `mesh` sits at `s`.
     fn travel(model: &SetModel, set: &GearSet, mesh: MeshKind, planet: usize, s: f64) -> f64 {
         let own = set.sun.base_radius() * model.planet_angles[planet];
         match mesh {
@@ -172,7 +172,7 @@ impl WearModel {
         }
     }
 
-    /// Per-slice forces [N] of planet `planet`'s pair of `mesh` at `s`, the
+    /// Per-slice forces \[N\] of planet `planet`'s pair of `mesh` at `s`, the
     /// set solved from `guess` (updated to the new equilibrium).
     fn pair_at(
         &self,
@@ -200,7 +200,7 @@ impl WearModel {
         }
     }
 
-    /// First and last loaded position of the pairs of `mesh` over all planets [m].
+    /// First and last loaded position of the pairs of `mesh` over all planets \[m\].
     fn engagement(&self, model: &SetModel, mesh: MeshKind) -> (f64, f64) {
         let path = match mesh {
             MeshKind::SunPlanet => model.sun_planet.path(),
@@ -222,7 +222,7 @@ impl WearModel {
     }
 
     /// The pair's passage through `mesh` and its per-slice loads
-    /// `[planet][slice][r]` [N], from the pair loads of `loads`.
+    /// `[planet][slice][r]` \[N\], from the pair loads of `loads`.
     fn passage(
         &self,
         model: &SetModel,
@@ -337,8 +337,8 @@ impl WearModel {
         out
     }
 
-    /// Per-slice loads `[planet][slice][r]` [N] of each planet's pair of
-    /// `mesh` at `position` [m] from the whole-set quasi-static LTCA.
+    /// Per-slice loads `[planet][slice][r]` \[N\] of each planet's pair of
+    /// `mesh` at `position` \[m\] from the whole-set quasi-static LTCA.
     fn quasi_static_loads(&self, model: &SetModel, mesh: MeshKind, position: &[f64]) -> Vec<Vec<Vec<f64>>> {
         let planets = model.planet_angles.len();
         let mut loads = vec![Vec::new(); planets];
@@ -513,7 +513,7 @@ impl WearModel {
     }
 }
 /// One wear cycle on the state's geometry with the tooth-pair loads of the
-/// dynamic steady state at `speed_rpm` [rpm], and those loads.
+/// dynamic steady state at `speed_rpm` \[rpm\], and those loads.
 pub fn dynamic_cycle(
     wear: &WearModel,
     state: &WornState,

@@ -44,7 +44,7 @@ const AT_BOUND: f64 = 1e-6;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Measure {
-    /// A natural frequency [Hz] of the mean-stiffness linear model: the
+    /// A natural frequency \[Hz\] of the mean-stiffness linear model: the
     /// `order`-th distinct frequency (1 = lowest) of the modes of `class`
     /// in the `fidelity` model.
     Frequency {
@@ -216,7 +216,7 @@ pub struct Report {
     pub contact_models: usize,
     /// Singular values of the scaled Jacobian at the fit, largest first.
     pub singular_values: Vec<f64>,
-    /// Wall time [s].
+    /// Wall time \[s\].
     pub seconds: f64,
 }
 

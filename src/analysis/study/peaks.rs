@@ -30,16 +30,16 @@ pub struct Peak {
     pub direction: Direction,
     /// The mesh (of planet 0) whose curve peaks.
     pub mesh: MeshKind,
-    /// Input speed of the peak [rpm].
+    /// Input speed of the peak \[rpm\].
     pub speed_rpm: f64,
-    /// Mesh frequency there [Hz].
+    /// Mesh frequency there \[Hz\].
     pub mesh_frequency: f64,
     /// F^(rms) at the peak [N/mm].
     pub rms_n_per_mm: f64,
     /// The harmonic l and natural frequency whose coincidence l·f_m = f_n
     /// explains it best, among the modes the phasing rule lets harmonic l excite.
     pub harmonic: u32,
-    /// That natural frequency [Hz].
+    /// That natural frequency \[Hz\].
     pub natural_frequency: f64,
     /// Its mode family.
     pub family: ModeClass,

@@ -38,20 +38,20 @@ use crate::wear::archard::{passage_wear, Band, WearSettings};
 use crate::wear::flank::Flank;
 use crate::wear::stepper::WearModel;
 
-/// The study's torsional natural frequencies [Hz]: first rotational, the
+/// The study's torsional natural frequencies \[Hz\]: first rotational, the
 /// planet modes (multiplicity n − 1), second rotational.
 pub const STUDY_FREQUENCIES: [f64; 3] = [9895.0, 20800.0, 23225.0];
 
-/// The resonance peaks of the study's forced-response curves [rpm].
+/// The resonance peaks of the study's forced-response curves \[rpm\].
 pub const STUDY_PEAKS: [f64; 4] = [4200.0, 8500.0, 10750.0, 13000.0];
 
-/// Off-resonance speeds at which the study's loads rise with wear [rpm].
+/// Off-resonance speeds at which the study's loads rise with wear \[rpm\].
 pub const OFF_RESONANCE: [f64; 4] = [1500.0, 2000.0, 2750.0, 3000.0];
 
 /// What to compute.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ValidationPlan {
-    /// The sweeps' speed grid as segments (first, last, step) [rpm], in order.
+    /// The sweeps' speed grid as segments (first, last, step) \[rpm\], in order.
     pub sweep: Vec<(f64, f64, f64)>,
     /// Geometry state of the worn rows.
     pub kappa: u32,
@@ -92,7 +92,7 @@ impl ValidationPlan {
         out
     }
 
-    /// The grid's step at `rpm` [rpm].
+    /// The grid's step at `rpm` \[rpm\].
     pub fn step_at(&self, rpm: f64) -> f64 {
         self.sweep
             .iter()
@@ -154,16 +154,16 @@ pub struct Row {
     pub method: String,
     /// Estimate of the error of ours.
     pub error: String,
-    /// Time of the computation behind the row [s] (shared computations are named in `method`).
+    /// Time of the computation behind the row \[s\] (shared computations are named in `method`).
     pub seconds: f64,
 }
 
 /// One point of a forced-response curve.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CurvePoint {
-    /// Input speed [rpm].
+    /// Input speed \[rpm\].
     pub speed_rpm: f64,
-    /// F^(rms) of planet 1's sun–planet and ring–planet mesh [N].
+    /// F^(rms) of planet 1's sun–planet and ring–planet mesh \[N\].
     pub rms: [f64; 2],
     /// Separation fraction of both meshes [-].
     pub separation: [f64; 2],
@@ -185,11 +185,11 @@ pub struct Curve {
 pub struct Profile {
     /// Flank.
     pub flank: Flank,
-    /// Roll angles [rad].
+    /// Roll angles \[rad\].
     pub roll: Vec<f64>,
-    /// Depth at κ [m].
+    /// Depth at κ \[m\].
     pub depth: Vec<f64>,
-    /// The pitch point's roll angle [rad].
+    /// The pitch point's roll angle \[rad\].
     pub pitch_roll: f64,
 }
 
@@ -208,9 +208,9 @@ pub struct Validation {
     pub curves: Vec<Curve>,
     /// Worn profiles of sun and planet at κ.
     pub profiles: Vec<Profile>,
-    /// Natural frequencies of both fidelities [Hz] with their classes.
+    /// Natural frequencies of both fidelities \[Hz\] with their classes.
     pub modes: Vec<(Fidelity, f64, ModeClass, usize)>,
-    /// Wall time [s].
+    /// Wall time \[s\].
     pub seconds: f64,
 }
 

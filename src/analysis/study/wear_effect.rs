@@ -167,13 +167,13 @@ pub fn variants(base: &Scene) -> Vec<Variant> {
 /// Where the wear of one flank sits.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct WearShape {
-    /// Deepest wear [m] and its roll angle [rad].
+    /// Deepest wear \[m\] and its roll angle \[rad\].
     pub deepest: (f64, f64),
-    /// Wear at the first grid point (start of active profile) [m].
+    /// Wear at the first grid point (start of active profile) \[m\].
     pub root_end: f64,
-    /// Wear at the last grid point (end of the involute, the tip or chamfer start) [m].
+    /// Wear at the last grid point (end of the involute, the tip or chamfer start) \[m\].
     pub tip_end: f64,
-    /// Wear at the pitch point [m] and the pitch point's roll angle [rad].
+    /// Wear at the pitch point \[m\] and the pitch point's roll angle \[rad\].
     pub pitch: (f64, f64),
     /// Share of the worn area (∫ h dξ) above the pitch point (the flank's addendum) [-].
     pub addendum_share: f64,
@@ -219,9 +219,9 @@ impl WearShape {
 pub struct StaticFigures {
     /// Share of the mesh cycle with two or more loaded pairs, sun–planet and ring–planet [-].
     pub double_contact: [f64; 2],
-    /// Loaded static transmission error peak-to-peak of each mesh at the mean planet load [m].
+    /// Loaded static transmission error peak-to-peak of each mesh at the mean planet load \[m\].
     pub transmission_error: [f64; 2],
-    /// Peak-to-peak of the sun's rotation along the line of action in the whole-set LTCA [m].
+    /// Peak-to-peak of the sun's rotation along the line of action in the whole-set LTCA \[m\].
     pub set_transmission_error: f64,
     /// Load-sharing factor of the whole set [-].
     pub load_sharing_factor: f64,
@@ -249,14 +249,14 @@ impl StaticFigures {
     }
 }
 
-/// Dynamic figures of planet 1's meshes at one speed [N].
+/// Dynamic figures of planet 1's meshes at one speed \[N\].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MeshLoads {
-    /// Input speed [rpm].
+    /// Input speed \[rpm\].
     pub speed_rpm: f64,
-    /// F^(1) of the sun–planet and ring–planet mesh [N].
+    /// F^(1) of the sun–planet and ring–planet mesh \[N\].
     pub first_harmonic: [f64; 2],
-    /// F^(rms) of the sun–planet and ring–planet mesh [N].
+    /// F^(rms) of the sun–planet and ring–planet mesh \[N\].
     pub rms: [f64; 2],
     /// Fraction of the window without tooth force, both meshes [-].
     pub separation: [f64; 2],
@@ -304,9 +304,9 @@ pub struct VariantResult {
     pub statics: [StaticFigures; 2],
     /// Dynamic loads at κ = 0 and at κ, per speed.
     pub loads: [Vec<MeshLoads>; 2],
-    /// Face width [m], for loads per unit width.
+    /// Face width \[m\], for loads per unit width.
     pub face_width: f64,
-    /// Wall time of the variant [s].
+    /// Wall time of the variant \[s\].
     pub seconds: f64,
 }
 

@@ -85,13 +85,13 @@ const MAX_HALVINGS: u32 = 40;
 /// The four parameters (α_m, α_f, γ, β) of the generalized-α family.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AlphaParameters {
-    /// Weight α_m of the old acceleration in the inertia term; below 1 [1].
+    /// Weight α_m of the old acceleration in the inertia term; below 1 \[1\].
     pub alpha_m: f64,
-    /// Weight α_f of the old force in the force term; in [0, 1) [1].
+    /// Weight α_f of the old force in the force term; in [0, 1) \[1\].
     pub alpha_f: f64,
-    /// Newmark velocity parameter γ; non-negative [1].
+    /// Newmark velocity parameter γ; non-negative \[1\].
     pub gamma: f64,
-    /// Newmark displacement parameter β; non-negative [1].
+    /// Newmark displacement parameter β; non-negative \[1\].
     pub beta: f64,
 }
 
@@ -156,7 +156,7 @@ impl AlphaParameters {
 pub struct GeneralizedAlphaSettings {
     /// Method parameters (α_m, α_f, γ, β).
     pub parameters: AlphaParameters,
-    /// Relative tolerance of the Newton convergence test; in [0, 1] [1].
+    /// Relative tolerance of the Newton convergence test; in [0, 1] \[1\].
     pub rtol: f64,
     /// Absolute tolerance of the Newton convergence test, applied to every coordinate in that
     /// coordinate's unit. The relative part scales with |q|, so for coordinates that grow without
@@ -166,7 +166,7 @@ pub struct GeneralizedAlphaSettings {
     /// Maximum number of Newton corrections per step attempt before the step is halved (≥ 1).
     /// Each correction costs one Jacobian, one LU factorisation and one force evaluation.
     pub max_iterations: u32,
-    /// Smallest step the halving may produce; positive [s].
+    /// Smallest step the halving may produce; positive \[s\].
     pub min_step: f64,
 }
 
@@ -327,7 +327,7 @@ impl GeneralizedAlpha {
         })
     }
 
-    /// Sets the initial time `t0` [s], displacements `q0` [m or rad] and velocities `v0`
+    /// Sets the initial time `t0` \[s\], displacements `q0` [m or rad] and velocities `v0`
     /// [m/s or rad/s], and the consistent initial acceleration from M a0 = f(t0, q0, v0).
     /// The counters are kept; see [`GeneralizedAlpha::reset_stats`].
     pub fn init<S: SecondOrderSystem + ?Sized>(
@@ -374,7 +374,7 @@ impl GeneralizedAlpha {
         Ok(())
     }
 
-    /// Restarts from time `t` [s], displacements `q` [m or rad] and velocities `v`
+    /// Restarts from time `t` \[s\], displacements `q` [m or rad] and velocities `v`
     /// [m/s or rad/s]; the acceleration is recomputed from M a = f(t, q, v). Same as
     /// [`GeneralizedAlpha::init`].
     pub fn set_state<S: SecondOrderSystem + ?Sized>(
@@ -414,7 +414,7 @@ impl GeneralizedAlpha {
         Ok(())
     }
 
-    /// Takes exactly `steps` equal steps from the current time to `t_end` [s]. The end of step k
+    /// Takes exactly `steps` equal steps from the current time to `t_end` \[s\]. The end of step k
     /// is t0 + (t_end − t0)·k/steps (with t0 the time at the call), and the last step ends at
     /// `t_end` exactly, so the time never drifts by accumulation. A step whose Newton iteration
     /// fails is halved recursively as described in the module documentation.
@@ -678,7 +678,7 @@ impl GeneralizedAlpha {
         Err(Failure::Newton { iterations: max_iterations })
     }
 
-    /// Current time [s].
+    /// Current time \[s\].
     pub fn time(&self) -> f64 {
         self.t
     }

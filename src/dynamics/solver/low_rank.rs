@@ -10,7 +10,7 @@
 //!
 //! K0 and C0 constant (bearings, shafts). The generalized-α iteration matrix
 //! S = (1 − α_m) M + c_C C + c_K K is then S0 + U W with the constant S0 = (1 − α_m) M + c_C C0 + c_K K0,
-//! U = [u_m] and the rows w_mᵀ = d_m u_mᵀ + e_m p_mᵀ, d_m = c_K k_m + c_C c_m, e_m = c_K g_m. By the
+//! U = \[u_m\] and the rows w_mᵀ = d_m u_mᵀ + e_m p_mᵀ, d_m = c_K k_m + c_C c_m, e_m = c_K g_m. By the
 //! Sherman–Morrison–Woodbury identity (Golub & Van Loan, *Matrix Computations*, 4th ed., §2.1.4)
 //!
 //! ```text

@@ -159,7 +159,7 @@ pub enum SolverError {
     /// A displacement, velocity or acceleration became non-finite.
     #[error("non-finite state component {index} at t = {t} s")]
     NonFiniteState {
-        /// Time at which the state was formed [s].
+        /// Time at which the state was formed \[s\].
         t: f64,
         /// Index of the first non-finite component in the stacked state [q, v, a]: indices at or
         /// above the number of degrees of freedom n refer to velocities, at or above 2n to
@@ -169,7 +169,7 @@ pub enum SolverError {
     /// The system returned a non-finite force.
     #[error("non-finite force component {index} at t = {t} s")]
     NonFiniteForce {
-        /// Time of the force evaluation [s].
+        /// Time of the force evaluation \[s\].
         t: f64,
         /// Index of the first non-finite force component.
         index: usize,
@@ -177,7 +177,7 @@ pub enum SolverError {
     /// The system returned a non-finite Jacobian entry.
     #[error("non-finite Jacobian entry ({row}, {col}) at t = {t} s")]
     NonFiniteJacobian {
-        /// Time of the Jacobian evaluation [s].
+        /// Time of the Jacobian evaluation \[s\].
         t: f64,
         /// Row of the first non-finite entry.
         row: usize,
@@ -187,7 +187,7 @@ pub enum SolverError {
     /// The system returned a non-finite event-function value.
     #[error("non-finite event function {index} at t = {t} s")]
     NonFiniteEvent {
-        /// Time of the evaluation [s].
+        /// Time of the evaluation \[s\].
         t: f64,
         /// Index of the first non-finite event function.
         index: usize,
@@ -195,7 +195,7 @@ pub enum SolverError {
     /// The number of event functions changed during a run.
     #[error("number of event functions changed from {expected} to {found} at t = {t} s")]
     EventCountChanged {
-        /// Time of the evaluation [s].
+        /// Time of the evaluation \[s\].
         t: f64,
         /// Number of event functions at initialisation.
         expected: usize,
@@ -205,9 +205,9 @@ pub enum SolverError {
     /// Newton's method did not converge, even on the smallest admissible (halved) step.
     #[error("Newton iteration failed at t = {t} s on a step of {step} s after {iterations} iterations")]
     NewtonDiverged {
-        /// Start time of the failed step [s].
+        /// Start time of the failed step \[s\].
         t: f64,
-        /// Size of the last (smallest) step tried [s].
+        /// Size of the last (smallest) step tried \[s\].
         step: f64,
         /// Newton iterations spent on that last attempt.
         iterations: u32,
@@ -215,23 +215,23 @@ pub enum SolverError {
     /// The Newton iteration matrix was singular, even on the smallest admissible step.
     #[error("singular iteration matrix at t = {t} s on a step of {h} s")]
     SingularMatrix {
-        /// Start time of the failed step [s].
+        /// Start time of the failed step \[s\].
         t: f64,
-        /// Size of the step [s].
+        /// Size of the step \[s\].
         h: f64,
     },
     /// The step size fell below the admissible minimum.
     #[error("step size {h} s at t = {t} s is below the admissible minimum")]
     StepTooSmall {
-        /// Time at which the step would start [s].
+        /// Time at which the step would start \[s\].
         t: f64,
-        /// Step size that would be needed [s].
+        /// Step size that would be needed \[s\].
         h: f64,
     },
     /// One call took more step attempts than allowed.
     #[error("more than {max_steps} step attempts in one call; stopped at t = {t} s")]
     TooManySteps {
-        /// Time reached [s].
+        /// Time reached \[s\].
         t: f64,
         /// The limit that was hit.
         max_steps: u64,
@@ -239,11 +239,11 @@ pub enum SolverError {
     /// Dense output was requested outside the last step.
     #[error("time {t} s lies outside the last step [{start}, {end}] s")]
     TimeOutOfRange {
-        /// Requested time [s].
+        /// Requested time \[s\].
         t: f64,
-        /// Start of the last step [s].
+        /// Start of the last step \[s\].
         start: f64,
-        /// End of the last step [s].
+        /// End of the last step \[s\].
         end: f64,
     },
 }

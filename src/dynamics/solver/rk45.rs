@@ -112,7 +112,7 @@ pub enum StepController {
     /// Proportional–integral controller fac = safety · ‖err_n‖^{−(1/5 − 3β/4)} · ‖err_{n−1}‖^β.
     PI {
         /// Integral gain β in [0, 0.1]: 0.04 in DOPRI5, 0 gives the standard controller, and the
-        /// controller is stable only for β < 1/5 − 3β/4, i.e. β < 0.114 [1].
+        /// controller is stable only for β < 1/5 − 3β/4, i.e. β < 0.114 \[1\].
         beta: f64,
     },
 }
@@ -120,32 +120,32 @@ pub enum StepController {
 /// Settings of the [`Rk45`] integrator.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rk45Settings {
-    /// Relative tolerance of the local error; in (0, 1) [1].
+    /// Relative tolerance of the local error; in (0, 1) \[1\].
     pub rtol: f64,
     /// Absolute tolerance of the displacement components; non-negative [m or rad].
     pub atol_q: f64,
     /// Absolute tolerance of the velocity components; non-negative [m/s or rad/s].
     pub atol_v: f64,
-    /// Safety factor of the step-size prediction; in (0, 1] [1].
+    /// Safety factor of the step-size prediction; in (0, 1] \[1\].
     pub safety: f64,
-    /// Smallest ratio between consecutive step sizes; in (0, 1) [1].
+    /// Smallest ratio between consecutive step sizes; in (0, 1) \[1\].
     pub min_ratio: f64,
-    /// Largest ratio between consecutive step sizes; above 1 [1].
+    /// Largest ratio between consecutive step sizes; above 1 \[1\].
     pub max_ratio: f64,
     /// Step-size controller.
     pub controller: StepController,
-    /// First step size; `None` selects it automatically [s].
+    /// First step size; `None` selects it automatically \[s\].
     pub initial_step: Option<f64>,
-    /// Largest step size; positive, may be infinite [s].
+    /// Largest step size; positive, may be infinite \[s\].
     pub max_step: f64,
     /// Smallest step size below which the integration stops with an error; the step that lands on
-    /// `t_end` or on an event may be shorter [s].
+    /// `t_end` or on an event may be shorter \[s\].
     pub min_step: f64,
     /// Largest number of step attempts (accepted, rejected and event retakes) in one
     /// [`Rk45::advance_to`] call.
     pub max_steps: u64,
     /// Relative time tolerance of event location, applied as
-    /// `event_tolerance · max(|t_n|, |t_{n+1}|, h)`; in [1e-15, 0.1] [1].
+    /// `event_tolerance · max(|t_n|, |t_{n+1}|, h)`; in [1e-15, 0.1] \[1\].
     pub event_tolerance: f64,
     /// Whether located events are stored for [`Rk45::located_events`]; they are always counted.
     pub record_events: bool,
@@ -222,7 +222,7 @@ impl Rk45Settings {
 /// One located zero crossing of an event function.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LocatedEvent {
-    /// Time of the crossing [s].
+    /// Time of the crossing \[s\].
     pub t: f64,
     /// Index of the event function.
     pub index: usize,
@@ -394,7 +394,7 @@ impl Rk45 {
         })
     }
 
-    /// Sets the initial time `t0` [s], displacements `q0` [m or rad] and velocities `v0`
+    /// Sets the initial time `t0` \[s\], displacements `q0` [m or rad] and velocities `v0`
     /// [m/s or rad/s], evaluates the force and the event functions there and chooses the first
     /// step. The counters and the event record are kept.
     pub fn init<S: SecondOrderSystem + ?Sized>(
@@ -449,7 +449,7 @@ impl Rk45 {
         Ok(())
     }
 
-    /// Restarts from time `t` [s], displacements `q` [m or rad] and velocities `v`
+    /// Restarts from time `t` \[s\], displacements `q` [m or rad] and velocities `v`
     /// [m/s or rad/s]. Same as [`Rk45::init`].
     pub fn set_state<S: SecondOrderSystem + ?Sized>(
         &mut self,
@@ -461,14 +461,14 @@ impl Rk45 {
         self.init(sys, t, q, v)
     }
 
-    /// The step controller's state: the proposed next step [s], the last accepted error norm and
+    /// The step controller's state: the proposed next step \[s\], the last accepted error norm and
     /// whether the last attempt was rejected (1 or 0). With [`Rk45::restore`] a run continues
     /// bit-identically from a saved state.
     pub fn controller_state(&self) -> [f64; 3] {
         [self.h_next, self.err_old, if self.rejected_last { 1.0 } else { 0.0 }]
     }
 
-    /// Restarts from time `t` [s], displacements `q` [m or rad] and velocities `v`
+    /// Restarts from time `t` \[s\], displacements `q` [m or rad] and velocities `v`
     /// [m/s or rad/s] as [`Rk45::init`], then takes the step controller's state from
     /// [`Rk45::controller_state`]: the continuation takes the steps the saved run would have
     /// taken (the force and event functions at the state are recomputed, and equal the saved
@@ -747,7 +747,7 @@ impl Rk45 {
         Ok(earliest)
     }
 
-    /// Integrates from the current time to `t_end` [s] with adaptive steps, landing exactly on
+    /// Integrates from the current time to `t_end` \[s\] with adaptive steps, landing exactly on
     /// `t_end` and on every located event in between.
     ///
     /// On error the integrator keeps the last accepted state.
@@ -759,7 +759,7 @@ impl Rk45 {
         self.integrate(sys, t_end, false)
     }
 
-    /// Takes one accepted step towards `t_max` [s]: the step the controller proposes, ending
+    /// Takes one accepted step towards `t_max` \[s\]: the step the controller proposes, ending
     /// at a located event inside it or at `t_max` if it would reach that far. Dense output
     /// ([`Rk45::dense_at`]) then covers the step; this is how a caller samples the solution at
     /// times of its own without forcing step ends onto them. Does nothing at `t_max`.
@@ -968,7 +968,7 @@ impl Rk45 {
     }
 
     /// Writes the dense-output displacements [m or rad] and velocities [m/s or rad/s] at time
-    /// `t` [s] inside the last accepted step into `q` and `v`. Before the first step only the
+    /// `t` \[s\] inside the last accepted step into `q` and `v`. Before the first step only the
     /// current time is available.
     pub fn dense_at(&self, t: f64, q: &mut [f64], v: &mut [f64]) -> Result<(), SolverError> {
         if !self.initialized {
@@ -1004,7 +1004,7 @@ impl Rk45 {
         Ok(())
     }
 
-    /// Current time [s].
+    /// Current time \[s\].
     pub fn time(&self) -> f64 {
         self.t
     }
@@ -1024,12 +1024,12 @@ impl Rk45 {
         &self.k1[self.n..]
     }
 
-    /// Size of the next step the controller proposes [s].
+    /// Size of the next step the controller proposes \[s\].
     pub fn next_step(&self) -> f64 {
         self.h_next
     }
 
-    /// Start and end of the last accepted step, if a step has been taken since `init` [s].
+    /// Start and end of the last accepted step, if a step has been taken since `init` \[s\].
     pub fn last_step(&self) -> Option<(f64, f64)> {
         self.dense_valid.then_some((self.dense_t0, self.t))
     }
