@@ -11,6 +11,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
+use quick_xml::events::{BytesDecl, Event};
+use quick_xml::Writer;
 use serde::Deserialize;
 
 // The GUID's code and the hash it uses, under the library's module paths.
@@ -62,10 +64,6 @@ fn fail(msg: String) -> ! {
     panic!("modelDescription/variables.toml: {msg}");
 }
 
-fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
-}
-
 fn const_name(name: &str) -> String {
     let mut out = String::new();
     let mut prev_lower = false;
@@ -89,6 +87,141 @@ fn const_name(name: &str) -> String {
 fn real_text(v: f64) -> String {
     let s = format!("{v:?}");
     s.replace("e-0", "e-").replace("e0", "e")
+}
+
+/// The start value of a variable as written in modelDescription.xml.
+fn start_text(v: &Var) -> Option<String> {
+    let s = v.start.as_ref()?;
+    Some(match (v.ty.as_str(), s) {
+        ("Real", toml::Value::Float(f)) => real_text(*f),
+        ("Real", toml::Value::Integer(n)) => real_text(*n as f64),
+        ("Integer", toml::Value::Integer(n)) => n.to_string(),
+        ("Boolean", toml::Value::Boolean(b)) => b.to_string(),
+        ("String", toml::Value::String(s)) => s.clone(),
+        _ => fail(format!("{}: start value {s} does not fit type {}", v.name, v.ty)),
+    })
+}
+
+/// modelDescription.xml of the table: written with quick-xml (which escapes
+/// the attribute values), two spaces of indentation.
+fn model_description_xml(table: &Table, guid: &str) -> std::io::Result<String> {
+    let m = &table.model;
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+    w.create_element("fmiModelDescription")
+        .with_attributes([
+            ("fmiVersion", "2.0"),
+            ("modelName", m.model_name.as_str()),
+            ("guid", guid),
+            ("description", m.description.as_str()),
+            ("author", m.author.as_str()),
+            ("version", env!("CARGO_PKG_VERSION")),
+            ("license", m.license.as_str()),
+            ("generationTool", "planetwear build.rs"),
+            ("variableNamingConvention", "structured"),
+            ("numberOfEventIndicators", "0"),
+        ])
+        .write_inner_content(|w| {
+            w.create_element("CoSimulation")
+                .with_attributes([
+                    ("modelIdentifier", m.model_identifier.as_str()),
+                    ("needsExecutionTool", "false"),
+                    ("canHandleVariableCommunicationStepSize", "true"),
+                    ("canInterpolateInputs", "false"),
+                    ("maxOutputDerivativeOrder", "0"),
+                    ("canRunAsynchronuously", "false"),
+                    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+                    ("canNotUseMemoryManagementFunctions", "true"),
+                    ("canGetAndSetFMUstate", "true"),
+                    ("canSerializeFMUstate", "true"),
+                    ("providesDirectionalDerivative", "false"),
+                ])
+                .write_empty()?;
+            w.create_element("UnitDefinitions").write_inner_content(|w| {
+                for (name, kg, mm, s, rad, displays) in &m.units {
+                    w.create_element("Unit").with_attribute(("name", name.as_str())).write_inner_content(
+                        |w| {
+                            let base: Vec<(&str, String)> = [("kg", kg), ("m", mm), ("s", s), ("rad", rad)]
+                                .into_iter()
+                                .filter(|(_, e)| **e != 0)
+                                .map(|(k, e)| (k, e.to_string()))
+                                .collect();
+                            if !base.is_empty() {
+                                w.create_element("BaseUnit")
+                                    .with_attributes(base.iter().map(|(k, e)| (*k, e.as_str())))
+                                    .write_empty()?;
+                            }
+                            for (d, f) in displays {
+                                w.create_element("DisplayUnit")
+                                    .with_attributes([
+                                        ("name", d.as_str()),
+                                        ("factor", real_text(*f).as_str()),
+                                    ])
+                                    .write_empty()?;
+                            }
+                            Ok(())
+                        },
+                    )?;
+                }
+                Ok(())
+            })?;
+            w.create_element("LogCategories").write_inner_content(|w| {
+                for (name, desc) in &m.log_categories {
+                    w.create_element("Category")
+                        .with_attributes([("name", name.as_str()), ("description", desc.as_str())])
+                        .write_empty()?;
+                }
+                Ok(())
+            })?;
+            w.create_element("DefaultExperiment")
+                .with_attributes([("startTime", "0.0"), ("stopTime", "0.05"), ("stepSize", "0.0001")])
+                .write_empty()?;
+            w.create_element("ModelVariables").write_inner_content(|w| {
+                for v in &table.variable {
+                    let vr = v.vr.to_string();
+                    let mut attrs = vec![
+                        ("name", v.name.as_str()),
+                        ("valueReference", vr.as_str()),
+                        ("description", v.description.as_str()),
+                        ("causality", v.causality.as_str()),
+                        ("variability", v.variability.as_str()),
+                    ];
+                    attrs.extend(v.initial.as_deref().map(|i| ("initial", i)));
+                    let start = start_text(v);
+                    let mut typed = Vec::new();
+                    typed.extend(v.unit.as_deref().map(|u| ("unit", u)));
+                    typed.extend(v.display.as_deref().map(|d| ("displayUnit", d)));
+                    typed.extend(start.as_deref().map(|s| ("start", s)));
+                    w.create_element("ScalarVariable").with_attributes(attrs).write_inner_content(|w| {
+                        w.create_element(v.ty.as_str()).with_attributes(typed).write_empty()?;
+                        Ok(())
+                    })?;
+                }
+                Ok(())
+            })?;
+            // Every output is an output and an initial unknown, by its
+            // 1-based index in ModelVariables.
+            let outputs: Vec<String> = (1..)
+                .zip(&table.variable)
+                .filter(|(_, v)| v.causality == "output")
+                .map(|(i, _): (usize, _)| i.to_string())
+                .collect();
+            let unknowns = |w: &mut Writer<Vec<u8>>| -> std::io::Result<()> {
+                for i in &outputs {
+                    w.create_element("Unknown").with_attribute(("index", i.as_str())).write_empty()?;
+                }
+                Ok(())
+            };
+            w.create_element("ModelStructure").write_inner_content(|w| {
+                w.create_element("Outputs").write_inner_content(unknowns)?;
+                w.create_element("InitialUnknowns").write_inner_content(unknowns)?;
+                Ok(())
+            })?;
+            Ok(())
+        })?;
+    let mut text = String::from_utf8(w.into_inner()).expect("the table is UTF-8");
+    text.push('\n');
+    Ok(text)
 }
 
 fn main() {
@@ -173,99 +306,7 @@ fn main() {
 
     // modelDescription.xml
     let m = &table.model;
-    let mut x = String::new();
-    let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
-    let _ = writeln!(
-        x,
-        r#"<fmiModelDescription fmiVersion="2.0" modelName="{}" guid="{guid}" description="{}" author="{}" version="{}" license="{}" generationTool="planetwear build.rs" variableNamingConvention="structured" numberOfEventIndicators="0">"#,
-        xml_escape(&m.model_name),
-        xml_escape(&m.description),
-        xml_escape(&m.author),
-        env!("CARGO_PKG_VERSION"),
-        xml_escape(&m.license)
-    );
-    let _ = writeln!(
-        x,
-        r#"  <CoSimulation modelIdentifier="{}" needsExecutionTool="false" canHandleVariableCommunicationStepSize="true" canInterpolateInputs="false" maxOutputDerivativeOrder="0" canRunAsynchronuously="false" canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="true" canGetAndSetFMUstate="true" canSerializeFMUstate="true" providesDirectionalDerivative="false"/>"#,
-        xml_escape(&m.model_identifier)
-    );
-    x.push_str("  <UnitDefinitions>\n");
-    for (name, kg, mm, s, rad, displays) in &m.units {
-        let mut base = String::new();
-        for (k, e) in [("kg", kg), ("m", mm), ("s", s), ("rad", rad)] {
-            if *e != 0 {
-                let _ = write!(base, r#" {k}="{e}""#);
-            }
-        }
-        let _ = writeln!(x, r#"    <Unit name="{}">"#, xml_escape(name));
-        if !base.is_empty() {
-            let _ = writeln!(x, "      <BaseUnit{base}/>");
-        }
-        for (d, f) in displays {
-            let _ =
-                writeln!(x, r#"      <DisplayUnit name="{}" factor="{}"/>"#, xml_escape(d), real_text(*f));
-        }
-        x.push_str("    </Unit>\n");
-    }
-    x.push_str("  </UnitDefinitions>\n  <LogCategories>\n");
-    for (name, desc) in &m.log_categories {
-        let _ =
-            writeln!(x, r#"    <Category name="{}" description="{}"/>"#, xml_escape(name), xml_escape(desc));
-    }
-    x.push_str("  </LogCategories>\n");
-    x.push_str("  <DefaultExperiment startTime=\"0.0\" stopTime=\"0.05\" stepSize=\"0.0001\"/>\n");
-    x.push_str("  <ModelVariables>\n");
-    let mut outputs = Vec::new();
-    let mut initial_unknowns = Vec::new();
-    for (i, v) in table.variable.iter().enumerate() {
-        let index = i + 1;
-        let _ = write!(
-            x,
-            r#"    <ScalarVariable name="{}" valueReference="{}" description="{}" causality="{}" variability="{}""#,
-            xml_escape(&v.name),
-            v.vr,
-            xml_escape(&v.description),
-            v.causality,
-            v.variability
-        );
-        if let Some(init) = &v.initial {
-            let _ = write!(x, r#" initial="{init}""#);
-        }
-        x.push_str(">\n");
-        let mut attrs = String::new();
-        if let Some(u) = &v.unit {
-            let _ = write!(attrs, r#" unit="{}""#, xml_escape(u));
-        }
-        if let Some(d) = &v.display {
-            let _ = write!(attrs, r#" displayUnit="{}""#, xml_escape(d));
-        }
-        if let Some(s) = &v.start {
-            let value = match (v.ty.as_str(), s) {
-                ("Real", toml::Value::Float(f)) => real_text(*f),
-                ("Real", toml::Value::Integer(n)) => real_text(*n as f64),
-                ("Integer", toml::Value::Integer(n)) => n.to_string(),
-                ("Boolean", toml::Value::Boolean(b)) => b.to_string(),
-                ("String", toml::Value::String(s)) => xml_escape(s),
-                _ => fail(format!("{}: start value {s} does not fit type {}", v.name, v.ty)),
-            };
-            let _ = write!(attrs, r#" start="{value}""#);
-        }
-        let _ = writeln!(x, "      <{}{attrs}/>", v.ty);
-        x.push_str("    </ScalarVariable>\n");
-        if v.causality == "output" {
-            outputs.push(index);
-            initial_unknowns.push(index);
-        }
-    }
-    x.push_str("  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n");
-    for i in &outputs {
-        let _ = writeln!(x, r#"      <Unknown index="{i}"/>"#);
-    }
-    x.push_str("    </Outputs>\n    <InitialUnknowns>\n");
-    for i in &initial_unknowns {
-        let _ = writeln!(x, r#"      <Unknown index="{i}"/>"#);
-    }
-    x.push_str("    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
+    let x = model_description_xml(&table, &guid).unwrap_or_else(|e| fail(format!("writing XML: {e}")));
 
     // The Rust table.
     let mut r = String::new();
