@@ -224,6 +224,64 @@ fn model_description_xml(table: &Table, guid: &str) -> std::io::Result<String> {
     Ok(text)
 }
 
+/// The CamelCase variant name of a variable: `planet[1].sunMeshForce` is
+/// `Planet1SunMeshForce`.
+fn variant_name(name: &str) -> String {
+    const_name(name)
+        .split('_')
+        .map(|part| {
+            let lower = part.to_ascii_lowercase();
+            let mut c = lower.chars();
+            c.next().map(|f| f.to_ascii_uppercase().to_string() + c.as_str()).unwrap_or_default()
+        })
+        .collect()
+}
+
+/// `enum Variable`: one variant per variable, with its value reference,
+/// name and table row, and the variable of a (base type, value reference).
+fn enum_source(table: &Table, r: &mut String) {
+    let variants: Vec<String> = table.variable.iter().map(|v| variant_name(&v.name)).collect();
+    let mut seen = BTreeMap::new();
+    for (v, variant) in table.variable.iter().zip(&variants) {
+        if let Some(other) = seen.insert(variant.as_str(), v.name.as_str()) {
+            fail(format!("{} and {other} both make the enum variant {variant}", v.name));
+        }
+    }
+    r.push_str(
+        "/// Every variable of the FMU, one variant each, in modelDescription.xml order.\n\
+         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]\npub enum Variable {\n",
+    );
+    for (v, variant) in table.variable.iter().zip(&variants) {
+        let _ = writeln!(r, "    /// `{}`: {}\n    {variant},", v.name, v.description.replace('\n', " "));
+    }
+    r.push_str("}\n\nimpl Variable {\n    /// Every variable, in modelDescription.xml order.\n    pub const ALL: &'static [Variable] = &[\n");
+    for variant in &variants {
+        let _ = writeln!(r, "        Variable::{variant},");
+    }
+    r.push_str(
+        "    ];\n\n    /// The variable of base type `kind` with value reference `vr`.\n    \
+         pub fn from_value_reference(kind: Kind, vr: u32) -> Option<Variable> {\n        match (kind, vr) {\n",
+    );
+    for (v, variant) in table.variable.iter().zip(&variants) {
+        let _ = writeln!(r, "            (Kind::{}, {}) => Some(Variable::{variant}),", v.ty, v.vr);
+    }
+    r.push_str(
+        "            _ => None,\n        }\n    }\n\n    /// Its value reference (unique within its base type).\n    \
+         pub fn value_reference(self) -> u32 {\n        match self {\n",
+    );
+    for (v, variant) in table.variable.iter().zip(&variants) {
+        let _ = writeln!(r, "            Variable::{variant} => {},", v.vr);
+    }
+    r.push_str("        }\n    }\n\n    /// Its structured name.\n    pub fn name(self) -> &'static str {\n        match self {\n");
+    for (v, variant) in table.variable.iter().zip(&variants) {
+        let _ = writeln!(r, "            Variable::{variant} => {:?},", v.name);
+    }
+    r.push_str(
+        "        }\n    }\n\n    /// Its row of [`VARIABLES`].\n    pub fn info(self) -> &'static VariableInfo {\n        \
+         &VARIABLES[self as usize]\n    }\n}\n",
+    );
+}
+
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it"));
     let source = manifest.join("modelDescription/variables.toml");
@@ -365,6 +423,7 @@ fn main() {
         );
     }
     r.push_str("}\n");
+    enum_source(&table, &mut r);
 
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it"));
     // The FMU's shared library exports the fmi2* functions and nothing else.

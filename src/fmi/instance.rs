@@ -6,10 +6,11 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
-use super::variables::{find, vr, Causality, Kind, Start, GUID, VARIABLES};
+use super::variables::{vr, Causality, Kind, Start, Variable, GUID, VARIABLES};
 use crate::contact::ltca::SetModel;
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::simulation::{Bearing, Simulation, Snapshot};
+use crate::dynamics::spectrum::Harmonics;
 use crate::dynamics::state_format;
 use crate::model::gear::{Drive, IntegratorKind, Member, MeshKind};
 use crate::model::lumped::Fidelity;
@@ -41,6 +42,14 @@ impl Refusal {
     fn error(message: impl Into<String>) -> Self {
         Self { status: Status::Error, message: message.into() }
     }
+}
+
+/// A variable's value, of its base type.
+enum Value {
+    Real(f64),
+    Integer(i32),
+    Boolean(bool),
+    String(String),
 }
 
 /// The phases of the FMI 2.0 co-simulation state machine that this FMU
@@ -445,20 +454,21 @@ impl Instance {
         Ok(())
     }
 
-    fn check_set(&self, kind: Kind, v: u32) -> Result<&'static super::variables::VariableInfo, Refusal> {
-        let info = find(kind, v).ok_or_else(|| {
+    fn check_set(&self, kind: Kind, v: u32) -> Result<Variable, Refusal> {
+        let variable = Variable::from_value_reference(kind, v).ok_or_else(|| {
             Refusal::error(format!("value reference {v} is not a {kind:?} variable of this FMU"))
         })?;
+        let info = variable.info();
         match (info.causality, self.phase) {
             (Causality::Output, _) => {
                 Err(Refusal::error(format!("{} is an output and cannot be set", info.name)))
             }
-            (Causality::Parameter, Phase::Instantiated | Phase::InitializationMode) => Ok(info),
+            (Causality::Parameter, Phase::Instantiated | Phase::InitializationMode) => Ok(variable),
             (Causality::Parameter, phase) => Err(Refusal::error(format!(
                 "{} is a fixed parameter and cannot be set in phase {phase:?}",
                 info.name
             ))),
-            (Causality::Input, _) => Ok(info),
+            (Causality::Input, _) => Ok(variable),
         }
     }
 
@@ -470,40 +480,203 @@ impl Instance {
         }
     }
 
+    fn store(&mut self, v: u32, value: Value) {
+        match value {
+            Value::Real(x) => {
+                self.reals.insert(v, x);
+            }
+            Value::Integer(x) => {
+                self.integers.insert(v, x);
+            }
+            Value::Boolean(x) => {
+                self.booleans.insert(v, x);
+            }
+            Value::String(x) => {
+                self.strings.insert(v, x);
+            }
+        }
+    }
+
+    /// Sets a variable [`Instance::check_set`] accepted: a parameter is
+    /// stored (the simulation is rebuilt from it), an input is stored and,
+    /// once the simulation exists, passed on to it.
+    fn set(&mut self, variable: Variable, value: Value) -> Result<(), Refusal> {
+        use Variable as V;
+        let v = variable.value_reference();
+        match variable {
+            V::SceneFile
+            | V::WearStateFile
+            | V::Fidelity
+            | V::HeldMember
+            | V::InputMember
+            | V::DriveMode
+            | V::Integrator
+            | V::StepsPerMeshCycle
+            | V::HarmonicWindowCycles
+            | V::SamplesPerMeshCycle
+            | V::Planets
+            | V::SunTeeth
+            | V::PlanetTeeth
+            | V::RingTeeth
+            | V::RhoInfinity
+            | V::RelativeTolerance
+            | V::Module
+            | V::PressureAngle
+            | V::FaceWidth
+            | V::CentreDistance
+            | V::SunToothThickness
+            | V::PlanetToothThickness
+            | V::RingToothThickness
+            | V::SunTipRadius
+            | V::SunRootRadius
+            | V::SunBoreRadius
+            | V::PlanetTipRadius
+            | V::PlanetRootRadius
+            | V::PlanetBoreRadius
+            | V::RingMinorRadius
+            | V::RingRootRadius
+            | V::RingRimRadius
+            | V::HobTipRadius
+            | V::RingFilletRadius
+            | V::TipChamferHeight
+            | V::TipChamferAngle
+            | V::YoungsModulus
+            | V::PoissonRatio
+            | V::Density
+            | V::SunInertia
+            | V::SunMass
+            | V::PlanetInertia
+            | V::PlanetMass
+            | V::RingInertia
+            | V::RingMass
+            | V::CarrierInertia
+            | V::CarrierMass
+            | V::SunBearingStiffness
+            | V::RingBearingStiffness
+            | V::CarrierBearingStiffness
+            | V::PlanetBearingStiffness
+            | V::BearingDampingRatio
+            | V::MeshDampingRatio
+            | V::ShaftStiffness
+            | V::InitialSpeed => {
+                self.store(v, value);
+                self.changed(v);
+                Ok(())
+            }
+            V::SunTorque | V::RingTorque | V::CarrierTorque | V::InputSpeedReference => {
+                self.store(v, value);
+                if self.sim.is_some() {
+                    self.explicitly_set.insert(v);
+                    return self.push_inputs();
+                }
+                self.changed(v);
+                Ok(())
+            }
+            V::SunSpeed
+            | V::RingSpeed
+            | V::CarrierSpeed
+            | V::SunAngle
+            | V::RingAngle
+            | V::CarrierAngle
+            | V::InputShaftTorque
+            | V::Planet1SunMeshForce
+            | V::Planet1RingMeshForce
+            | V::Planet2SunMeshForce
+            | V::Planet2RingMeshForce
+            | V::Planet3SunMeshForce
+            | V::Planet3RingMeshForce
+            | V::Planet4SunMeshForce
+            | V::Planet4RingMeshForce
+            | V::Planet5SunMeshForce
+            | V::Planet5RingMeshForce
+            | V::Planet6SunMeshForce
+            | V::Planet6RingMeshForce
+            | V::Planet7SunMeshForce
+            | V::Planet7RingMeshForce
+            | V::Planet8SunMeshForce
+            | V::Planet8RingMeshForce
+            | V::TrackedPairSunForce
+            | V::TrackedPairRingForce
+            | V::Planet1SunTransmissionError
+            | V::Planet1RingTransmissionError
+            | V::Planet1SunStaticTransmissionError
+            | V::Planet1RingStaticTransmissionError
+            | V::SunBearingForce
+            | V::RingBearingForce
+            | V::CarrierBearingForce
+            | V::Planet1BearingForce
+            | V::Planet2BearingForce
+            | V::Planet3BearingForce
+            | V::Planet4BearingForce
+            | V::Planet5BearingForce
+            | V::Planet6BearingForce
+            | V::Planet7BearingForce
+            | V::Planet8BearingForce
+            | V::WindowSunMeshF1
+            | V::WindowSunMeshF2
+            | V::WindowSunMeshF3
+            | V::WindowSunMeshF4
+            | V::WindowSunMeshF5
+            | V::WindowSunMeshF6
+            | V::WindowSunMeshFrms
+            | V::WindowSunSeparation
+            | V::WindowRingMeshF1
+            | V::WindowRingMeshF2
+            | V::WindowRingMeshF3
+            | V::WindowRingMeshF4
+            | V::WindowRingMeshF5
+            | V::WindowRingMeshF6
+            | V::WindowRingMeshFrms
+            | V::WindowRingSeparation
+            | V::WindowSunMeshMean
+            | V::WindowRingMeshMean
+            | V::Planet1SunPairsInContact
+            | V::Planet1RingPairsInContact
+            | V::Planet2SunPairsInContact
+            | V::Planet2RingPairsInContact
+            | V::Planet3SunPairsInContact
+            | V::Planet3RingPairsInContact
+            | V::Planet4SunPairsInContact
+            | V::Planet4RingPairsInContact
+            | V::Planet5SunPairsInContact
+            | V::Planet5RingPairsInContact
+            | V::Planet6SunPairsInContact
+            | V::Planet6RingPairsInContact
+            | V::Planet7SunPairsInContact
+            | V::Planet7RingPairsInContact
+            | V::Planet8SunPairsInContact
+            | V::Planet8RingPairsInContact
+            | V::WindowCycles => {
+                Err(Refusal::error(format!("{} is an output and cannot be set", variable.name())))
+            }
+        }
+    }
+
     /// fmi2SetReal for one variable.
     pub fn set_real(&mut self, v: u32, value: f64) -> Result<(), Refusal> {
-        let info = self.check_set(Kind::Real, v)?;
+        let variable = self.check_set(Kind::Real, v)?;
         if !value.is_finite() {
-            return Err(Refusal::error(format!("{} = {value}: must be finite", info.name)));
+            return Err(Refusal::error(format!("{} = {value}: must be finite", variable.name())));
         }
-        self.reals.insert(v, value);
-        if info.causality == Causality::Input && self.sim.is_some() {
-            self.explicitly_set.insert(v);
-            return self.push_inputs();
-        }
-        self.changed(v);
-        Ok(())
+        self.set(variable, Value::Real(value))
     }
 
     /// fmi2SetInteger for one variable.
     pub fn set_integer(&mut self, v: u32, value: i32) -> Result<(), Refusal> {
-        self.check_set(Kind::Integer, v)?;
-        self.integers.insert(v, value);
-        self.changed(v);
-        Ok(())
+        let variable = self.check_set(Kind::Integer, v)?;
+        self.set(variable, Value::Integer(value))
     }
 
     /// fmi2SetBoolean for one variable (this FMU has none).
-    pub fn set_boolean(&mut self, v: u32, _value: bool) -> Result<(), Refusal> {
-        self.check_set(Kind::Boolean, v).map(|_| ())
+    pub fn set_boolean(&mut self, v: u32, value: bool) -> Result<(), Refusal> {
+        let variable = self.check_set(Kind::Boolean, v)?;
+        self.set(variable, Value::Boolean(value))
     }
 
     /// fmi2SetString for one variable.
     pub fn set_string(&mut self, v: u32, value: &str) -> Result<(), Refusal> {
-        self.check_set(Kind::String, v)?;
-        self.strings.insert(v, value.to_string());
-        self.changed(v);
-        Ok(())
+        let variable = self.check_set(Kind::String, v)?;
+        self.set(variable, Value::String(value.to_string()))
     }
 
     fn sim(&mut self) -> Result<&Simulation, Refusal> {
@@ -513,99 +686,212 @@ impl Instance {
         self.sim.as_ref().ok_or_else(|| Refusal::error("no simulation"))
     }
 
+    /// The value of a variable: a parameter's or an input's as set, an
+    /// output's read from the simulation (built first if need be).
+    fn get(&mut self, variable: Variable) -> Result<Value, Refusal> {
+        use MeshKind::{RingPlanet as Ring, SunPlanet as Sun};
+        use Variable as V;
+        let v = variable.value_reference();
+        if variable.info().causality == Causality::Output {
+            self.sim()?;
+        }
+        let sim = || self.sim.as_ref().ok_or_else(|| Refusal::error("no simulation"));
+        let real = |read: &dyn Fn(&Simulation) -> f64| Ok::<_, Refusal>(Value::Real(read(sim()?)));
+        let mesh_force = |p: usize, m: MeshKind| real(&|s| s.mesh_force(p, m));
+        let bearing = |b: Bearing| real(&|s| s.bearing_force(b));
+        // Over the window; 0 until it is full.
+        let window = |m: MeshKind, read: fn(&Harmonics, f64) -> f64| {
+            real(&|s| s.window_harmonics(m).map_or(0.0, |(h, sep)| read(&h, sep)))
+        };
+        let pairs = |p: usize, m: MeshKind| Ok(Value::Integer(sim()?.pairs_in_contact(p, m) as i32));
+        Ok(match variable {
+            V::SceneFile | V::WearStateFile => {
+                Value::String(self.strings.get(&v).cloned().unwrap_or_default())
+            }
+            V::Fidelity
+            | V::HeldMember
+            | V::InputMember
+            | V::DriveMode
+            | V::Integrator
+            | V::StepsPerMeshCycle
+            | V::HarmonicWindowCycles
+            | V::SamplesPerMeshCycle
+            | V::Planets
+            | V::SunTeeth
+            | V::PlanetTeeth
+            | V::RingTeeth => Value::Integer(self.int(v)),
+            V::RhoInfinity
+            | V::RelativeTolerance
+            | V::Module
+            | V::PressureAngle
+            | V::FaceWidth
+            | V::CentreDistance
+            | V::SunToothThickness
+            | V::PlanetToothThickness
+            | V::RingToothThickness
+            | V::SunTipRadius
+            | V::SunRootRadius
+            | V::SunBoreRadius
+            | V::PlanetTipRadius
+            | V::PlanetRootRadius
+            | V::PlanetBoreRadius
+            | V::RingMinorRadius
+            | V::RingRootRadius
+            | V::RingRimRadius
+            | V::HobTipRadius
+            | V::RingFilletRadius
+            | V::TipChamferHeight
+            | V::TipChamferAngle
+            | V::YoungsModulus
+            | V::PoissonRatio
+            | V::Density
+            | V::SunInertia
+            | V::SunMass
+            | V::PlanetInertia
+            | V::PlanetMass
+            | V::RingInertia
+            | V::RingMass
+            | V::CarrierInertia
+            | V::CarrierMass
+            | V::SunBearingStiffness
+            | V::RingBearingStiffness
+            | V::CarrierBearingStiffness
+            | V::PlanetBearingStiffness
+            | V::BearingDampingRatio
+            | V::MeshDampingRatio
+            | V::ShaftStiffness
+            | V::InitialSpeed
+            | V::SunTorque
+            | V::RingTorque
+            | V::CarrierTorque
+            | V::InputSpeedReference => Value::Real(self.real(v)),
+            V::SunSpeed => real(&|s| s.speed(Member::Sun))?,
+            V::RingSpeed => real(&|s| s.speed(Member::Ring))?,
+            V::CarrierSpeed => real(&|s| s.speed(Member::Carrier))?,
+            V::SunAngle => real(&|s| s.angle(Member::Sun))?,
+            V::RingAngle => real(&|s| s.angle(Member::Ring))?,
+            V::CarrierAngle => real(&|s| s.angle(Member::Carrier))?,
+            V::InputShaftTorque => real(&|s| s.input_torque())?,
+            V::Planet1SunMeshForce => mesh_force(0, Sun)?,
+            V::Planet1RingMeshForce => mesh_force(0, Ring)?,
+            V::Planet2SunMeshForce => mesh_force(1, Sun)?,
+            V::Planet2RingMeshForce => mesh_force(1, Ring)?,
+            V::Planet3SunMeshForce => mesh_force(2, Sun)?,
+            V::Planet3RingMeshForce => mesh_force(2, Ring)?,
+            V::Planet4SunMeshForce => mesh_force(3, Sun)?,
+            V::Planet4RingMeshForce => mesh_force(3, Ring)?,
+            V::Planet5SunMeshForce => mesh_force(4, Sun)?,
+            V::Planet5RingMeshForce => mesh_force(4, Ring)?,
+            V::Planet6SunMeshForce => mesh_force(5, Sun)?,
+            V::Planet6RingMeshForce => mesh_force(5, Ring)?,
+            V::Planet7SunMeshForce => mesh_force(6, Sun)?,
+            V::Planet7RingMeshForce => mesh_force(6, Ring)?,
+            V::Planet8SunMeshForce => mesh_force(7, Sun)?,
+            V::Planet8RingMeshForce => mesh_force(7, Ring)?,
+            V::TrackedPairSunForce => real(&|s| s.tracked_pair_force(Sun))?,
+            V::TrackedPairRingForce => real(&|s| s.tracked_pair_force(Ring))?,
+            V::Planet1SunTransmissionError => real(&|s| s.transmission_error(0, Sun))?,
+            V::Planet1RingTransmissionError => real(&|s| s.transmission_error(0, Ring))?,
+            V::Planet1SunStaticTransmissionError => real(&|s| s.static_transmission_error(0, Sun))?,
+            V::Planet1RingStaticTransmissionError => real(&|s| s.static_transmission_error(0, Ring))?,
+            V::SunBearingForce => bearing(Bearing::Member(Member::Sun))?,
+            V::RingBearingForce => bearing(Bearing::Member(Member::Ring))?,
+            V::CarrierBearingForce => bearing(Bearing::Member(Member::Carrier))?,
+            V::Planet1BearingForce => bearing(Bearing::Planet(0))?,
+            V::Planet2BearingForce => bearing(Bearing::Planet(1))?,
+            V::Planet3BearingForce => bearing(Bearing::Planet(2))?,
+            V::Planet4BearingForce => bearing(Bearing::Planet(3))?,
+            V::Planet5BearingForce => bearing(Bearing::Planet(4))?,
+            V::Planet6BearingForce => bearing(Bearing::Planet(5))?,
+            V::Planet7BearingForce => bearing(Bearing::Planet(6))?,
+            V::Planet8BearingForce => bearing(Bearing::Planet(7))?,
+            V::WindowSunMeshF1 => window(Sun, |h, _| h.amplitude[0])?,
+            V::WindowSunMeshF2 => window(Sun, |h, _| h.amplitude[1])?,
+            V::WindowSunMeshF3 => window(Sun, |h, _| h.amplitude[2])?,
+            V::WindowSunMeshF4 => window(Sun, |h, _| h.amplitude[3])?,
+            V::WindowSunMeshF5 => window(Sun, |h, _| h.amplitude[4])?,
+            V::WindowSunMeshF6 => window(Sun, |h, _| h.amplitude[5])?,
+            V::WindowSunMeshFrms => window(Sun, |h, _| h.rms)?,
+            V::WindowSunSeparation => window(Sun, |_, sep| sep)?,
+            V::WindowSunMeshMean => window(Sun, |h, _| h.mean)?,
+            V::WindowRingMeshF1 => window(Ring, |h, _| h.amplitude[0])?,
+            V::WindowRingMeshF2 => window(Ring, |h, _| h.amplitude[1])?,
+            V::WindowRingMeshF3 => window(Ring, |h, _| h.amplitude[2])?,
+            V::WindowRingMeshF4 => window(Ring, |h, _| h.amplitude[3])?,
+            V::WindowRingMeshF5 => window(Ring, |h, _| h.amplitude[4])?,
+            V::WindowRingMeshF6 => window(Ring, |h, _| h.amplitude[5])?,
+            V::WindowRingMeshFrms => window(Ring, |h, _| h.rms)?,
+            V::WindowRingSeparation => window(Ring, |_, sep| sep)?,
+            V::WindowRingMeshMean => window(Ring, |h, _| h.mean)?,
+            V::Planet1SunPairsInContact => pairs(0, Sun)?,
+            V::Planet1RingPairsInContact => pairs(0, Ring)?,
+            V::Planet2SunPairsInContact => pairs(1, Sun)?,
+            V::Planet2RingPairsInContact => pairs(1, Ring)?,
+            V::Planet3SunPairsInContact => pairs(2, Sun)?,
+            V::Planet3RingPairsInContact => pairs(2, Ring)?,
+            V::Planet4SunPairsInContact => pairs(3, Sun)?,
+            V::Planet4RingPairsInContact => pairs(3, Ring)?,
+            V::Planet5SunPairsInContact => pairs(4, Sun)?,
+            V::Planet5RingPairsInContact => pairs(4, Ring)?,
+            V::Planet6SunPairsInContact => pairs(5, Sun)?,
+            V::Planet6RingPairsInContact => pairs(5, Ring)?,
+            V::Planet7SunPairsInContact => pairs(6, Sun)?,
+            V::Planet7RingPairsInContact => pairs(6, Ring)?,
+            V::Planet8SunPairsInContact => pairs(7, Sun)?,
+            V::Planet8RingPairsInContact => pairs(7, Ring)?,
+            V::WindowCycles => Value::Integer(sim()?.window_cycles() as i32),
+        })
+    }
+
+    /// The variable of a base type with a value reference; `a` is the
+    /// article before the type's name in the refusal.
+    fn lookup(kind: Kind, v: u32, a: &str) -> Result<Variable, Refusal> {
+        Variable::from_value_reference(kind, v).ok_or_else(|| {
+            Refusal::error(format!("value reference {v} is not {a} {kind:?} variable of this FMU"))
+        })
+    }
+
     /// fmi2GetReal for one variable. An output that is not finite (a state
     /// driven to overflow) is refused, never returned.
     pub fn get_real(&mut self, v: u32) -> Result<f64, Refusal> {
-        let info = find(Kind::Real, v).ok_or_else(|| {
-            Refusal::error(format!("value reference {v} is not a Real variable of this FMU"))
-        })?;
-        if info.causality != Causality::Output {
-            return Ok(self.real(v));
-        }
-        let x = self.output(v, info.name)?;
-        if !x.is_finite() {
+        let variable = Self::lookup(Kind::Real, v, "a")?;
+        let Value::Real(x) = self.get(variable)? else {
+            return Err(Refusal::error(format!("{} is not a Real variable", variable.name())));
+        };
+        if variable.info().causality == Causality::Output && !x.is_finite() {
             return Err(Refusal::error(format!(
                 "{} = {x} is not finite: the simulation state has overflowed; reset or restore an earlier FMU state",
-                info.name
+                variable.name()
             )));
         }
         Ok(x)
     }
 
-    fn output(&mut self, v: u32, name: &str) -> Result<f64, Refusal> {
-        let sim = self.sim()?;
-        let planet = |base: u32| ((v - base) / 2) as usize;
-        let mesh = |base: u32| if (v - base) % 2 == 0 { MeshKind::SunPlanet } else { MeshKind::RingPlanet };
-        let window = |m: MeshKind, k: usize| -> f64 {
-            sim.window_harmonics(m).map_or(0.0, |(h, sep)| match k {
-                0..=5 => h.amplitude[k],
-                6 => h.rms,
-                7 => sep,
-                _ => h.mean,
-            })
-        };
-        Ok(match v {
-            vr::SUN_SPEED => sim.speed(Member::Sun),
-            vr::RING_SPEED => sim.speed(Member::Ring),
-            vr::CARRIER_SPEED => sim.speed(Member::Carrier),
-            vr::SUN_ANGLE => sim.angle(Member::Sun),
-            vr::RING_ANGLE => sim.angle(Member::Ring),
-            vr::CARRIER_ANGLE => sim.angle(Member::Carrier),
-            vr::INPUT_SHAFT_TORQUE => sim.input_torque(),
-            210..=225 => sim.mesh_force(planet(210), mesh(210)),
-            vr::TRACKED_PAIR_SUN_FORCE => sim.tracked_pair_force(MeshKind::SunPlanet),
-            vr::TRACKED_PAIR_RING_FORCE => sim.tracked_pair_force(MeshKind::RingPlanet),
-            vr::PLANET_1_SUN_TRANSMISSION_ERROR => sim.transmission_error(0, MeshKind::SunPlanet),
-            vr::PLANET_1_RING_TRANSMISSION_ERROR => sim.transmission_error(0, MeshKind::RingPlanet),
-            vr::PLANET_1_SUN_STATIC_TRANSMISSION_ERROR => {
-                sim.static_transmission_error(0, MeshKind::SunPlanet)
-            }
-            vr::PLANET_1_RING_STATIC_TRANSMISSION_ERROR => {
-                sim.static_transmission_error(0, MeshKind::RingPlanet)
-            }
-            vr::SUN_BEARING_FORCE => sim.bearing_force(Bearing::Member(Member::Sun)),
-            vr::RING_BEARING_FORCE => sim.bearing_force(Bearing::Member(Member::Ring)),
-            vr::CARRIER_BEARING_FORCE => sim.bearing_force(Bearing::Member(Member::Carrier)),
-            263..=270 => sim.bearing_force(Bearing::Planet((v - 263) as usize)),
-            280..=287 => window(MeshKind::SunPlanet, (v - 280) as usize),
-            290..=297 => window(MeshKind::RingPlanet, (v - 290) as usize),
-            288 => window(MeshKind::SunPlanet, 8),
-            289 => window(MeshKind::RingPlanet, 8),
-            _ => return Err(Refusal::error(format!("{name} has no value in this version"))),
-        })
-    }
-
     /// fmi2GetInteger for one variable.
     pub fn get_integer(&mut self, v: u32) -> Result<i32, Refusal> {
-        let info = find(Kind::Integer, v).ok_or_else(|| {
-            Refusal::error(format!("value reference {v} is not an Integer variable of this FMU"))
-        })?;
-        if info.causality != Causality::Output {
-            return Ok(self.int(v));
-        }
-        let sim = self.sim()?;
-        Ok(match v {
-            230..=245 => {
-                let k = v - 230;
-                let m = if k % 2 == 0 { MeshKind::SunPlanet } else { MeshKind::RingPlanet };
-                sim.pairs_in_contact((k / 2) as usize, m) as i32
-            }
-            vr::WINDOW_CYCLES => sim.window_cycles() as i32,
-            _ => return Err(Refusal::error(format!("{} has no value in this version", info.name))),
-        })
+        let variable = Self::lookup(Kind::Integer, v, "an")?;
+        let Value::Integer(x) = self.get(variable)? else {
+            return Err(Refusal::error(format!("{} is not an Integer variable", variable.name())));
+        };
+        Ok(x)
     }
 
     /// fmi2GetBoolean for one variable (this FMU has none).
     pub fn get_boolean(&mut self, v: u32) -> Result<bool, Refusal> {
-        Err(Refusal::error(format!("value reference {v} is not a Boolean variable of this FMU")))
+        let variable = Self::lookup(Kind::Boolean, v, "a")?;
+        let Value::Boolean(x) = self.get(variable)? else {
+            return Err(Refusal::error(format!("{} is not a Boolean variable", variable.name())));
+        };
+        Ok(x)
     }
 
     /// fmi2GetString for one variable.
     pub fn get_string(&mut self, v: u32) -> Result<String, Refusal> {
-        find(Kind::String, v).ok_or_else(|| {
-            Refusal::error(format!("value reference {v} is not a String variable of this FMU"))
-        })?;
-        Ok(self.strings.get(&v).cloned().unwrap_or_default())
+        let variable = Self::lookup(Kind::String, v, "a")?;
+        let Value::String(x) = self.get(variable)? else {
+            return Err(Refusal::error(format!("{} is not a String variable", variable.name())));
+        };
+        Ok(x)
     }
 
     /// fmi2DoStep.
