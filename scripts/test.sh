@@ -8,6 +8,9 @@ echo "== cargo fmt --check"
 cargo fmt --check
 echo "== cargo clippy"
 cargo clippy --release --all-targets --quiet -- -D warnings
+echo "== cargo doc: every intra-doc link resolves, public docs link no private item"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --document-private-items --quiet
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --quiet
 echo "== cargo test"
 cargo test --release
 echo "== build and pack the FMU (fmu/planetwear.fmu; its library from the stripped, LTO profile fmu)"

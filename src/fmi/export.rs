@@ -1,5 +1,5 @@
 //! The exported FMI 2.0 co-simulation functions: the only `unsafe` code of
-//! the project. Every function goes through [`guard`], which checks the
+//! the project. Every function goes through `guard`, which checks the
 //! component pointer, checks the call against the call-order table
 //! ([`allowed`]), catches panics (answering fmi2Fatal), maps refusals to
 //! their status and logs through the importer's callback — only there, only

@@ -104,7 +104,7 @@ pub struct Instance {
     built_from: String,
     /// Set when a step was discarded and the simulation cannot go on.
     pub terminated: bool,
-    /// Time of the last completed step [s].
+    /// Time of the last completed step \[s\].
     pub last_successful_time: f64,
 }
 
