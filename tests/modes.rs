@@ -114,3 +114,45 @@ fn planet_mode_frequencies_do_not_depend_on_the_number_of_planets() {
     let r5 = planet_freqs(5, Fidelity::Torsional);
     assert!((r3[0] / r5[0] - 1.0).abs() < 1e-9);
 }
+
+/// Above `FAER_FROM` rows the modal problem is solved by faer: the same
+/// natural frequencies as nalgebra's solver to 1e-12 of the largest, every
+/// mode an eigenvector (K φ = ω² M φ to 1e-9 of ‖K‖·‖φ‖), and Lin & Parker's
+/// structure for 12 planets (n = 3·(3 + 12) = 45 > FAER_FROM) intact.
+#[test]
+fn large_sets_solved_by_faer_keep_the_frequencies_and_the_mode_structure() {
+    use planetwear::analysis::modes::{symmetric_eigen, FAER_FROM};
+    let s = set(12, Fidelity::TransverseTorsional, None);
+    let (m, k) = (s.mass(), s.stiffness());
+    let n = m.len();
+    assert!(n >= FAER_FROM, "n = {n} must take the faer path");
+    let modes = natural_modes(&s);
+    // Frequencies against nalgebra's symmetric QR on the same matrix.
+    let inv_sqrt: Vec<f64> = m.iter().map(|x| 1.0 / x.sqrt()).collect();
+    let a = nalgebra::DMatrix::from_fn(n, n, |i, j| inv_sqrt[i] * k[(i, j)] * inv_sqrt[j]);
+    let a = (&a + a.transpose()) * 0.5;
+    let mut reference: Vec<f64> =
+        nalgebra::SymmetricEigen::new(a.clone()).eigenvalues.iter().copied().collect();
+    reference.sort_by(f64::total_cmp);
+    let largest = reference.iter().fold(0.0f64, |x, y| x.max(y.abs()));
+    let (mut ours, _) = symmetric_eigen(a);
+    ours.sort_by(f64::total_cmp);
+    for (x, y) in ours.iter().zip(&reference) {
+        assert!((x - y).abs() <= 1e-12 * largest, "eigenvalue {x} against nalgebra's {y}");
+    }
+    // Every mode satisfies K φ = ω² M φ.
+    let k_norm = k.norm();
+    for mode in &modes {
+        let w2 = (2.0 * std::f64::consts::PI * mode.frequency).powi(2);
+        let phi = nalgebra::DVector::from_column_slice(&mode.shape);
+        let r = &k * &phi - nalgebra::DVector::from_fn(n, |i, _| w2 * m[i] * phi[i]);
+        assert!(r.norm() <= 1e-9 * k_norm * phi.norm(), "residual {} at {} Hz", r.norm(), mode.frequency);
+    }
+    // Lin & Parker: one rigid-body mode (nothing held), N − 3 = 9 planet
+    // modes per planet-mode frequency group (three groups), rotational and
+    // translational modes, no mixed ones for equally spaced planets.
+    assert_eq!(count(&modes, ModeClass::RigidBody), 1);
+    assert_eq!(count(&modes, ModeClass::Planet), 3 * 9);
+    assert_eq!(count(&modes, ModeClass::Mixed), 0);
+    assert!(count(&modes, ModeClass::Rotational) > 0 && count(&modes, ModeClass::Translational) > 0);
+}

@@ -47,6 +47,38 @@ pub struct Mode {
     pub energy_shares: [f64; 3],
 }
 
+/// Size from which the modal problem is solved by faer rather than nalgebra:
+/// `cargo bench --bench linear_algebra` measured nalgebra 1.6× faster at
+/// n = 20 (the example, transverse–torsional) and faer 1.8× faster at n = 33,
+/// 3.4× at n = 105 and 6.5× at n = 201 (docs/PERFORMANCE.md).
+pub const FAER_FROM: usize = 30;
+
+/// Eigenvalues and eigenvectors (columns) of a symmetric matrix: nalgebra's
+/// symmetric QR below [`FAER_FROM`] rows, faer's self-adjoint
+/// divide-and-conquer from there on, sequentially. Both agree to a few ulp
+/// in the eigenvalues; within a repeated eigenvalue each returns its own
+/// orthonormal basis of the same eigenspace.
+pub fn symmetric_eigen(a: DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+    let n = a.nrows();
+    if n < FAER_FROM {
+        let eig = SymmetricEigen::new(a);
+        return (eig.eigenvalues.iter().copied().collect(), eig.eigenvectors);
+    }
+    let fa = faer::Mat::<f64>::from_fn(n, n, |i, j| a[(i, j)]);
+    match fa.self_adjoint_eigen(faer::Side::Lower) {
+        Ok(e) => {
+            let (s, u) = (e.S(), e.U());
+            ((0..n).map(|i| s[i]).collect(), DMatrix::from_fn(n, n, |i, j| u[(i, j)]))
+        }
+        // faer reports non-convergence (never seen on a symmetric matrix);
+        // nalgebra's iteration then gives the answer.
+        Err(_) => {
+            let eig = SymmetricEigen::new(a);
+            (eig.eigenvalues.iter().copied().collect(), eig.eigenvectors)
+        }
+    }
+}
+
 /// Natural modes of a lumped set, by increasing frequency.
 pub fn natural_modes(set: &LumpedSet) -> Vec<Mode> {
     let red = set.reduction();
@@ -56,18 +88,18 @@ pub fn natural_modes(set: &LumpedSet) -> Vec<Mode> {
     let inv_sqrt: Vec<f64> = m.iter().map(|x| 1.0 / x.sqrt()).collect();
     let a = DMatrix::from_fn(d, d, |i, j| inv_sqrt[i] * k[(i, j)] * inv_sqrt[j]);
     let a = (&a + a.transpose()) * 0.5;
-    let eig = SymmetricEigen::new(a);
+    let (eigenvalues, eigenvectors) = symmetric_eigen(a);
     let mut order: Vec<usize> = (0..d).collect();
-    order.sort_by(|i, j| eig.eigenvalues[*i].total_cmp(&eig.eigenvalues[*j]));
-    let omega_max = eig.eigenvalues.iter().cloned().fold(0.0, f64::max).max(0.0).sqrt();
+    order.sort_by(|i, j| eigenvalues[*i].total_cmp(&eigenvalues[*j]));
+    let omega_max = eigenvalues.iter().cloned().fold(0.0, f64::max).max(0.0).sqrt();
     let full_mass = set.full_mass();
     let n = set.planet_angles.len();
     let mut modes: Vec<Mode> = order
         .iter()
         .map(|&i| {
-            let lambda = eig.eigenvalues[i].max(0.0);
+            let lambda = eigenvalues[i].max(0.0);
             let omega = lambda.sqrt();
-            let shape: Vec<f64> = (0..d).map(|r| eig.eigenvectors[(r, i)] * inv_sqrt[r]).collect();
+            let shape: Vec<f64> = (0..d).map(|r| eigenvectors[(r, i)] * inv_sqrt[r]).collect();
             // Expand to full coordinates for the energy bookkeeping.
             let mut full = vec![0.0; red.full];
             for (row, entries) in red.t.iter().enumerate() {
