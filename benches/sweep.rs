@@ -40,7 +40,8 @@ fn main() {
     let dof = model.dim();
     println!(
         "sweep benchmark: example-2004, {:?}, {} speeds × 2 directions, one thread",
-        set.dynamics.fidelity, n
+        set.dynamics().fidelity,
+        n
     );
     println!("  model build (contact tables, LTCA for the mean stiffness): {build_time:.3} s");
     println!("  wall time of both sweeps: {wall:.2} s");

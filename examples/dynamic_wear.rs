@@ -27,10 +27,10 @@ fn main() -> anyhow::Result<()> {
     let set = Scene::example_2004().validate()?;
     let wear = WearModel::new(&set, WearSettings::for_set(&set))?;
     let state = wear.unworn();
-    let face_mm = set.sun.face_width.min(set.planet.face_width) * 1e3;
+    let face_mm = set.sun().face_width.min(set.planet().face_width) * 1e3;
     println!(
         "example-2004 ({:?}), unworn (κ = 0), R = {}, k = {:e} m²/N; wear per tooth cycle [pm], mean over the planets",
-        set.dynamics.fidelity,
+        set.dynamics().fidelity,
         wear.settings().positions,
         wear.settings().archard_coefficient
     );

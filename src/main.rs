@@ -521,7 +521,7 @@ fn wear_run(
     }
     println!(
         "wear of {}: {} updates, states and summary.json in {}, {} plot files",
-        set.name,
+        set.name(),
         states.len() - 1,
         out.display(),
         files.len()
@@ -557,7 +557,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Scene { action: SceneAction::Check(SceneCheckArgs { scene }) } => match load_any(&scene)? {
             AnyScene::Gear(s) => {
                 let set = validated(&s)?;
-                println!("scene '{}' is valid: {} planets", set.name, set.planet_angles.len());
+                println!("scene '{}' is valid: {} planets", set.name(), set.planet_angles().len());
             }
             AnyScene::Lumped(s) => {
                 let set = s.validate()?;
@@ -590,7 +590,7 @@ fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: SimulateArgs
     }
     let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
     let mut sim =
-        planetwear::dynamics::simulation::Simulation::new(&set, model, 0.0, set.dynamics.input_speed)?;
+        planetwear::dynamics::simulation::Simulation::new(&set, model, 0.0, set.dynamics().input_speed)?;
     let n = (stop / step).round() as u64;
     for k in 0..n {
         // Communication points on the integer grid t_k = k·step, each
@@ -613,7 +613,7 @@ fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: SimulateArgs
 fn run_command(RunArgs { scene, wear_state, speed, json, plots }: RunArgs) -> Result<()> {
     let set = validated(&load_scene(&scene)?)?;
     let mut model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
-    let rpm = speed.unwrap_or(set.dynamics.input_speed * 30.0 / std::f64::consts::PI);
+    let rpm = speed.unwrap_or(set.dynamics().input_speed * 30.0 / std::f64::consts::PI);
     let ss = steady_state(&mut model, &set, rpm * std::f64::consts::PI / 30.0, None)?;
     if let Some(dir) = &plots {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -622,7 +622,7 @@ fn run_command(RunArgs { scene, wear_state, speed, json, plots }: RunArgs) -> Re
     if json {
         println!("{}", serde_json::to_string_pretty(&ss)?);
     } else {
-        print_steady_state(&ss, set.sun.face_width * 1e3);
+        print_steady_state(&ss, set.sun().face_width * 1e3);
     }
     Ok(())
 }
@@ -659,7 +659,7 @@ fn sweep_command(
     };
     bar.finish_and_clear();
     let wall = started.elapsed().as_secs_f64();
-    let width_mm = set.sun.face_width * 1e3;
+    let width_mm = set.sun().face_width * 1e3;
     let mut files = Vec::new();
     for sw in &results {
         let name = if sw.direction == Direction::Up { "sweep_up.csv" } else { "sweep_down.csv" };
@@ -681,7 +681,7 @@ fn sweep_command(
         .collect();
     let steps: u64 = results.iter().flat_map(|s| &s.points).map(|p| p.stats.steps).sum();
     let summary = serde_json::json!({
-        "scene": set.name,
+        "scene": set.name(),
         "speeds": speeds.len(),
         "directions": dirs,
         "wall_time_s": wall,
@@ -735,7 +735,7 @@ fn wear_compare_command(WearCompareArgs { scene, state, speeds, json }: WearComp
             .with_context(|| format!("--state {}", path.display()))?,
         None => model.unworn(),
     };
-    let face_mm = set.sun.face_width * 1e3;
+    let face_mm = set.sun().face_width * 1e3;
     let mut docs = Vec::new();
     for rpm in speeds {
         if !(rpm.is_finite() && rpm > 0.0) {
@@ -872,7 +872,7 @@ fn validate_command(ValidateArgs { out, quick, scene }: ValidateArgs) -> Result<
         if quick { " --quick" } else { "" },
         if scene == "example-2004" { String::new() } else { format!(" --scene {scene}") }
     );
-    planetwear::report::validation::write_report(&v, &out, set.sun.face_width, &command)?;
+    planetwear::report::validation::write_report(&v, &out, set.sun().face_width, &command)?;
     for r in &v.rows {
         println!(
             "{:<5} {:<40} ours {}",
@@ -953,7 +953,7 @@ fn modes_command(ModesArgs { scene, wear_state, json }: ModesArgs) -> Result<()>
         AnyScene::Gear(s) => {
             let set = validated(&s)?;
             let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
-            (set.name.clone(), model.lumped)
+            (set.name().to_string(), model.lumped)
         }
         AnyScene::Lumped(_) if wear_state.is_some() => {
             bail!("--wear-state: a lumped-parameter scene has no tooth flanks to wear")
@@ -973,8 +973,8 @@ fn ltca_command(LtcaArgs { scene, wear_state, torque, samples, json, out, plots 
         scene.analysis.positions_per_mesh_cycle = n as u32;
     }
     let set = validated(&scene)?;
-    if set.input_torque <= 0.0 {
-        bail!("--torque: the LTCA needs a positive input torque (got {} N·m)", set.input_torque);
+    if set.input_torque() <= 0.0 {
+        bail!("--torque: the LTCA needs a positive input torque (got {} N·m)", set.input_torque());
     }
     let state = match &wear_state {
         Some(path) => Some(
@@ -985,7 +985,7 @@ fn ltca_command(LtcaArgs { scene, wear_state, torque, samples, json, out, plots 
     };
     let model = state.as_ref().map_or_else(|| SetModel::new(&set), |s| s.set_model(&set));
     let kappa = state.as_ref().map(|s| s.kappa);
-    let study = LtcaStudy::run_on(&set, &model, set.analysis.positions_per_mesh_cycle, kappa);
+    let study = LtcaStudy::run_on(&set, &model, set.analysis().positions_per_mesh_cycle, kappa);
     let doc = study.to_json();
     let text = serde_json::to_string_pretty(&doc)?;
     if let Some(path) = &out {

@@ -37,7 +37,7 @@ fn max_wear(c: &CycleWear, flank: Flank) -> f64 {
 
 /// Line load [N/mm] of a force [N] on the example's face width.
 fn per_mm(set: &GearSet, force: f64) -> f64 {
-    force / (set.sun.face_width.min(set.planet.face_width) * 1e3)
+    force / (set.sun().face_width.min(set.planet().face_width) * 1e3)
 }
 
 fn print(c: &SourceComparison) {

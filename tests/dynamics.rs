@@ -200,8 +200,8 @@ fn the_integrator_work_is_pinned() {
     scene.dynamics.integrator = IntegratorKind::GeneralizedAlpha;
     let (set, mut model) = build(&scene);
     let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
-    let cycles = (set.dynamics.run_in_revolutions * 34.0).ceil() as u64 + 68;
-    assert_eq!(r.stats.steps, cycles * set.dynamics.steps_per_mesh_cycle as u64);
+    let cycles = (set.dynamics().run_in_revolutions * 34.0).ceil() as u64 + 68;
+    assert_eq!(r.stats.steps, cycles * set.dynamics().steps_per_mesh_cycle as u64);
     let per_step = r.stats.newton_iterations as f64 / r.stats.steps as f64;
     assert!(per_step < 1.1, "Newton iterations per step {per_step}");
     let _ = model.dim();
@@ -214,7 +214,7 @@ fn the_default_adaptive_work_is_pinned() {
     // when the default was chosen (on the uncalibrated reading); a silent
     // cost regression fails here.
     let (set, mut model) = build(&Scene::example_2004_annulus());
-    assert_eq!(set.dynamics.integrator, IntegratorKind::Rk45);
+    assert_eq!(set.dynamics().integrator, IntegratorKind::Rk45);
     let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
     let near = |x: u64, pinned: u64| (x as f64 / pinned as f64 - 1.0).abs() <= 0.02;
     assert!(near(r.stats.steps, PINNED_STEPS), "steps {}", r.stats.steps);

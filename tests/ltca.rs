@@ -15,7 +15,7 @@ fn example() -> GearSet {
 }
 
 fn per_planet_load(set: &GearSet) -> f64 {
-    set.input_torque / set.sun.base_radius() / set.planet_angles.len() as f64
+    set.input_torque() / set.sun().base_radius() / set.planet_angles().len() as f64
 }
 
 #[test]
@@ -36,7 +36,7 @@ fn pair_loads_add_up_to_the_mesh_load_and_stiffness_is_periodic() {
             assert!((f2 - f).abs() < 1e-9 * w && (k2 - k).abs() < 1e-9 * k, "not periodic at {s}");
         }
         let nominal: Vec<f64> = r.position.iter().map(|s| model.nominal_mesh_stiffness(*s)).collect();
-        let mean = nominal.iter().sum::<f64>() / nominal.len() as f64 / (set.sun.face_width * 1e3) * 1e-6;
+        let mean = nominal.iter().sum::<f64>() / nominal.len() as f64 / (set.sun().face_width * 1e3) * 1e-6;
         eprintln!(
             "{mesh:?}: loaded contact ratio {:.4}, mean nominal mesh stiffness {mean:.3} N/(mm·µm), TE p-p {:.3} µm",
             r.loaded_contact_ratio(),
@@ -54,7 +54,7 @@ fn mean_mesh_stiffness_of_the_example_is_inside_the_iso_band() {
     let set = example();
     let model = MeshModel::new(&set, MeshKind::SunPlanet, &MeshFlanks::default());
     let r = mesh_ltca(&set, &model, per_planet_load(&set), 200);
-    let width_mm = set.sun.face_width * 1e3;
+    let width_mm = set.sun().face_width * 1e3;
     let mean = r.mesh_stiffness_nominal.iter().sum::<f64>() / 200.0 / width_mm * 1e-6;
     // ISO 6336-1 for this pair: x = ±0.295 (the thicknesses with the backlash
     // split equally), h_fP = 1.37 m, ε_α = 1.3436.
@@ -110,7 +110,7 @@ fn planets_share_the_load_equally_on_average_and_loads_add_up() {
     let set = example();
     let model = SetModel::new(&set);
     let r = set_ltca(&set, &model, 100);
-    let total = set.input_torque / set.sun.base_radius();
+    let total = set.input_torque() / set.sun().base_radius();
     for i in 0..r.travel.len() {
         let sum: f64 = r.planet_load.iter().map(|p| p[i]).sum();
         assert!((sum / total - 1.0).abs() < 1e-9, "planet loads add to {sum} of {total}");
@@ -130,7 +130,7 @@ fn in_phase_planets_share_the_load_equally_at_every_position() {
     // sun meshes (and all four ring meshes) are in phase.
     let set = in_phase::in_phase_scene().validate().unwrap_or_else(|e| panic!("{e}"));
     let r = set_ltca(&set, &SetModel::new(&set), 50);
-    let total = set.input_torque / set.sun.base_radius();
+    let total = set.input_torque() / set.sun().base_radius();
     for i in 0..r.travel.len() {
         for p in &r.planet_load {
             assert!((p[i] / (total / 4.0) - 1.0).abs() < 1e-9, "planet load {} at {i}", p[i]);
@@ -190,7 +190,7 @@ mod deviations_and_slices {
         let (f, _) = two.force(s, d, Some(&mut pairs));
         assert!((f / w - 1.0).abs() < 1e-9);
         let loaded = pairs.iter().find(|p| p.force > 0.0).unwrap();
-        let mean_line = loaded.force / set.sun.face_width;
+        let mean_line = loaded.force / set.sun().face_width;
         let expected = 1.0 + two.stiffness.at(loaded.position) * 2e-6 / (2.0 * w);
         // 1e-5: the model interpolates k from its 400-per-pitch table.
         assert!(

@@ -27,7 +27,7 @@ proptest! {
         let m = if ring { rp } else { sp };
         let p = m.path();
         let s = p.start + phase * p.base_pitch;
-        let w = load_per_mm * set.sun.face_width * 1e3;
+        let w = load_per_mm * set.sun().face_width * 1e3;
         let d = m.approach_for(s, w);
         let mut pairs = Vec::new();
         let (f, k) = m.force(s, d, Some(&mut pairs));

@@ -53,7 +53,7 @@ fn the_fmu_window_converges_to_the_order_tracked_harmonics_at_second_order() {
     let exact = &reference.windows[0];
     // The mean mesh force is the static load: 750 N·m over 4 planets at the
     // sun's base radius.
-    let f0 = 750.0 / (4.0 * set.sun.base_radius());
+    let f0 = 750.0 / (4.0 * set.sun().base_radius());
     assert!((exact.sun.mean / f0 - 1.0).abs() < 2e-3, "{} vs {f0}", exact.sun.mean);
     let errors: Vec<f64> = [240, 480, 960].iter().map(|s| window_error(exact, &fmu_window(*s))).collect();
     let shown: Vec<String> = errors.iter().map(|e| format!("{e:.2e}")).collect();

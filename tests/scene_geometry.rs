@@ -19,7 +19,7 @@ fn sun_pitch_point_roll_angle_is_22_34_deg() {
 #[test]
 fn base_pitch_is_4_3905_mm() {
     let set = example();
-    for g in [&set.sun, &set.planet, &set.ring] {
+    for g in [&set.sun(), &set.planet(), &set.ring()] {
         assert!((g.base_pitch() * 1e3 - 4.3905).abs() < 5e-5, "{}", g.base_pitch());
     }
 }
@@ -27,7 +27,7 @@ fn base_pitch_is_4_3905_mm() {
 #[test]
 fn base_radii_match_model_md() {
     let set = example();
-    for (g, rb) in [(&set.sun, 23.758), (&set.planet, 12.578), (&set.ring, 48.914)] {
+    for (g, rb) in [(&set.sun(), 23.758), (&set.planet(), 12.578), (&set.ring(), 48.914)] {
         assert!((g.base_radius() * 1e3 - rb).abs() < 5e-4, "{} vs {rb}", g.base_radius() * 1e3);
     }
 }

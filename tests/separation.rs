@@ -44,7 +44,7 @@ fn perfect_involutes_touch_along_the_whole_path_and_back_flanks_sit_one_backlash
 #[test]
 fn fillet_joins_the_involute_at_the_form_radius() {
     let set = example();
-    for g in [&set.sun, &set.planet, &set.ring] {
+    for g in [&set.sun(), &set.planet(), &set.ring()] {
         let o = FlankOutline::new(g, &ProfileDeviation::none());
         eprintln!(
             "form radius {:.5} mm (analytic {:.5}), root half angle {:.5}",

@@ -22,7 +22,7 @@ fn setup(fidelity: Fidelity) -> (GearSet, PlanetaryDynamics) {
 }
 
 fn nominal_step(model: &PlanetaryDynamics, set: &GearSet) -> f64 {
-    1.0 / (model.mesh_frequency_per_input_speed * OMEGA * set.dynamics.steps_per_mesh_cycle as f64)
+    1.0 / (model.mesh_frequency_per_input_speed * OMEGA * set.dynamics().steps_per_mesh_cycle as f64)
 }
 
 /// Generalized-α takes the same internal steps whatever the communication
@@ -265,7 +265,7 @@ fn a_speed_step_moves_the_rigid_body_speed_and_keeps_the_elastic_state() {
     // Deflections unchanged; the speeds moved by the rigid-body pattern (Willis).
     assert_eq!(before.q, after.q);
     assert!((sim.speed(Member::Sun) - ws - OMEGA).abs() < 1e-9 * OMEGA, "sun {}", sim.speed(Member::Sun));
-    let ratio = -f64::from(set.sun.teeth) / f64::from(set.ring.teeth);
+    let ratio = -f64::from(set.sun().teeth) / f64::from(set.ring().teeth);
     assert!((sim.speed(Member::Ring) - wr - ratio * OMEGA).abs() < 1e-9 * OMEGA);
     for (p, te0) in te.iter().enumerate() {
         assert_eq!(sim.transmission_error(p, MeshKind::SunPlanet), *te0);
@@ -314,7 +314,7 @@ fn a_snapshot_after_speed_steps_continues_bit_identically() {
 #[test]
 fn a_torque_change_continues_as_a_restart_with_the_new_torques() {
     let (set, model) = speed_steps_setup();
-    assert_eq!(set.dynamics.integrator, planetwear::scene::IntegratorKind::Rk45);
+    assert_eq!(set.dynamics().integrator, planetwear::scene::IntegratorKind::Rk45);
     let mut a = Simulation::new(&set, model.clone(), 0.0, OMEGA).unwrap();
     let h = 1e-4;
     for _ in 0..10 {
@@ -339,7 +339,7 @@ fn a_torque_change_continues_as_a_restart_with_the_new_torques() {
 #[test]
 fn a_run_away_coupling_ends_in_a_refused_step_not_a_hang() {
     let (set, model) = setup(Fidelity::TransverseTorsional);
-    assert_eq!(set.dynamics.integrator, IntegratorKind::Rk45);
+    assert_eq!(set.dynamics().integrator, IntegratorKind::Rk45);
     let [t_sun, t_ring, t_carrier] = set.balanced_torques();
     let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
     let h = 1e-4;

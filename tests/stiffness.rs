@@ -32,7 +32,7 @@ fn pair_stiffness_of_the_example_lies_in_the_iso_band() {
     for mesh in MeshKind::ALL {
         let k = PairStiffness::new(&set, mesh);
         let p = &k.path;
-        let width_mm = set.sun.face_width * 1e3;
+        let width_mm = set.sun().face_width * 1e3;
         let mut max: f64 = 0.0;
         for i in 0..=100 {
             let s = p.start + (p.end - p.start) * i as f64 / 100.0;

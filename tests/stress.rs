@@ -101,7 +101,7 @@ fn reversed_torque_loads_the_back_flanks_and_mirrors_the_mean_load() {
     let (set, mut model) = build(&s);
     let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
     assert!(finite(&r));
-    let f = 750.0 / (4.0 * set.sun.base_radius());
+    let f = 750.0 / (4.0 * set.sun().base_radius());
     for m in &r.meshes {
         assert!((m.harmonics.mean / -f - 1.0).abs() < 0.01, "mean {} against {}", m.harmonics.mean, -f);
     }
@@ -238,11 +238,11 @@ fn undamped_default_run(samples: u64, checkpoints: &[u64]) -> Vec<(f64, f64)> {
     s.dynamics.mesh_damping_ratio = 0.0;
     s.supports.bearing_damping_ratio = 0.0;
     let (set, mut model) = build(&s);
-    assert_eq!(set.dynamics.integrator, IntegratorKind::Rk45);
+    assert_eq!(set.dynamics().integrator, IntegratorKind::Rk45);
     let omega = 3000.0 * RPM;
     let start = static_state(&model, omega);
     let period = 1.0 / (model.mesh_frequency_per_input_speed * omega);
-    let rtol = set.dynamics.relative_tolerance;
+    let rtol = set.dynamics().relative_tolerance;
     let settings = Rk45Settings {
         rtol,
         atol_q: rtol * 1e-6,
@@ -344,7 +344,7 @@ fn a_step_in_input_torque_settles_to_the_new_load() {
 }
 
 fn sim_mesh_frequency(set: &GearSet, omega: f64) -> f64 {
-    f64::from(set.sun.teeth) * omega / (2.0 * std::f64::consts::PI)
+    f64::from(set.sun().teeth) * omega / (2.0 * std::f64::consts::PI)
 }
 
 #[test]
@@ -355,10 +355,10 @@ fn fifty_micrometres_of_wear_and_pairs_that_never_touch() {
     let (set0, _) = build(&Scene::example_2004_annulus());
     let sp = SetModel::new(&set0);
     let path = sp.sun_planet.path().clone();
-    let roll_start = path.start / set0.sun.base_radius();
-    let roll_pitch = path.tangency_distance * set0.sun.base_radius()
-        / (set0.sun.base_radius() + set0.planet.base_radius())
-        / set0.sun.base_radius();
+    let roll_start = path.start / set0.sun().base_radius();
+    let roll_pitch = path.tangency_distance * set0.sun().base_radius()
+        / (set0.sun().base_radius() + set0.planet().base_radius())
+        / set0.sun().base_radius();
     let worn = ProfileDeviation::new(vec![roll_start, roll_pitch], vec![50e-6, 0.0]);
     let flanks = MeshFlanks { gear1_drive: worn, ..MeshFlanks::default() };
     let model_set = SetModel::with_flanks(&set0, &[flanks], &[MeshFlanks::default()]);

@@ -344,8 +344,10 @@ fn wear_is_linear_in_the_archard_coefficient_and_in_the_load() {
     // Twice the torque at fixed geometry: in the single-pair zone the pair
     // carries the planet's load exactly, so the wear doubles there (to 2 %:
     // b grows by √2, which moves the trapezoid's error).
-    let mut heavy = set.clone();
-    heavy.input_torque *= 2.0;
+    let mut heavy_scene = in_phase::in_phase_scene();
+    heavy_scene.operation.input_torque_nm *= 2.0;
+    let heavy = heavy_scene.validate().unwrap();
+    assert_eq!(heavy.input_torque(), 2.0 * set.input_torque());
     let (_, _, c2) = cycle_of(&heavy, base);
     let p = PathOfContact::new(&set, MeshKind::SunPlanet);
     // The loaded single-pair zone of both loads: the pair carries the
@@ -435,12 +437,12 @@ fn the_two_flanks_wear_in_the_inverse_ratio_of_their_rolling_speeds() {
             assert!(
                 (h1 / h2 / expected - 1.0).abs() < tolerance,
                 "{}: at s = {:.3} mm Δh1/Δh2 = {} vs v2/v1 = {expected}",
-                set.name,
+                set.name(),
                 s * 1e3,
                 h1 / h2
             );
         }
-        assert!(checked >= 8, "{}: {checked} contact points checked", set.name);
+        assert!(checked >= 8, "{}: {checked} contact points checked", set.name());
     }
 }
 

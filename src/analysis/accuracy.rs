@@ -54,6 +54,7 @@ use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics, SpectrumError};
 use crate::model::gear::{GearSet, IntegratorKind};
 use crate::model::lumped::Fidelity;
+use crate::scene::SceneError;
 
 /// Number of mesh harmonics in the error measure.
 pub const HARMONICS: usize = 6;
@@ -61,6 +62,14 @@ pub const HARMONICS: usize = 6;
 /// Errors of a work-precision computation.
 #[derive(Debug, thiserror::Error)]
 pub enum AccuracyError {
+    /// A method's setting breaks the scene's rules for run settings.
+    #[error("{method}: {source}")]
+    Settings {
+        /// The method and setting.
+        method: String,
+        /// The rules it breaks.
+        source: SceneError,
+    },
     /// An integrator failed.
     #[error("{method} at {speed_rpm} rpm: {source}")]
     Integration {
@@ -208,21 +217,20 @@ impl Method {
     }
 
     /// The gear set with this method as its integrator setting (the rest of
-    /// the dynamics settings unchanged).
-    pub fn apply(&self, set: &GearSet) -> GearSet {
-        let mut s = set.clone();
-        match *self {
+    /// the dynamics settings unchanged); a setting outside the scene's rules
+    /// is refused.
+    pub fn apply(&self, set: &GearSet) -> Result<GearSet, SceneError> {
+        set.with_run_settings(|d| match *self {
             Method::GeneralizedAlpha { rho_infinity, steps_per_mesh_cycle } => {
-                s.dynamics.integrator = IntegratorKind::GeneralizedAlpha;
-                s.dynamics.rho_infinity = rho_infinity;
-                s.dynamics.steps_per_mesh_cycle = steps_per_mesh_cycle as usize;
+                d.integrator = IntegratorKind::GeneralizedAlpha;
+                d.rho_infinity = rho_infinity;
+                d.steps_per_mesh_cycle = steps_per_mesh_cycle as usize;
             }
             Method::Rk45 { relative_tolerance } => {
-                s.dynamics.integrator = IntegratorKind::Rk45;
-                s.dynamics.relative_tolerance = relative_tolerance;
+                d.integrator = IntegratorKind::Rk45;
+                d.relative_tolerance = relative_tolerance;
             }
-        }
-        s
+        })
     }
 }
 
@@ -552,8 +560,9 @@ pub fn measure(
     protocol.check()?;
     check_speed(speed_rpm)?;
     let period = mesh_period(model, speed_rpm);
-    let configured = method.apply(set);
     let label = method.label();
+    let configured =
+        method.apply(set).map_err(|source| AccuracyError::Settings { method: label.clone(), source })?;
     let err = |source| AccuracyError::Integration { method: label.clone(), speed_rpm, source };
     let steps = match method {
         Method::GeneralizedAlpha { steps_per_mesh_cycle, .. } => (*steps_per_mesh_cycle).max(1),
@@ -906,7 +915,7 @@ pub fn study_point(
     Ok(PointResult {
         name: point.name.clone(),
         description: point.description.clone(),
-        fidelity: point.set.dynamics.fidelity,
+        fidelity: point.set.dynamics().fidelity,
         speed_rpm: speed,
         mesh_frequency: 1.0 / period,
         dof: model.dim(),

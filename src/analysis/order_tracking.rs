@@ -80,10 +80,10 @@ pub fn order_tracked_windows(
         value,
         reason: reason.into(),
     };
-    if set.dynamics.integrator != IntegratorKind::Rk45 {
+    if set.dynamics().integrator != IntegratorKind::Rk45 {
         return Err(invalid(
             "integrator",
-            format!("{:?}", set.dynamics.integrator),
+            format!("{:?}", set.dynamics().integrator),
             "order tracking samples the adaptive method's dense output: use rk45",
         ));
     }
@@ -128,7 +128,7 @@ pub fn order_tracked_windows(
     };
     rk.init(model, 0.0, &start.q, &start.v).map_err(err)?;
 
-    let spacing = set.sun.base_pitch() / samples_per_cycle as f64;
+    let spacing = set.sun().base_pitch() / samples_per_cycle as f64;
     let n = model.dim();
     let mut scratch = vec![0.0; n];
     let (mut q, mut v) = (vec![0.0; n], vec![0.0; n]);

@@ -595,10 +595,10 @@ fn hertz_of(model: &MeshModel, set: &GearSet, pos: f64, line_load: f64) -> (f64,
     let p = model.path();
     let s = pos.clamp(p.start, p.end);
     let e_star = contact_modulus(
-        set.material.youngs_modulus,
-        set.material.poisson_ratio,
-        set.material.youngs_modulus,
-        set.material.poisson_ratio,
+        set.material().youngs_modulus,
+        set.material().poisson_ratio,
+        set.material().youngs_modulus,
+        set.material().poisson_ratio,
     );
     let c = line_contact(line_load, p.rho_1(s), p.rho_2(s), p.kind == GearKind::Internal, e_star);
     (c.peak_pressure, c.half_width)
@@ -682,7 +682,7 @@ pub struct SetModel {
 impl SetModel {
     /// Models of both meshes, unworn, with the scene's face slices.
     pub fn new(set: &GearSet) -> Self {
-        let slices = vec![MeshFlanks::default(); set.analysis.face_slices.max(1)];
+        let slices = vec![MeshFlanks::default(); set.analysis().face_slices.max(1)];
         Self::with_flanks(set, &slices, &slices)
     }
 
@@ -696,16 +696,16 @@ impl SetModel {
         // angle, so the ring position is the sun position shifted by
         // (offset_r − offset_s) − j_n,s/2 − r_b,p (π + π/Z_p).
         let off = |m: &MeshModel| m.separation.back_mirror / 2.0 - m.separation.normal_backlash / 2.0;
-        let zp = f64::from(set.planet.teeth);
+        let zp = f64::from(set.planet().teeth);
         let ring_shift = off(&rp)
             - off(&sp)
             - sp.separation.normal_backlash / 2.0
-            - set.planet.base_radius() * (std::f64::consts::PI + std::f64::consts::PI / zp);
+            - set.planet().base_radius() * (std::f64::consts::PI + std::f64::consts::PI / zp);
         Self {
             sun_planet: sp,
             ring_planet: rp,
-            planet_angles: set.planet_angles.clone(),
-            base_radius_sun: set.sun.base_radius(),
+            planet_angles: set.planet_angles().to_vec(),
+            base_radius_sun: set.sun().base_radius(),
             ring_shift,
         }
     }

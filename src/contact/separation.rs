@@ -278,7 +278,7 @@ impl MeshSeparation {
     pub fn new(set: &GearSet, mesh: MeshKind, flanks: &MeshFlanks, step: f64) -> Self {
         let (g1, g2) = set.mesh_gears(mesh);
         let path = PathOfContact::new(set, mesh);
-        let a = set.centre_distance;
+        let a = set.centre_distance();
         let rb1 = g1.base_radius();
         let rb2 = g2.base_radius();
         let jn = set.normal_backlash(mesh);

@@ -226,9 +226,9 @@ impl PairStiffness {
         let width = g1.face_width.min(g2.face_width);
         Self {
             path: PathOfContact::new(set, mesh),
-            gear1: ToothComplianceCurve::new(g1, &set.material),
-            gear2: ToothComplianceCurve::new(g2, &set.material),
-            hertz: hertz_compliance(&set.material, width),
+            gear1: ToothComplianceCurve::new(g1, set.material()),
+            gear2: ToothComplianceCurve::new(g2, set.material()),
+            hertz: hertz_compliance(set.material(), width),
             scale: set.stiffness_scale(mesh),
         }
     }

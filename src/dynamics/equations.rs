@@ -126,8 +126,8 @@ pub enum DynamicsError {
 /// Speeds of sun, ring and carrier [rad/s] for a unit input speed, the held
 /// member at rest (Willis: ω_s − ω_c = R (ω_r − ω_c), R = −Z_r/Z_s).
 pub fn rigid_speeds(set: &GearSet) -> (f64, f64, f64) {
-    let r = -f64::from(set.ring.teeth) / f64::from(set.sun.teeth);
-    match (set.held, set.input) {
+    let r = -f64::from(set.ring().teeth) / f64::from(set.sun().teeth);
+    match (set.held(), set.input()) {
         (Member::Carrier, Member::Sun) => (1.0, 1.0 / r, 0.0),
         (Member::Carrier, Member::Ring) => (r, 1.0, 0.0),
         (Member::Ring, Member::Sun) => (1.0, 0.0, 1.0 / (1.0 - r)),
@@ -141,9 +141,9 @@ pub fn rigid_speeds(set: &GearSet) -> (f64, f64, f64) {
 
 fn lever(set: &GearSet, m: Member) -> f64 {
     match m {
-        Member::Sun => set.sun.base_radius(),
-        Member::Ring => set.ring.base_radius(),
-        Member::Carrier => set.centre_distance,
+        Member::Sun => set.sun().base_radius(),
+        Member::Ring => set.ring().base_radius(),
+        Member::Carrier => set.centre_distance(),
     }
 }
 
@@ -166,9 +166,13 @@ impl PlanetaryDynamics {
         };
         let k_sp = mean_stiffness(&contact.sun_planet);
         let k_rp = mean_stiffness(&contact.ring_planet);
-        let b = &set.bodies;
-        let (rbs, rbr, rbp, a) =
-            (set.sun.base_radius(), set.ring.base_radius(), set.planet.base_radius(), set.centre_distance);
+        let b = &set.bodies();
+        let (rbs, rbr, rbp, a) = (
+            set.sun().base_radius(),
+            set.ring().base_radius(),
+            set.planet().base_radius(),
+            set.centre_distance(),
+        );
         let lumped = LumpedSet {
             central_mass: [b.carrier.mass, b.ring.mass, b.sun.mass],
             central_rotational_mass: [
@@ -178,17 +182,21 @@ impl PlanetaryDynamics {
             ],
             planet_mass: b.planet.mass,
             planet_rotational_mass: b.planet.inertia / (rbp * rbp),
-            central_bearing: [set.supports.carrier_radial, set.supports.ring_radial, set.supports.sun_radial],
+            central_bearing: [
+                set.supports().carrier_radial,
+                set.supports().ring_radial,
+                set.supports().sun_radial,
+            ],
             central_torsional: [0.0; 3],
-            planet_bearing: set.supports.planet_bearing,
-            planet_bearings: set.supports.planet_bearings.clone(),
+            planet_bearing: set.supports().planet_bearing,
+            planet_bearings: set.supports().planet_bearings.clone(),
             sun_mesh: k_sp,
             ring_mesh: k_rp,
             sun_pressure_angle: alpha_s,
             ring_pressure_angle: alpha_r,
-            planet_angles: set.planet_angles.clone(),
-            held: Some(set.held),
-            fidelity: set.dynamics.fidelity,
+            planet_angles: set.planet_angles().to_vec(),
+            held: Some(set.held()),
+            fidelity: set.dynamics().fidelity,
         };
         let reduction = lumped.reduction();
         let mass = lumped.mass();
@@ -197,7 +205,7 @@ impl PlanetaryDynamics {
         // Bearing damping: c = 2ζ√(k m) of each body on its own bearing, with
         // the damping ratio of that member (carrier, ring, sun, planets).
         let mut c_support = DMatrix::zeros(dim, dim);
-        let zeta = set.supports.damping_ratios;
+        let zeta = set.supports().damping_ratios;
         let members = [Member::Carrier, Member::Ring, Member::Sun];
         for (j, m) in members.iter().enumerate() {
             let c = 2.0 * zeta[j] * (lumped.central_bearing[j] * lumped.central_mass[j]).sqrt();
@@ -207,15 +215,15 @@ impl PlanetaryDynamics {
                 }
             }
         }
-        let n = set.planet_angles.len();
-        for (p, psi) in set.planet_angles.iter().enumerate() {
+        let n = set.planet_angles().len();
+        for (p, psi) in set.planet_angles().iter().enumerate() {
             let cp = 2.0 * zeta[3] * (lumped.planet_bearing_of(p) * lumped.planet_mass).sqrt();
             for bv in crate::model::lumped::planet_bearing_vectors(n, p, *psi) {
                 add_outer(&mut c_support, &reduction.reduce_vector(&bv), cp);
             }
         }
         let u = |m: Member| reduction.position(Coordinate::U(m));
-        let zeta_m = set.dynamics.mesh_damping_ratio;
+        let zeta_m = set.dynamics().mesh_damping_ratio;
         let m_rot = |x: f64, y: f64| x * y / (x + y);
         let c_sp = 2.0
             * zeta_m
@@ -225,7 +233,7 @@ impl PlanetaryDynamics {
             * (k_rp * m_rot(lumped.central_rotational_mass[1], lumped.planet_rotational_mass)).sqrt();
         let mut links = Vec::new();
         for (p, (bs, br)) in lumped.mesh_vectors().into_iter().enumerate() {
-            let psi = set.planet_angles[p];
+            let psi = set.planet_angles()[p];
             let nz =
                 |v: &[f64]| v.iter().enumerate().filter(|(_, x)| **x != 0.0).map(|(i, x)| (i, *x)).collect();
             let mut ps = Vec::new();
@@ -262,17 +270,17 @@ impl PlanetaryDynamics {
         // External torques: the set's balance ([`GearSet::balanced_torques`]),
         // applied through `set_torques` once the model stands.
         let torques = set.balanced_torques();
-        let input_torque = match set.input {
+        let input_torque = match set.input() {
             Member::Sun => torques[0],
             Member::Ring => torques[1],
             Member::Carrier => torques[2],
         };
-        let input_index = u(set.input).ok_or_else(|| DynamicsError::InvalidParameter {
+        let input_index = u(set.input()).ok_or_else(|| DynamicsError::InvalidParameter {
             name: "operation.input".into(),
-            value: set.input.name().into(),
+            value: set.input().name().into(),
             reason: "the input member cannot be the held member".into(),
         })?;
-        let input_lever = lever(set, set.input);
+        let input_lever = lever(set, set.input());
         // Rigid-body velocity at unit input speed. Willis: (ω_s − ω_c) =
         // R (ω_r − ω_c) with R = −Z_r/Z_s; the held member at rest.
         let (ws, wr, wc) = rigid_speeds(set);
@@ -286,7 +294,7 @@ impl PlanetaryDynamics {
         if let Some(i) = u(Member::Carrier) {
             rigid[i] = wc * a;
         }
-        for p in 0..set.planet_angles.len() {
+        for p in 0..set.planet_angles().len() {
             // δ_sn = u_s + u_n − η_n cos α_s = 0 with η_n = u_c for rigid motion.
             if let Some(i) = reduction.position(Coordinate::PlanetU(p)) {
                 rigid[i] = -ws * rbs + wc * a * alpha_s.cos();
@@ -296,14 +304,14 @@ impl PlanetaryDynamics {
             }
         }
         let mesh_frequency_per_input_speed =
-            ((ws - wc) * f64::from(set.sun.teeth) / (2.0 * std::f64::consts::PI)).abs();
+            ((ws - wc) * f64::from(set.sun().teeth) / (2.0 * std::f64::consts::PI)).abs();
         let rotations = [(u(Member::Carrier), a), (u(Member::Ring), rbr), (u(Member::Sun), rbs)];
-        let speed_drive = match set.dynamics.drive {
+        let speed_drive = match set.dynamics().drive {
             Drive::Torque | Drive::SpeedSteps => None,
             Drive::Speed => {
                 // Shaft stiffness on u: k_θ / lever²; damping ratio 0.05 of the
                 // input body on the shaft.
-                let k = set.dynamics.shaft_stiffness / (input_lever * input_lever);
+                let k = set.dynamics().shaft_stiffness / (input_lever * input_lever);
                 let c = 2.0 * 0.05 * (k * mass[input_index]).sqrt();
                 Some(SpeedDrive {
                     stiffness: k,

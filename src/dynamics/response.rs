@@ -138,7 +138,7 @@ pub(crate) enum Stepper {
 
 impl Stepper {
     pub(crate) fn new(set: &GearSet, mesh_period: f64) -> Result<Self, SolverError> {
-        let d = &set.dynamics;
+        let d = &set.dynamics();
         Ok(match d.integrator {
             IntegratorKind::GeneralizedAlpha => {
                 let mut s = GeneralizedAlphaSettings::chung_hulbert(d.rho_infinity)?;
@@ -303,7 +303,7 @@ pub fn steady_state_observed(
             reason: "must be non-zero and finite: the steady state is measured over mesh cycles".into(),
         });
     }
-    let d = &set.dynamics;
+    let d = &set.dynamics();
     let period = 1.0 / fm;
     let cycles_per_rev = model.mesh_frequency_per_input_speed * 2.0 * std::f64::consts::PI;
     let run_in_cycles = (d.run_in_revolutions * cycles_per_rev).ceil() as u64;

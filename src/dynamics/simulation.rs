@@ -214,7 +214,7 @@ impl Simulation {
             return Err(invalid("input speed", input_speed, "must be finite and non-zero"));
         }
         let fm = model.mesh_frequency_per_input_speed * input_speed.abs();
-        let nominal_step = 1.0 / (fm * set.dynamics.steps_per_mesh_cycle as f64);
+        let nominal_step = 1.0 / (fm * set.dynamics().steps_per_mesh_cycle as f64);
         let mut model = model;
         let start = static_state(&model, input_speed);
         let torques = set.balanced_torques();
@@ -238,8 +238,8 @@ impl Simulation {
             speed_reference: input_speed,
             window: Window {
                 cycles: 34,
-                samples_per_cycle: set.dynamics.samples_per_mesh_cycle,
-                spacing: set.sun.base_pitch() / set.dynamics.samples_per_mesh_cycle as f64,
+                samples_per_cycle: set.dynamics().samples_per_mesh_cycle,
+                spacing: set.sun().base_pitch() / set.dynamics().samples_per_mesh_cycle as f64,
                 last: None,
                 sun: VecDeque::new(),
                 ring: VecDeque::new(),
@@ -267,7 +267,7 @@ impl Simulation {
         }
         self.window.cycles = cycles;
         self.window.samples_per_cycle = samples_per_cycle;
-        self.window.spacing = self.set.sun.base_pitch() / samples_per_cycle as f64;
+        self.window.spacing = self.set.sun().base_pitch() / samples_per_cycle as f64;
         self.window.sun.clear();
         self.window.ring.clear();
         self.window.collected = 0;
@@ -322,7 +322,7 @@ impl Simulation {
         if omega == self.speed_reference {
             return Ok(());
         }
-        match self.set.dynamics.drive {
+        match self.set.dynamics().drive {
             Drive::Torque => self.speed_reference = omega,
             Drive::Speed => {
                 self.speed_reference = omega;
@@ -372,7 +372,7 @@ impl Simulation {
         if !(fm.is_finite() && fm > 0.0) {
             return Ok(None);
         }
-        self.nominal_step = 1.0 / (fm * self.set.dynamics.steps_per_mesh_cycle as f64);
+        self.nominal_step = 1.0 / (fm * self.set.dynamics().steps_per_mesh_cycle as f64);
         let t = self.time;
         Stepper::new(&self.set, 1.0 / fm)
             .map(Some)
@@ -421,7 +421,7 @@ impl Simulation {
         let budget = WORK_BASE + WORK_PER_INTERNAL_STEP * steps;
         let nominal_speed = 1.0
             / (self.nominal_step
-                * self.set.dynamics.steps_per_mesh_cycle as f64
+                * self.set.dynamics().steps_per_mesh_cycle as f64
                 * self.model.mesh_frequency_per_input_speed);
         let work_start = match &self.stepper {
             Stepper::Rk(r) => r.stats().rhs_evaluations,
@@ -510,7 +510,7 @@ impl Simulation {
         let (q, v) = self.stepper.state();
         match self.model.shaft_torque(self.time, q, v) {
             Some(t) => t,
-            None => match self.set.input {
+            None => match self.set.input() {
                 Member::Sun => self.torques[0],
                 Member::Ring => self.torques[1],
                 Member::Carrier => self.torques[2],
@@ -534,8 +534,8 @@ impl Simulation {
         let Some(state) = self.mesh_state(0, mesh) else { return 0.0 };
         let model = self.model.mesh_model(mesh);
         let teeth = match mesh {
-            MeshKind::SunPlanet => self.set.sun.teeth,
-            MeshKind::RingPlanet => self.set.planet.teeth,
+            MeshKind::SunPlanet => self.set.sun().teeth,
+            MeshKind::RingPlanet => self.set.planet().teeth,
         };
         let period = f64::from(teeth) * model.path().base_pitch;
         let start = model.separation.drive.start;
@@ -689,7 +689,7 @@ impl Simulation {
         self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
         self.speed_reference = s.speed_reference;
         self.model.set_drive_state(&s.drive);
-        if self.set.dynamics.drive != Drive::Torque {
+        if self.set.dynamics().drive != Drive::Torque {
             // The internal step follows the reference (see `set_speed_reference`).
             if let Some(stepper) = self.retuned_stepper(s.speed_reference)? {
                 self.stepper = stepper;

@@ -407,10 +407,10 @@ impl Instance {
         let set = scene
             .validate()
             .map_err(|e| Refusal::error(format!("the parameters describe an invalid gear set: {e}")))?;
-        if set.planet_angles.len() > 8 {
+        if set.planet_angles().len() > 8 {
             return Err(Refusal::error(format!(
                 "planets = {}: this FMU has outputs for at most 8 planets",
-                set.planet_angles.len()
+                set.planet_angles().len()
             )));
         }
         let model = PlanetaryDynamics::new(&set, self.contact_model(&set)?)
@@ -419,7 +419,7 @@ impl Instance {
         let mut sim = Simulation::new(&set, model, self.start_time, speed)
             .map_err(|e| Refusal::error(format!("initialSpeed: {e}")))?;
         let cycles = usize::try_from(self.int(vr::HARMONIC_WINDOW_CYCLES)).unwrap_or(0);
-        sim.set_window(cycles, set.dynamics.samples_per_mesh_cycle)
+        sim.set_window(cycles, set.dynamics().samples_per_mesh_cycle)
             .map_err(|e| Refusal::error(e.to_string()))?;
         self.sim = Some(sim);
         self.built_from = self.build_key();
@@ -1058,11 +1058,11 @@ mod tests {
         let (a, b) = (scene.validate().unwrap(), example.validate().unwrap());
         // Everything but the last digit of the angles written to 15 digits.
         let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * y.abs().max(1e-300);
-        assert_eq!(format!("{:?}", a.bodies), format!("{:?}", b.bodies));
-        assert_eq!(format!("{:?}", a.supports), format!("{:?}", b.supports));
-        assert_eq!(a.dynamics.mesh_damping_ratio, b.dynamics.mesh_damping_ratio);
-        assert_eq!((a.held, a.input, a.input_torque), (b.held, b.input, b.input_torque));
-        for (x, y) in [(&a.sun, &b.sun), (&a.planet, &b.planet), (&a.ring, &b.ring)] {
+        assert_eq!(format!("{:?}", a.bodies()), format!("{:?}", b.bodies()));
+        assert_eq!(format!("{:?}", a.supports()), format!("{:?}", b.supports()));
+        assert_eq!(a.dynamics().mesh_damping_ratio, b.dynamics().mesh_damping_ratio);
+        assert_eq!((a.held(), a.input(), a.input_torque()), (b.held(), b.input(), b.input_torque()));
+        for (x, y) in [(&a.sun(), &b.sun()), (&a.planet(), &b.planet()), (&a.ring(), &b.ring())] {
             assert!(close(x.pressure_angle, y.pressure_angle) && close(x.tooth_thickness, y.tooth_thickness));
             match (x.chamfer, y.chamfer) {
                 (Some(c), Some(d)) => {

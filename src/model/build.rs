@@ -394,36 +394,29 @@ fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         c.in_range(name, v, 0.1, 10.0, "a correction factor on the energy method's pair stiffness");
     }
     let d = &scene.dynamics;
-    if !(d.mesh_damping_ratio.is_finite() && (0.0..1.0).contains(&d.mesh_damping_ratio)) {
-        c.fail("dynamics.mesh_damping_ratio", d.mesh_damping_ratio, "must be at least 0 and below 1");
-    }
-    if !d.input_speed_rpm.is_finite() || d.input_speed_rpm.abs() > 1.0e6 {
+    if !d.input_speed_rpm.is_finite() || d.input_speed_rpm.abs() > MAX_INPUT_SPEED_RPM {
         c.fail(
             "dynamics.input_speed_rpm",
             d.input_speed_rpm,
             "must be a finite speed below 1e6 rpm in magnitude",
         );
     }
-    c.positive("dynamics.shaft_stiffness_nm_per_rad", d.shaft_stiffness_nm_per_rad);
-    if !(d.rho_infinity.is_finite() && (0.0..=1.0).contains(&d.rho_infinity)) {
-        c.fail("dynamics.rho_infinity", d.rho_infinity, "must lie between 0 and 1 (spectral radius)");
-    }
-    if !(4..=100_000).contains(&d.steps_per_mesh_cycle) {
-        c.fail("dynamics.steps_per_mesh_cycle", d.steps_per_mesh_cycle, "must be between 4 and 100000");
-    }
-    if !(d.relative_tolerance.is_finite() && d.relative_tolerance >= 1e-14 && d.relative_tolerance <= 1e-1) {
-        c.fail("dynamics.relative_tolerance", d.relative_tolerance, "must lie between 1e-14 and 0.1");
-    }
-    if !(d.run_in_revolutions.is_finite() && d.run_in_revolutions >= 0.0) {
-        c.fail("dynamics.run_in_revolutions", d.run_in_revolutions, "must be zero or more");
-    }
-    c.positive("dynamics.measured_revolutions", d.measured_revolutions);
-    if !(d.steady_tolerance.is_finite() && (0.0..1.0).contains(&d.steady_tolerance)) {
-        c.fail("dynamics.steady_tolerance", d.steady_tolerance, "must be at least 0 and below 1");
-    }
-    if !(8..=100_000).contains(&d.samples_per_mesh_cycle) {
-        c.fail("dynamics.samples_per_mesh_cycle", d.samples_per_mesh_cycle, "must be between 8 and 100000");
-    }
+    let run = DynamicsSettings {
+        fidelity: d.fidelity,
+        mesh_damping_ratio: d.mesh_damping_ratio,
+        drive: d.drive,
+        input_speed: d.input_speed_rpm * std::f64::consts::PI / 30.0,
+        shaft_stiffness: d.shaft_stiffness_nm_per_rad,
+        integrator: d.integrator,
+        rho_infinity: d.rho_infinity,
+        steps_per_mesh_cycle: d.steps_per_mesh_cycle as usize,
+        relative_tolerance: d.relative_tolerance,
+        run_in_revolutions: d.run_in_revolutions,
+        steady_tolerance: d.steady_tolerance,
+        measured_revolutions: d.measured_revolutions,
+        samples_per_mesh_cycle: d.samples_per_mesh_cycle as usize,
+    };
+    check_run_settings(&run, &mut c);
 
     let op = &scene.operation;
     if op.held == op.input {
@@ -507,21 +500,7 @@ fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
             ring: Body { mass: 0.0, inertia: 0.0 },
             carrier: Body { mass: 0.0, inertia: 0.0 },
         },
-        dynamics: DynamicsSettings {
-            fidelity: d.fidelity,
-            mesh_damping_ratio: d.mesh_damping_ratio,
-            drive: d.drive,
-            input_speed: d.input_speed_rpm * std::f64::consts::PI / 30.0,
-            shaft_stiffness: d.shaft_stiffness_nm_per_rad,
-            integrator: d.integrator,
-            rho_infinity: d.rho_infinity,
-            steps_per_mesh_cycle: d.steps_per_mesh_cycle as usize,
-            relative_tolerance: d.relative_tolerance,
-            run_in_revolutions: d.run_in_revolutions,
-            steady_tolerance: d.steady_tolerance,
-            measured_revolutions: d.measured_revolutions,
-            samples_per_mesh_cycle: d.samples_per_mesh_cycle as usize,
-        },
+        dynamics: run,
     };
     // Bodies from the geometry, then the user's overrides.
     let mut set = set;
@@ -686,5 +665,62 @@ fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         Ok(set)
     } else {
         Err(SceneError::Invalid { problems: c.problems })
+    }
+}
+
+/// Largest input speed a scene may give [rpm].
+const MAX_INPUT_SPEED_RPM: f64 = 1.0e6;
+
+/// The rules of the run settings that hold in SI as in the scene's units
+/// (everything but the input speed, which the scene gives in rpm), each
+/// problem named by its scene key. Shared by [`Scene::validate`] and
+/// [`GearSet::with_run_settings`].
+fn check_run_settings(d: &DynamicsSettings, c: &mut Checker) {
+    if !(d.mesh_damping_ratio.is_finite() && (0.0..1.0).contains(&d.mesh_damping_ratio)) {
+        c.fail("dynamics.mesh_damping_ratio", d.mesh_damping_ratio, "must be at least 0 and below 1");
+    }
+    c.positive("dynamics.shaft_stiffness_nm_per_rad", d.shaft_stiffness);
+    if !(d.rho_infinity.is_finite() && (0.0..=1.0).contains(&d.rho_infinity)) {
+        c.fail("dynamics.rho_infinity", d.rho_infinity, "must lie between 0 and 1 (spectral radius)");
+    }
+    if !(4..=100_000).contains(&d.steps_per_mesh_cycle) {
+        c.fail("dynamics.steps_per_mesh_cycle", d.steps_per_mesh_cycle, "must be between 4 and 100000");
+    }
+    if !(d.relative_tolerance.is_finite() && d.relative_tolerance >= 1e-14 && d.relative_tolerance <= 1e-1) {
+        c.fail("dynamics.relative_tolerance", d.relative_tolerance, "must lie between 1e-14 and 0.1");
+    }
+    if !(d.run_in_revolutions.is_finite() && d.run_in_revolutions >= 0.0) {
+        c.fail("dynamics.run_in_revolutions", d.run_in_revolutions, "must be zero or more");
+    }
+    c.positive("dynamics.measured_revolutions", d.measured_revolutions);
+    if !(d.steady_tolerance.is_finite() && (0.0..1.0).contains(&d.steady_tolerance)) {
+        c.fail("dynamics.steady_tolerance", d.steady_tolerance, "must be at least 0 and below 1");
+    }
+    if !(8..=100_000).contains(&d.samples_per_mesh_cycle) {
+        c.fail("dynamics.samples_per_mesh_cycle", d.samples_per_mesh_cycle, "must be between 8 and 100000");
+    }
+}
+
+impl GearSet {
+    /// The same gear set with other run settings (fidelity, damping, drive,
+    /// integrator, windows): `change` edits a copy of the settings, which
+    /// must pass the scene's rules for them again; the geometry, bodies and
+    /// supports are those already validated.
+    pub fn with_run_settings(
+        &self,
+        change: impl FnOnce(&mut DynamicsSettings),
+    ) -> Result<GearSet, SceneError> {
+        let mut run = self.dynamics;
+        change(&mut run);
+        let mut c = Checker { problems: Vec::new() };
+        let rpm = run.input_speed * 30.0 / PI;
+        if !rpm.is_finite() || rpm.abs() > MAX_INPUT_SPEED_RPM {
+            c.fail("dynamics.input_speed_rpm", rpm, "must be a finite speed below 1e6 rpm in magnitude");
+        }
+        check_run_settings(&run, &mut c);
+        if !c.problems.is_empty() {
+            return Err(SceneError::Invalid { problems: c.problems });
+        }
+        Ok(GearSet { dynamics: run, ..self.clone() })
     }
 }

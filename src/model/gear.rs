@@ -356,39 +356,120 @@ impl MeshKind {
 }
 
 /// A validated spur planetary gear set, SI units.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct GearSet {
     /// Scene name.
-    pub name: String,
+    pub(in crate::model) name: String,
     /// Sun gear.
-    pub sun: ToothForm,
+    pub(in crate::model) sun: ToothForm,
     /// Planet gear (all planets identical).
-    pub planet: ToothForm,
+    pub(in crate::model) planet: ToothForm,
     /// Ring gear.
-    pub ring: ToothForm,
+    pub(in crate::model) ring: ToothForm,
     /// Angular positions of the planet centres \[rad\].
-    pub planet_angles: Vec<f64>,
+    pub(in crate::model) planet_angles: Vec<f64>,
     /// Centre distance of both meshes \[m\].
-    pub centre_distance: f64,
+    pub(in crate::model) centre_distance: f64,
     /// Material.
-    pub material: Material,
+    pub(in crate::model) material: Material,
     /// Member held fixed.
-    pub held: Member,
+    pub(in crate::model) held: Member,
     /// Driving member.
-    pub input: Member,
+    pub(in crate::model) input: Member,
     /// Torque on the driving member [N·m].
-    pub input_torque: f64,
+    pub(in crate::model) input_torque: f64,
     /// Factors on the tooth-pair stiffness of the sun–planet and the
     /// ring–planet mesh [-].
-    pub stiffness_scale: [f64; 2],
+    pub(in crate::model) stiffness_scale: [f64; 2],
     /// Analysis resolution.
-    pub analysis: Analysis,
+    pub(in crate::model) analysis: Analysis,
     /// Bearing supports.
-    pub supports: Supports,
+    pub(in crate::model) supports: Supports,
     /// Masses and inertias of the bodies.
-    pub bodies: Bodies,
+    pub(in crate::model) bodies: Bodies,
     /// Dynamic model and integrator settings.
-    pub dynamics: DynamicsSettings,
+    pub(in crate::model) dynamics: DynamicsSettings,
+}
+
+/// Read access to a validated gear set. The fields are visible to the model
+/// stage alone (where `Scene::validate` builds the set), so a `GearSet`
+/// outside it is always one that passed every rule; a changed set is made by
+/// changing the scene and validating again.
+impl GearSet {
+    /// Scene name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Sun gear.
+    pub fn sun(&self) -> &ToothForm {
+        &self.sun
+    }
+
+    /// Planet gear (all planets identical).
+    pub fn planet(&self) -> &ToothForm {
+        &self.planet
+    }
+
+    /// Ring gear.
+    pub fn ring(&self) -> &ToothForm {
+        &self.ring
+    }
+
+    /// Angular positions of the planet centres \[rad\].
+    pub fn planet_angles(&self) -> &[f64] {
+        &self.planet_angles
+    }
+
+    /// Centre distance of both meshes \[m\].
+    pub fn centre_distance(&self) -> f64 {
+        self.centre_distance
+    }
+
+    /// Material.
+    pub fn material(&self) -> &Material {
+        &self.material
+    }
+
+    /// Member held fixed.
+    pub fn held(&self) -> Member {
+        self.held
+    }
+
+    /// Driving member.
+    pub fn input(&self) -> Member {
+        self.input
+    }
+
+    /// Torque on the driving member [N·m].
+    pub fn input_torque(&self) -> f64 {
+        self.input_torque
+    }
+
+    /// Factors on the tooth-pair stiffness of the sun–planet and the ring–planet mesh [-].
+    pub fn stiffness_scales(&self) -> [f64; 2] {
+        self.stiffness_scale
+    }
+
+    /// Analysis resolution.
+    pub fn analysis(&self) -> &Analysis {
+        &self.analysis
+    }
+
+    /// Bearing supports.
+    pub fn supports(&self) -> &Supports {
+        &self.supports
+    }
+
+    /// Masses and inertias of the bodies.
+    pub fn bodies(&self) -> &Bodies {
+        &self.bodies
+    }
+
+    /// Dynamic model and integrator settings.
+    pub fn dynamics(&self) -> &DynamicsSettings {
+        &self.dynamics
+    }
 }
 
 /// Bearing stiffnesses and damping.

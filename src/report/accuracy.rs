@@ -101,8 +101,8 @@ pub fn operating_points(fidelity: Fidelity) -> Result<Vec<OperatingPoint>, Study
     let mut stiff = base.clone();
     stiff.supports.planet_bearing_n_per_m *= 10.0;
     stiff.supports.sun_radial_n_per_m *= 10.0;
-    stiff.inertia.planet_mass_kg = Some(0.5 * set.bodies.planet.mass);
-    stiff.inertia.planet_inertia_kg_m2 = Some(0.5 * set.bodies.planet.inertia);
+    stiff.inertia.planet_mass_kg = Some(0.5 * set.bodies().planet.mass);
+    stiff.inertia.planet_inertia_kg_m2 = Some(0.5 * set.bodies().planet.inertia);
     points.push(point(
         &format!("stiff_light_{tag}"),
         "planet and sun bearings 10× stiffer, planets of half the mass and inertia, 8000 rpm",

@@ -69,7 +69,7 @@ impl LtcaStudy {
         {
             let r = mesh_ltca(set, m, load, samples);
             let p = m.path();
-            let width = set.sun.face_width.min(set.planet.face_width).min(set.ring.face_width);
+            let width = set.sun().face_width.min(set.planet().face_width).min(set.ring().face_width);
             let iso = iso_for(set, mesh, p.nominal_contact_ratio());
             let singles: Vec<f64> =
                 (0..=200).map(|i| m.stiffness.at(p.start + (p.end - p.start) * i as f64 / 200.0)).collect();
@@ -156,15 +156,15 @@ impl LtcaStudy {
             .collect();
         let w = &self.whole_set;
         json!({
-            "scene": set.name,
+            "scene": set.name(),
             "kappa": self.kappa.unwrap_or(0),
             "units": "SI: m, N, N/m, Pa, rad, N·m",
-            "input_torque": set.input_torque,
-            "face_width": set.sun.face_width,
+            "input_torque": set.input_torque(),
+            "face_width": set.sun().face_width,
             "meshes": meshes,
             "planets": {
                 "model": "torsional statics, central members on their axes, carrier and output held",
-                "angles": set.planet_angles,
+                "angles": set.planet_angles(),
                 "mean_load": w.planet_mean_load,
                 "load_sharing_factor": w.load_sharing_factor,
                 "sun_transmission_error": CycleStats::of(&w.sun_approach),
@@ -177,7 +177,7 @@ impl LtcaStudy {
 
     /// Writes the plots into `dir` and returns the files written.
     pub fn write_plots(&self, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
-        let width_mm = self.set.sun.face_width * 1e3;
+        let width_mm = self.set.sun().face_width * 1e3;
         let deg = |v: &[f64]| v.iter().map(|x| x.to_degrees()).collect::<Vec<_>>();
         let mut files = Vec::new();
         for r in &self.meshes {

@@ -275,7 +275,7 @@ pub fn example_references(
     scene.dynamics.integrator = IntegratorKind::Rk45;
     scene.dynamics.relative_tolerance = rtol;
     let set = scene.validate().map_err(|e| ReferenceError::Setup(e.to_string()))?;
-    let samples = set.dynamics.samples_per_mesh_cycle;
+    let samples = set.dynamics().samples_per_mesh_cycle;
     let allowed_drift = 0.25 * (INTEGRATOR_ERROR + WINDOW_INTERPOLATION_ERROR);
     let computed: Vec<Case> = cases
         .par_iter()
@@ -352,7 +352,7 @@ pub fn example_references(
         format: FORMAT.into(),
         fmu_guid: GUID.into(),
         planetwear_version: env!("CARGO_PKG_VERSION").into(),
-        scene: set.name.clone(),
+        scene: set.name().to_string(),
         protocol: Protocol {
             description: format!(
                 "The FMU with its default parameters (the example-2004 set) and the protocol's and the case's \

@@ -77,7 +77,7 @@ pub fn write_forced_response(
     modes: &[Mode],
     dir: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
-    let width_mm = set.sun.face_width * 1e3;
+    let width_mm = set.sun().face_width * 1e3;
     let mut files = Vec::new();
     let Some(first) = sweeps.iter().find(|s| !s.points.is_empty()) else { return Ok(files) };
     let (lo, hi) = first
@@ -87,7 +87,7 @@ pub fn write_forced_response(
     let fm_per_rpm = first.points[0].mesh_frequency / first.points[0].input_speed_rpm;
     let mut vlines = Vec::new();
     for l in 1..=3u32 {
-        let family = excited_family(l, set.sun.teeth, set.planet_angles.len());
+        let family = excited_family(l, set.sun().teeth, set.planet_angles().len());
         for m in modes.iter().filter(|m| m.class == family) {
             let rpm = m.frequency / (f64::from(l) * fm_per_rpm);
             if rpm >= lo && rpm <= hi && !vlines.iter().any(|(x, _): &(f64, String)| (x - rpm).abs() < 1e-6) {
@@ -139,7 +139,7 @@ pub fn write_forced_response(
 
 /// Time history and order spectrum charts of one steady state.
 pub fn write_steady_state(ss: &SteadyState, set: &GearSet, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
-    let width_mm = set.sun.face_width * 1e3;
+    let width_mm = set.sun().face_width * 1e3;
     let mut files = Vec::new();
     let tag = format!("{:.0}rpm", ss.input_speed_rpm);
     if ss.time.is_empty() {

@@ -62,7 +62,7 @@ pub fn summary(set: &GearSet, states: &[WornState], seconds: &[f64]) -> Value {
         })
         .collect();
     json!({
-        "scene": set.name,
+        "scene": set.name(),
         "pitch_roll_deg": { "sun": pitch, "planet": pitch },
         "states": rows,
     })
@@ -104,7 +104,7 @@ pub fn write_plots(set: &GearSet, states: &[WornState], dir: &Path) -> Result<Ve
             if stem == "sun" || stem == "planet" { vec![(pitch, "pitch point".into())] } else { vec![] };
         files.extend(write_chart(
             &Chart {
-                title: format!("{}: wear depth of the {title}", set.name),
+                title: format!("{}: wear depth of the {title}", set.name()),
                 x_label: "roll angle (deg)".into(),
                 y_label: "wear depth (µm)".into(),
                 series,

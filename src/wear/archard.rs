@@ -209,8 +209,8 @@ impl WearSettings {
     /// (`analysis.profile_points`, `analysis.face_slices`).
     pub fn for_set(set: &GearSet) -> Self {
         Self {
-            profile_points: set.analysis.profile_points,
-            face_slices: set.analysis.face_slices,
+            profile_points: set.analysis().profile_points,
+            face_slices: set.analysis().face_slices,
             ..Self::default()
         }
     }

@@ -173,7 +173,7 @@ pub fn samples_per_cycle(set: &GearSet, positions: usize) -> usize {
         .map(|m| PathOfContact::new(set, *m).involute_contact_ratio())
         .fold(f64::INFINITY, f64::min)
         .max(1.0);
-    set.dynamics.samples_per_mesh_cycle.max((positions as f64 / ratio).ceil() as usize)
+    set.dynamics().samples_per_mesh_cycle.max((positions as f64 / ratio).ceil() as usize)
 }
 /// Runs the dynamic model on `contact` (the contact models of a worn or
 /// unworn set) to steady state at `speed_rpm` \[rpm\] and records each planet's
@@ -188,9 +188,9 @@ pub fn record_pair_loads(
 ) -> Result<(DynamicPairLoads, SetModel), WearError> {
     PressureSource::Dynamic { speed_rpm }.validate()?;
     let failed = |reason: String| WearError::DynamicRun { speed_rpm, reason };
-    let mut run_set = set.clone();
-    run_set.dynamics.samples_per_mesh_cycle = samples_per_cycle(set, positions);
-    let samples = run_set.dynamics.samples_per_mesh_cycle;
+    let samples = samples_per_cycle(set, positions);
+    let run_set =
+        set.with_run_settings(|d| d.samples_per_mesh_cycle = samples).map_err(|e| failed(e.to_string()))?;
     let mut dynamics = PlanetaryDynamics::new(&run_set, contact).map_err(|e| failed(e.to_string()))?;
     let n_mesh = dynamics.mesh_count();
     // Per mesh: the reference position of each phase in the first cycle, and

@@ -131,15 +131,16 @@ impl GearCycles {
 /// teeth, a ring tooth n·M/Z_r planets. Carrier held, sun driven: sun n,
 /// planet Z_s/Z_p, ring n·Z_s/Z_r.
 pub fn cycles_per_input_revolution(set: &GearSet) -> GearCycles {
-    let (zs, zp, zr) = (f64::from(set.sun.teeth), f64::from(set.planet.teeth), f64::from(set.ring.teeth));
-    let n = set.planet_angles.len() as f64;
+    let (zs, zp, zr) =
+        (f64::from(set.sun().teeth), f64::from(set.planet().teeth), f64::from(set.ring().teeth));
+    let n = set.planet_angles().len() as f64;
     // Speed of a member as a linear form in (carrier speed c, relative sun speed u).
     let form = |m: Member| match m {
         Member::Sun => (1.0, 1.0),
         Member::Ring => (1.0, -zs / zr),
         Member::Carrier => (1.0, 0.0),
     };
-    let (h, i) = (form(set.held), form(set.input));
+    let (h, i) = (form(set.held()), form(set.input()));
     // h·(c, u) = 0, i·(c, u) = 1.
     let det = h.0 * i.1 - h.1 * i.0;
     let u = if det == 0.0 { 1.0 } else { h.0 / det };

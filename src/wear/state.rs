@@ -224,25 +224,25 @@ impl GearSetPrint {
     /// The print of a gear set.
     pub fn of(set: &GearSet) -> Self {
         let mut p = BTreeMap::new();
-        form_parameters(&mut p, "sun", &set.sun);
-        form_parameters(&mut p, "planet", &set.planet);
-        form_parameters(&mut p, "ring", &set.ring);
-        p.insert("planets".into(), set.planet_angles.len() as f64);
-        for (i, a) in set.planet_angles.iter().enumerate() {
+        form_parameters(&mut p, "sun", set.sun());
+        form_parameters(&mut p, "planet", set.planet());
+        form_parameters(&mut p, "ring", set.ring());
+        p.insert("planets".into(), set.planet_angles().len() as f64);
+        for (i, a) in set.planet_angles().iter().enumerate() {
             p.insert(format!("planet_angle.{i}"), *a);
         }
-        p.insert("centre_distance".into(), set.centre_distance);
-        p.insert("material.youngs_modulus".into(), set.material.youngs_modulus);
-        p.insert("material.poisson_ratio".into(), set.material.poisson_ratio);
+        p.insert("centre_distance".into(), set.centre_distance());
+        p.insert("material.youngs_modulus".into(), set.material().youngs_modulus);
+        p.insert("material.poisson_ratio".into(), set.material().poisson_ratio);
         // Present only when not 1, so the prints of sets without a correction
         // (all sets before the option existed) are unchanged.
-        for (mesh, scale) in ["sun_planet", "ring_planet"].iter().zip(set.stiffness_scale) {
+        for (mesh, scale) in ["sun_planet", "ring_planet"].iter().zip(set.stiffness_scales()) {
             if scale != 1.0 {
                 p.insert(format!("mesh_stiffness.{mesh}_scale"), scale);
             }
         }
         let fingerprint = Self::fingerprint_of(&p);
-        Self { name: set.name.clone(), fingerprint, parameters: p }
+        Self { name: set.name().to_string(), fingerprint, parameters: p }
     }
 
     /// The fingerprint of a parameter list: FNV-1a 64 over `name=bits;` in

@@ -53,7 +53,7 @@ impl WearModel {
     /// The wear model of a validated gear set with checked settings.
     pub fn new(set: &GearSet, settings: WearSettings) -> Result<Self, WearError> {
         settings.validate()?;
-        let m = &set.material;
+        let m = &set.material();
         Ok(Self {
             set: set.clone(),
             settings,
@@ -165,7 +165,7 @@ impl WearModel {
 
     /// Sun travel \[m\] at which planet `planet`'s pair of `mesh` sits at `s`.
     fn travel(model: &SetModel, set: &GearSet, mesh: MeshKind, planet: usize, s: f64) -> f64 {
-        let own = set.sun.base_radius() * model.planet_angles[planet];
+        let own = set.sun().base_radius() * model.planet_angles[planet];
         match mesh {
             MeshKind::SunPlanet => s + own,
             MeshKind::RingPlanet => s - model.ring_shift + own,

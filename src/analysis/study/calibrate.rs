@@ -282,8 +282,9 @@ impl<'a> Evaluator<'a> {
                 Measure::Frequency { fidelity, class, order } => {
                     let fkey = format!("{fidelity:?}");
                     if !lumped.contains_key(&fkey) {
-                        let mut s = set.clone();
-                        s.dynamics.fidelity = *fidelity;
+                        let s = set
+                            .with_run_settings(|d| d.fidelity = *fidelity)
+                            .map_err(|e| fail(e.to_string()))?;
                         let model =
                             PlanetaryDynamics::new(&s, contact.clone()).map_err(|e| fail(e.to_string()))?;
                         lumped.insert(fkey.clone(), natural_modes(&model.lumped));

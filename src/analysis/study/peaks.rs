@@ -66,7 +66,7 @@ pub fn find_peaks(
         let fm = pts[i].mesh_frequency;
         let mut best: Option<Peak> = None;
         for l in 1..=6u32 {
-            let family = excited_family(l, set.sun.teeth, set.planet_angles.len());
+            let family = excited_family(l, set.sun().teeth, set.planet_angles().len());
             for m in modes.iter().filter(|m| m.class == family) {
                 let mismatch = (f64::from(l) * fm - m.frequency).abs() / m.frequency;
                 if best.as_ref().is_none_or(|b| mismatch < b.mismatch) {

@@ -222,7 +222,7 @@ impl Validation {
 }
 
 fn integrator_words(set: &GearSet) -> String {
-    let d = &set.dynamics;
+    let d = &set.dynamics();
     match d.integrator {
         IntegratorKind::Rk45 => format!(
             "RK 5(4) at relative tolerance {:e}; run-in ≤ {} input revolution, window {} revolutions, {} samples per mesh cycle",
@@ -340,7 +340,7 @@ impl Rows {
 pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, String> {
     let started = Instant::now();
     let set = scene.validate().map_err(|e| e.to_string())?;
-    let width = set.sun.face_width;
+    let width = set.sun().face_width;
     let per_mm = |f: f64| f / (width * 1e3);
     let mut rows = Rows { rows: Vec::new() };
     let integrator = integrator_words(&set);
@@ -349,8 +349,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     let t = Instant::now();
     let contact = SetModel::new(&set);
     let dynamics_of = |fidelity: Fidelity| -> Result<PlanetaryDynamics, String> {
-        let mut s = set.clone();
-        s.dynamics.fidelity = fidelity;
+        let s = set.with_run_settings(|d| d.fidelity = fidelity).map_err(|e| e.to_string())?;
         PlanetaryDynamics::new(&s, contact.clone()).map_err(|e| e.to_string())
     };
     // The torsional model also serves the closed-form planet-mode check.
@@ -371,8 +370,8 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
             let (f, mult) = found.unwrap_or((f64::NAN, 0));
             let expect_mult = if class == ModeClass::Planet {
                 match fid {
-                    Fidelity::Torsional => set.planet_angles.len() - 1,
-                    Fidelity::TransverseTorsional => set.planet_angles.len().saturating_sub(3).max(1),
+                    Fidelity::Torsional => set.planet_angles().len() - 1,
+                    Fidelity::TransverseTorsional => set.planet_angles().len().saturating_sub(3).max(1),
                 }
             } else {
                 1
@@ -388,7 +387,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
                 sec,
                 &format!("{tag} model: {name}"),
                 if class == ModeClass::Planet {
-                    format!("{study:.0} Hz (×{})", set.planet_angles.len() - 1)
+                    format!("{study:.0} Hz (×{})", set.planet_angles().len() - 1)
                 } else {
                     format!("{study:.0} Hz")
                 },
@@ -414,7 +413,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
         .map(|(f, _)| format!("{f:.0}"))
         .collect();
     let translational_excited = (1..=6)
-        .any(|l| excited_family(l, set.sun.teeth, set.planet_angles.len()) == ModeClass::Translational);
+        .any(|l| excited_family(l, set.sun().teeth, set.planet_angles().len()) == ModeClass::Translational);
     rows.push(
         "frequency-tt-no-new-low-mode",
         sec,
@@ -683,12 +682,12 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     peaks0.extend(prominent_peaks(&xs, &ys(&curves[1]), 0.1));
     peaks0.sort_by(|a, b| a.0.total_cmp(&b.0));
     peaks0.dedup_by(|a, b| (a.0 - b.0).abs() <= 2.0 * step);
-    let fm_per_rpm = f64::from(set.sun.teeth) / 60.0;
+    let fm_per_rpm = f64::from(set.sun().teeth) / 60.0;
     let explain = |rpm: f64| -> String {
         let fm = fm_per_rpm * rpm;
         let mut best = (f64::INFINITY, 0u32, 0.0, ModeClass::Mixed);
         for l in 1..=6u32 {
-            let family = excited_family(l, set.sun.teeth, set.planet_angles.len());
+            let family = excited_family(l, set.sun().teeth, set.planet_angles().len());
             for m in tt.iter().filter(|m| m.class == family) {
                 let mis = (f64::from(l) * fm - m.frequency).abs() / m.frequency;
                 if mis < best.0 {
@@ -815,15 +814,18 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
         "> 0 on the branch of the jump",
         sep > 0.0,
         &sweep_method,
-        format!("samples of {} per mesh cycle: 1/{} of the cycle", set.dynamics.samples_per_mesh_cycle, set.dynamics.samples_per_mesh_cycle),
+        format!("samples of {} per mesh cycle: 1/{} of the cycle", set.dynamics().samples_per_mesh_cycle, set.dynamics().samples_per_mesh_cycle),
         t_sweeps,
     );
 
     // Off-resonance loads at κ = 0 and κ, with a reference at a tight tolerance.
     let t = Instant::now();
-    let mut tight = set.clone();
-    tight.dynamics.integrator = IntegratorKind::Rk45;
-    tight.dynamics.relative_tolerance = plan.reference_tolerance;
+    let tight = set
+        .with_run_settings(|d| {
+            d.integrator = IntegratorKind::Rk45;
+            d.relative_tolerance = plan.reference_tolerance;
+        })
+        .map_err(|e| e.to_string())?;
     let mut figures = Vec::new();
     for rpm in OFF_RESONANCE {
         let omega = rpm * std::f64::consts::PI / 30.0;
@@ -915,7 +917,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     let mut m = model0.clone();
     let ss =
         steady_state(&mut m, &set, 3000.0 * std::f64::consts::PI / 30.0, None).map_err(|e| e.to_string())?;
-    let n = set.planet_angles.len();
+    let n = set.planet_angles().len();
     let phases: Vec<Vec<f64>> = (0..n)
         .map(|p| mesh_phases(&ss.mesh_force[2 * p], ss.cycles, 6).map_err(|e| e.to_string()))
         .collect::<Result<_, _>>()?;
@@ -934,8 +936,8 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
                     * 2.0
                     * std::f64::consts::PI
                     * l as f64
-                    * f64::from(set.sun.teeth)
-                    * set.planet_angles[p]
+                    * f64::from(set.sun().teeth)
+                    * set.planet_angles()[p]
                     / (2.0 * std::f64::consts::PI);
                 let measured = phases[p][l - 1] - phases[0][l - 1];
                 worst[k] = worst[k].max(wrap(measured - rule).abs());
@@ -944,7 +946,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     }
     let worst = worst[0].min(worst[1]).to_degrees();
     let in_phase: Vec<String> = (1..=6u32)
-        .filter(|l| excited_family(*l, set.sun.teeth, n) == ModeClass::Rotational)
+        .filter(|l| excited_family(*l, set.sun().teeth, n) == ModeClass::Rotational)
         .map(|l| l.to_string())
         .collect();
     rows.push(
@@ -980,7 +982,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
         })
         .collect();
     Ok(Validation {
-        scene: set.name.clone(),
+        scene: set.name().to_string(),
         plan: plan.clone(),
         integrator,
         rows: rows.rows,
@@ -1112,10 +1114,10 @@ fn benchmark_rows(
     // Archard over one passage of a steady Hertz band (Flodin & Andersson 1997):
     // Δh_i = k w |v_i − v_j| / v_i and the sliding distance 2b |1 − v_j / v_i|.
     let e_star = contact_modulus(
-        set.material.youngs_modulus,
-        set.material.poisson_ratio,
-        set.material.youngs_modulus,
-        set.material.poisson_ratio,
+        set.material().youngs_modulus,
+        set.material().poisson_ratio,
+        set.material().youngs_modulus,
+        set.material().poisson_ratio,
     );
     let w = 263.07e3; // N/m
     let c = line_contact(w, 0.008, 0.006, false, e_star);

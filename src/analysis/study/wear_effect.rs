@@ -327,7 +327,7 @@ pub fn run_variant(v: &Variant, kappa: u32, speeds_rpm: &[f64]) -> Result<Varian
     let model = WearModel::new(&set, settings).map_err(|e| format!("{}: {e}", v.key))?;
     let unworn = model.unworn();
     let worn = model.run_to_kappa(&unworn, kappa).map_err(|e| format!("{}: {e}", v.key))?;
-    let samples = set.analysis.positions_per_mesh_cycle;
+    let samples = set.analysis().positions_per_mesh_cycle;
     let statics = [StaticFigures::of(&unworn, &set, samples), StaticFigures::of(&worn, &set, samples)];
     let loads = [mesh_loads(&set, &unworn, speeds_rpm)?, mesh_loads(&set, &worn, speeds_rpm)?];
     Ok(VariantResult {
@@ -338,7 +338,7 @@ pub fn run_variant(v: &Variant, kappa: u32, speeds_rpm: &[f64]) -> Result<Varian
         planet: WearShape::of(&worn, &set, Flank::PlanetSunSide),
         statics,
         loads,
-        face_width: set.sun.face_width,
+        face_width: set.sun().face_width,
         seconds: started.elapsed().as_secs_f64(),
     })
 }
