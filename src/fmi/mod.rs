@@ -2,6 +2,7 @@
 //! build.rs from `modelDescription/variables.toml` (with modelDescription.xml
 //! and the GUID), the instance in safe Rust, and the exported functions.
 
+pub mod core;
 pub mod export;
 pub mod guid;
 pub mod instance;
