@@ -1,5 +1,5 @@
-//! The exported FMI 2.0 co-simulation functions: the C boundary, and with
-//! the logger callback the only `unsafe` code of the project.
+//! The exported FMI 2.0 co-simulation functions: the C boundary, and the
+//! only `unsafe` code of the project.
 //!
 //! Every `fmi2*` function is `unsafe`: it relies on the importer keeping the
 //! FMI 2.0 contract, which each one states under "Safety" — a component comes
@@ -9,9 +9,9 @@
 //! from this FMU and is not used after it is freed; no two calls run on one
 //! instance at once. Its body is one call: the raw arguments are turned into
 //! Rust values by the `unsafe fn`s below (`component`, `owned`, `slice`,
-//! `slice_mut`, `buffer`, `c_str`, `c_strs`, `out`, `saved_state`, `state_handle`,
-//! `logger`), each with the part of the contract it needs, and handed to the
-//! safe code of [`super::core`]. Every call on a component goes through
+//! `slice_mut`, `buffer`, `c_str`, `c_strs`, `out`, `saved_state`,
+//! `state_handle`, `logger`), each with the part of the contract it needs,
+//! and handed to the safe code of [`super::core`]. Every call on a component goes through
 //! `guard`: a NULL component is fmi2Error, anything else is
 //! [`Component::call`] (the call-order table, panics caught as fmi2Fatal,
 //! refusals mapped to their status and logged through the importer's
@@ -150,11 +150,11 @@ unsafe fn c_str(p: fmi2String) -> Option<String> {
     Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
 }
 
-/// An array of `n` C strings as Rust text, as [`slice`] and [`c_str`].
+/// An array of `n` C strings as Rust text, as [`slice()`] and [`c_str`].
 ///
 /// # Safety
 ///
-/// That of [`slice`] for the array, and of [`c_str`] for each element.
+/// That of [`slice()`] for the array, and of [`c_str`] for each element.
 unsafe fn c_strs(ptr: *const fmi2String, n: usize, what: &str) -> Result<Vec<Option<String>>, Refusal> {
     // SAFETY: the contract of `c_strs` covers the array.
     let strings = unsafe { slice(ptr, n, what) }?;
