@@ -18,32 +18,39 @@ use planetwear::scene::{Fidelity, IntegratorKind, Scene};
 
 fn fmu_run(fidelity: i32, integrator: i32, h: f64, span: f64) -> f64 {
     let guid = CString::new(GUID).expect("no NUL");
-    let c = fmi2Instantiate(
-        c"bench".as_ptr(),
-        fmi2Type_fmi2CoSimulation,
-        guid.as_ptr(),
-        std::ptr::null(),
-        std::ptr::null(),
-        0,
-        0,
-    );
+    // SAFETY: the strings are NUL-terminated and outlive the call; no callbacks.
+    let c = unsafe {
+        fmi2Instantiate(
+            c"bench".as_ptr(),
+            fmi2Type_fmi2CoSimulation,
+            guid.as_ptr(),
+            std::ptr::null(),
+            std::ptr::null(),
+            0,
+            0,
+        )
+    };
     assert!(!c.is_null());
-    assert_eq!(fmi2SetInteger(c, &vr::FIDELITY, 1, &fidelity), fmi2Status_fmi2OK);
-    assert_eq!(fmi2SetInteger(c, &vr::INTEGRATOR, 1, &integrator), fmi2Status_fmi2OK);
-    assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2Status_fmi2OK);
-    assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
-    assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
     let n = (span / h).round() as u64;
     let refs = [vr::PLANET_1_SUN_MESH_FORCE, vr::PLANET_1_RING_MESH_FORCE, vr::SUN_SPEED];
     let mut out = [0.0; 3];
-    let start = Instant::now();
-    for k in 0..n {
-        assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
-        assert_eq!(fmi2GetReal(c, refs.as_ptr(), 3, out.as_mut_ptr()), fmi2Status_fmi2OK);
+    // SAFETY: `c` is live until fmi2FreeInstance, used by this thread only;
+    // the value-reference and value arrays are locals of the lengths passed.
+    unsafe {
+        assert_eq!(fmi2SetInteger(c, &vr::FIDELITY, 1, &fidelity), fmi2Status_fmi2OK);
+        assert_eq!(fmi2SetInteger(c, &vr::INTEGRATOR, 1, &integrator), fmi2Status_fmi2OK);
+        assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2Status_fmi2OK);
+        assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+        let start = Instant::now();
+        for k in 0..n {
+            assert_eq!(fmi2DoStep(c, k as f64 * h, h, 1), fmi2Status_fmi2OK);
+            assert_eq!(fmi2GetReal(c, refs.as_ptr(), 3, out.as_mut_ptr()), fmi2Status_fmi2OK);
+        }
+        let wall = start.elapsed().as_secs_f64();
+        fmi2FreeInstance(c);
+        wall / n as f64
     }
-    let wall = start.elapsed().as_secs_f64();
-    fmi2FreeInstance(c);
-    wall / n as f64
 }
 
 fn native_run(fidelity: Fidelity, integrator: IntegratorKind, h: f64, span: f64) -> f64 {

@@ -222,7 +222,6 @@ fn guid() -> String {
 }
 
 #[test]
-#[allow(unused_unsafe)]
 fn fmu_outputs_after_200_steps_are_unchanged() {
     let outputs = real_outputs();
     let guid = CString::new(guid()).unwrap();

@@ -1,7 +1,8 @@
 //! One FMU instance, in safe Rust: variable values by value reference,
 //! the parameters turned into a scene and a [`Simulation`], outputs read from
-//! it, the FMI 2.0 co-simulation phases, and FMU states. The C boundary
-//! (`export.rs`) only converts arguments and reports what this returns.
+//! it, the FMI 2.0 co-simulation phases, and FMU states. The FMI calls
+//! (`core.rs`) report what this returns; the C boundary (`export.rs`) only
+//! converts arguments.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
