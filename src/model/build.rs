@@ -668,7 +668,7 @@ fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     }
 }
 
-/// Largest input speed a scene may give [rpm].
+/// Largest input speed a scene may give \[rpm\].
 const MAX_INPUT_SPEED_RPM: f64 = 1.0e6;
 
 /// The rules of the run settings that hold in SI as in the scene's units
