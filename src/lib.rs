@@ -12,7 +12,8 @@
 //! 5. [`dynamics`]: equations of motion, integrators, steady states.
 //! 6. [`wear`]: Archard wear, the stepper, the worn-profile state.
 //! 7. [`analysis`]: modes, order tracking, accuracy, calibration, validation.
-//! 8. Front ends: [`fmi`] (the FMU), [`report`] (files for the tool), and the
+//! 8. Front ends: [`fmi`] (the FMU), [`package`] (the `.fmu` archive and its
+//!    regression references), [`report`] (files for the tool), and the
 //!    command-line tool (`src/main.rs`).
 #![deny(clippy::print_stdout, clippy::print_stderr)]
 
@@ -23,6 +24,7 @@ pub mod files;
 pub mod fmi;
 pub mod geometry;
 pub mod model;
+pub mod package;
 pub mod report;
 pub mod scene;
 pub mod wear;

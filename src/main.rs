@@ -374,7 +374,7 @@ struct FmuReferencesArgs {
     #[arg(long)]
     out: PathBuf,
     /// Relative tolerance of the references' RK 5(4) run (at most 1e-6).
-    #[arg(long, default_value_t = planetwear::report::regression::REFERENCE_RELATIVE_TOLERANCE)]
+    #[arg(long, default_value_t = planetwear::package::regression::REFERENCE_RELATIVE_TOLERANCE)]
     relative_tolerance: f64,
 }
 
@@ -905,16 +905,16 @@ fn fmu_pack_command(FmuPackArgs { out, library }: FmuPackArgs) -> Result<()> {
             .map(|d| d.join("libplanetwear.so"))
             .context("locating the executable's directory")?,
     };
-    planetwear::report::pack::pack(&library, &out)?;
+    planetwear::package::pack::pack(&library, &out)?;
     println!("wrote {} (library {})", out.display(), library.display());
     Ok(())
 }
 
 fn fmu_references_command(FmuReferencesArgs { out, relative_tolerance }: FmuReferencesArgs) -> Result<()> {
-    use planetwear::report::regression::{example_references, CASES};
+    use planetwear::package::regression::{example_references, CASES};
     let started = std::time::Instant::now();
     let mut texts = Vec::new();
-    for state in planetwear::report::pack::example_wear_states()? {
+    for state in planetwear::package::pack::example_wear_states()? {
         texts.push(state.to_json()?);
     }
     let refs = example_references(&texts, &CASES, relative_tolerance)?;

@@ -39,7 +39,7 @@ fn the_packed_fmu_runs_under_the_fmi_crate() {
 #[ignore = "needs fmu/planetwear.fmu: `cargo build --release && target/release/planetwear fmu pack`"]
 fn the_packed_fmu_ships_regression_references_that_belong_to_it() {
     use planetwear::fmi::variables::GUID;
-    use planetwear::report::regression::{References, CASES, FORMAT, RESOURCE};
+    use planetwear::package::regression::{References, CASES, FORMAT, RESOURCE};
     use std::io::Read;
 
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fmu/planetwear.fmu");

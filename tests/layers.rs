@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 /// The stages in pipeline order; a stage may import only from those before
 /// it. `cli` is `src/main.rs`.
 const STAGES: &[&str] = &[
-    "files", "scene", "model", "geometry", "contact", "dynamics", "wear", "analysis", "fmi", "report", "cli",
+    "files", "scene", "model", "geometry", "contact", "dynamics", "wear", "analysis", "fmi", "package",
+    "report", "cli",
 ];
 
 /// One file of the crate: its stage, its module path below the stage (e.g.

@@ -13,7 +13,7 @@ use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::response::ResponseError;
 use planetwear::dynamics::simulation::Simulation;
 use planetwear::model::gear::{IntegratorKind, MeshKind};
-use planetwear::report::regression::window_error;
+use planetwear::package::regression::window_error;
 use planetwear::scene::{Fidelity, Scene};
 
 const OMEGA: f64 = 3000.0 * std::f64::consts::PI / 30.0;

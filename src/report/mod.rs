@@ -4,9 +4,7 @@
 
 pub mod accuracy;
 pub mod ltca;
-pub mod pack;
 pub mod plot;
-pub mod regression;
 pub mod sweep;
 pub mod validation;
 pub mod wear;

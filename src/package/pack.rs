@@ -10,7 +10,7 @@ use std::path::Path;
 use zip::write::SimpleFileOptions;
 
 use crate::fmi::variables::{Causality, GUID, MODEL_DESCRIPTION_XML, MODEL_IDENTIFIER, VARIABLES};
-use crate::report::regression::{
+use crate::package::regression::{
     example_references, CASES, REFERENCE_RELATIVE_TOLERANCE, RESOURCE, STEPS_PER_MESH_CYCLE,
 };
 use crate::scene::lumped::LumpedScene;
