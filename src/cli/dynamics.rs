@@ -1,0 +1,316 @@
+//! The dynamic and static analyses of one scene: `simulate`, `run`, `sweep`,
+//! `modes` and `ltca`, with the printing of their results.
+
+use crate::*;
+
+pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: SimulateArgs) -> Result<()> {
+    let set = validated(&load_scene(&scene)?)?;
+    if !(step.is_finite() && step > 0.0 && stop.is_finite() && stop > 0.0) {
+        bail!("--stop and --step must be finite and positive (got {stop} and {step})");
+    }
+    let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+    let mut sim =
+        planetwear::dynamics::simulation::Simulation::new(&set, model, 0.0, set.dynamics().input_speed)?;
+    let n = (stop / step).round() as u64;
+    for k in 0..n {
+        // Communication points on the integer grid t_k = k·step, each
+        // step t_{k+1} − t_k (as fmpy and most importers call doStep):
+        // the adaptive integrator's steps depend on the last bit of
+        // the step ends.
+        let (t0, t1) = (k as f64 * step, (k + 1) as f64 * step);
+        sim.do_step(t0, t1 - t0)?;
+        let row = serde_json::json!({
+            "time": sim.time(),
+            "sun.speed": sim.speed(planetwear::model::gear::Member::Sun),
+            "planet[1].sunMeshForce": sim.mesh_force(0, planetwear::model::gear::MeshKind::SunPlanet),
+            "planet[1].ringMeshForce": sim.mesh_force(0, planetwear::model::gear::MeshKind::RingPlanet),
+        });
+        println!("{row}");
+    }
+    Ok(())
+}
+
+pub(crate) fn run_command(RunArgs { scene, wear_state, speed, json, plots }: RunArgs) -> Result<()> {
+    let set = validated(&load_scene(&scene)?)?;
+    let mut model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+    let rpm = speed.unwrap_or(set.dynamics().input_speed * 30.0 / std::f64::consts::PI);
+    let ss = steady_state(&mut model, &set, rpm * std::f64::consts::PI / 30.0, None)?;
+    if let Some(dir) = &plots {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        write_steady_state(&ss, &set, dir)?;
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(&ss)?);
+    } else {
+        print_steady_state(&ss, set.sun().face_width * 1e3);
+    }
+    Ok(())
+}
+
+pub(crate) fn sweep_command(
+    SweepArgs { scene, wear_state, from, to, step, direction, out, histories, json }: SweepArgs,
+) -> Result<()> {
+    let set = validated(&load_scene(&scene)?)?;
+    let speeds = speed_grid(from, to, step)?;
+    let dirs: Vec<Direction> = match direction.as_str() {
+        "up" => vec![Direction::Up],
+        "down" => vec![Direction::Down],
+        "both" => vec![Direction::Up, Direction::Down],
+        other => bail!("--direction {other}: allowed are up, down, both"),
+    };
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+    let modes = natural_modes(&model.lumped);
+    let bar = progress_bar((speeds.len() * dirs.len()) as u64);
+    let started = std::time::Instant::now();
+    let run = |d: Direction| {
+        let mut m = model.clone();
+        let mut grid = speeds.clone();
+        if d == Direction::Down {
+            grid.reverse();
+        }
+        sweep(&set, &mut m, d, &grid, &histories, |_| bar.inc(1))
+    };
+    let results: Vec<_> = if dirs.len() == 2 {
+        let (a, b) = rayon::join(|| run(Direction::Up), || run(Direction::Down));
+        vec![a?, b?]
+    } else {
+        vec![run(dirs[0])?]
+    };
+    bar.finish_and_clear();
+    let wall = started.elapsed().as_secs_f64();
+    let width_mm = set.sun().face_width * 1e3;
+    let mut files = Vec::new();
+    for sw in &results {
+        let name = if sw.direction == Direction::Up { "sweep_up.csv" } else { "sweep_down.csv" };
+        let path = out.join(name);
+        write_csv(&path, &sweep_csv(sw, width_mm))?;
+        files.push(path);
+        for p in sw.points.iter().filter(|p| !p.time.is_empty()) {
+            files.extend(write_steady_state(p, &set, &out)?);
+        }
+    }
+    files.extend(write_forced_response(&results, &set, &modes, &out)?);
+    let peaks: Vec<_> = results
+        .iter()
+        .flat_map(|sw| {
+            let mut v = find_peaks(sw, 0, width_mm, &modes, &set);
+            v.extend(find_peaks(sw, 1, width_mm, &modes, &set));
+            v
+        })
+        .collect();
+    let steps: u64 = results.iter().flat_map(|s| &s.points).map(|p| p.stats.steps).sum();
+    let summary = serde_json::json!({
+        "scene": set.name(),
+        "speeds": speeds.len(),
+        "directions": dirs,
+        "wall_time_s": wall,
+        "internal_steps": steps,
+        "steps_per_second": steps as f64 / wall,
+        "peaks": peaks,
+        "files": files,
+    });
+    write_atomic(&out.join("sweep.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+    } else {
+        println!(
+            "swept {} speeds × {} directions in {wall:.2} s ({steps} steps, {:.0} steps/s); {} files in {}",
+            speeds.len(),
+            dirs.len(),
+            steps as f64 / wall,
+            files.len(),
+            out.display()
+        );
+        for p in &peaks {
+            println!(
+                "  peak {:?} {} at {:.0} rpm: F(rms) {:.1} N/mm; {}×f_m = {:.0} Hz ≈ {:?} mode at {:.0} Hz ({:.1} %)",
+                p.direction,
+                p.mesh.name(),
+                p.speed_rpm,
+                p.rms_n_per_mm,
+                p.harmonic,
+                f64::from(p.harmonic) * p.mesh_frequency,
+                p.family,
+                p.natural_frequency,
+                100.0 * p.mismatch
+            );
+        }
+    }
+    Ok(())
+}
+
+pub(crate) fn modes_command(ModesArgs { scene, wear_state, json }: ModesArgs) -> Result<()> {
+    let (name, lumped) = match load_any(&scene)? {
+        AnyScene::Gear(s) => {
+            let set = validated(&s)?;
+            let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+            (set.name().to_string(), model.lumped)
+        }
+        AnyScene::Lumped(_) if wear_state.is_some() => {
+            bail!("--wear-state: a lumped-parameter scene has no tooth flanks to wear")
+        }
+        AnyScene::Lumped(s) => (s.name.clone(), s.validate()?),
+    };
+    report_modes(&name, &lumped, json)?;
+    Ok(())
+}
+
+pub(crate) fn ltca_command(
+    LtcaArgs { scene, wear_state, torque, samples, json, out, plots }: LtcaArgs,
+) -> Result<()> {
+    let mut scene = load_scene(&scene)?;
+    if let Some(t) = torque {
+        scene.operation.input_torque_nm = t;
+    }
+    if let Some(n) = samples {
+        scene.analysis.positions_per_mesh_cycle = n as u32;
+    }
+    let set = validated(&scene)?;
+    if set.input_torque() <= 0.0 {
+        bail!("--torque: the LTCA needs a positive input torque (got {} N·m)", set.input_torque());
+    }
+    let state = match &wear_state {
+        Some(path) => Some(
+            planetwear::wear::state::read_worn_state(path, &set)
+                .with_context(|| format!("--wear-state {}", path.display()))?,
+        ),
+        None => None,
+    };
+    let model = state.as_ref().map_or_else(|| SetModel::new(&set), |s| s.set_model(&set));
+    let kappa = state.as_ref().map(|s| s.kappa);
+    let study = LtcaStudy::run_on(&set, &model, set.analysis().positions_per_mesh_cycle, kappa);
+    let doc = study.to_json();
+    let text = serde_json::to_string_pretty(&doc)?;
+    if let Some(path) = &out {
+        write_atomic(path, text.as_bytes()).map_err(anyhow::Error::from)?;
+    }
+    if let Some(dir) = &plots {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let files = study.write_plots(dir).map_err(anyhow::Error::from)?;
+        if !json {
+            println!("wrote {} plot files to {}", files.len(), dir.display());
+        }
+    }
+    if json {
+        println!("{text}");
+    } else {
+        print_summary(&doc);
+    }
+    Ok(())
+}
+
+pub(crate) fn print_steady_state(ss: &SteadyState, width_mm: f64) {
+    println!(
+        "steady state at {:.1} rpm (mesh frequency {:.1} Hz, {} mesh cycles; {} steps, {} Newton iterations)",
+        ss.input_speed_rpm, ss.mesh_frequency, ss.cycles, ss.stats.steps, ss.stats.newton_iterations
+    );
+    println!(
+        "  {:<16} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7}",
+        "mesh", "mean", "F1", "F2", "F3", "F4", "F5", "F6", "rms", "sep"
+    );
+    for m in &ss.meshes {
+        let h = &m.harmonics;
+        print!(
+            "  planet {} {:<7} {:>9.2}",
+            m.planet,
+            format!("{:?}", m.mesh).replace("Planet", ""),
+            h.mean / width_mm
+        );
+        for a in &h.amplitude {
+            print!(" {:>9.2}", a / width_mm);
+        }
+        println!(" {:>9.2} {:>7.3}", h.rms / width_mm, m.separation);
+    }
+    println!("  (forces in N/mm of face width)");
+}
+
+pub(crate) fn report_modes(name: &str, set: &LumpedSet, json: bool) -> Result<()> {
+    let modes = natural_modes(set);
+    let red = set.reduction();
+    if json {
+        let doc = serde_json::json!({
+            "scene": name,
+            "fidelity": set.fidelity,
+            "held": set.held,
+            "mean_mesh_stiffness": {"sun_planet": set.sun_mesh, "ring_planet": set.ring_mesh},
+            "coordinates": red.coordinates.iter().map(|c| format!("{c:?}")).collect::<Vec<_>>(),
+            "modes": modes,
+        });
+        println!("{}", serde_json::to_string_pretty(&doc)?);
+        return Ok(());
+    }
+    println!(
+        "natural modes of {name} ({:?}, held {:?}); mean mesh stiffness sun–planet {:.4e} N/m, ring–planet {:.4e} N/m",
+        set.fidelity, set.held, set.sun_mesh, set.ring_mesh
+    );
+    println!("  {:>12}  {:<14} {:>12}", "frequency Hz", "class", "multiplicity");
+    let mut i = 0;
+    while i < modes.len() {
+        let m = &modes[i];
+        let class = match m.class {
+            ModeClass::RigidBody => "rigid body",
+            ModeClass::Rotational => "rotational",
+            ModeClass::Translational => "translational",
+            ModeClass::Planet => "planet",
+            ModeClass::Mixed => "mixed",
+        };
+        println!("  {:>12.1}  {:<14} {:>12}", m.frequency, class, m.multiplicity);
+        i += m.multiplicity.max(1);
+    }
+    Ok(())
+}
+
+pub(crate) fn print_summary(doc: &serde_json::Value) {
+    let width_mm = doc["face_width"].as_f64().unwrap_or(1.0) * 1e3;
+    println!(
+        "LTCA of {} at {} N·m (κ = {})",
+        doc["scene"].as_str().unwrap_or("?"),
+        doc["input_torque"],
+        doc["kappa"]
+    );
+    for m in doc["meshes"].as_array().into_iter().flatten() {
+        let f = |k: &str| m[k].as_f64().unwrap_or(f64::NAN);
+        let g = |k: &str, s: &str| m[k][s].as_f64().unwrap_or(f64::NAN);
+        println!("  {}:", m["name"].as_str().unwrap_or("?"));
+        println!("    load {:.1} N/mm along the line of action", f("load") / width_mm);
+        println!(
+            "    contact ratio: nominal {:.4}, on the involutes {:.4}, loaded {:.4} (1 pair {:.1} %, 2 pairs {:.1} %, 3 pairs {:.1} %)",
+            f("contact_ratio_nominal"),
+            f("contact_ratio_involute"),
+            f("contact_ratio_loaded"),
+            100.0 * m["pairs_in_contact_fraction"]["1"].as_f64().unwrap_or(0.0),
+            100.0 * m["pairs_in_contact_fraction"]["2"].as_f64().unwrap_or(0.0),
+            100.0 * m["pairs_in_contact_fraction"]["3"].as_f64().unwrap_or(0.0),
+        );
+        let k = |v: f64| v / width_mm * 1e-6;
+        println!(
+            "    mesh stiffness N/(mm·µm): nominal mean {:.3} p-p {:.3}; loaded mean {:.3} p-p {:.3}; ISO c_γα {:.3}",
+            k(g("mesh_stiffness_nominal", "mean")),
+            k(g("mesh_stiffness_nominal", "peak_to_peak")),
+            k(g("mesh_stiffness_loaded", "mean")),
+            k(g("mesh_stiffness_loaded", "peak_to_peak")),
+            m["iso6336"]["mesh_stiffness_per_width_N_per_mm_um"].as_f64().unwrap_or(f64::NAN),
+        );
+        println!(
+            "    static TE: mean {:.3} µm, peak-to-peak {:.3} µm; peak Hertz pressure {:.0} MPa, half-width up to {:.1} µm",
+            g("static_transmission_error", "mean") * 1e6,
+            g("static_transmission_error", "peak_to_peak") * 1e6,
+            f("peak_hertz_pressure") * 1e-6,
+            f("max_hertz_half_width") * 1e6,
+        );
+    }
+    let p = &doc["planets"];
+    let loads: Vec<String> = p["mean_load"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|v| format!("{:.2}", v.as_f64().unwrap_or(f64::NAN) / width_mm))
+        .collect();
+    println!(
+        "  planets: mean loads {} N/mm, load sharing factor {:.4}; sun rotation along the line of action peak-to-peak {:.3} µm",
+        loads.join(", "),
+        p["load_sharing_factor"].as_f64().unwrap_or(f64::NAN),
+        p["sun_transmission_error"]["peak_to_peak"].as_f64().unwrap_or(f64::NAN) * 1e6
+    );
+}

@@ -1,0 +1,56 @@
+//! The FMU's generated files: `fmu pack`, `fmu references` and `fmu xml`.
+
+use crate::*;
+
+pub(crate) fn fmu_pack_command(FmuPackArgs { out, library }: FmuPackArgs) -> Result<()> {
+    let library = match library {
+        Some(l) => l,
+        None => std::env::current_exe()?
+            .parent()
+            .map(|d| d.join("libplanetwear.so"))
+            .context("locating the executable's directory")?,
+    };
+    planetwear::package::pack::pack(&library, &out)?;
+    println!("wrote {} (library {})", out.display(), library.display());
+    Ok(())
+}
+
+pub(crate) fn fmu_references_command(
+    FmuReferencesArgs { out, relative_tolerance }: FmuReferencesArgs,
+) -> Result<()> {
+    use planetwear::package::regression::{example_references, CASES};
+    let started = std::time::Instant::now();
+    let mut texts = Vec::new();
+    for state in planetwear::package::pack::example_wear_states()? {
+        texts.push(state.to_json()?);
+    }
+    let refs = example_references(&texts, &CASES, relative_tolerance)?;
+    write_atomic(&out, refs.to_json()?.as_bytes())?;
+    for c in &refs.cases {
+        println!(
+            "{:<18} sun F1 {:9.3} N  ring F1 {:9.3} N  drift {:.2e}  tolerance {:.1e} of F1  ({} steps)",
+            c.name,
+            c.values["window.sunMeshF1"],
+            c.values["window.ringMeshF1"],
+            c.budget.drift,
+            c.budget.fraction_of_f1,
+            c.work.steps
+        );
+    }
+    println!(
+        "wrote {} ({} cases, {:.1} s)",
+        out.display(),
+        refs.cases.len(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+pub(crate) fn fmu_xml_command(FmuXmlArgs { out }: FmuXmlArgs) -> Result<()> {
+    let xml = planetwear::fmi::variables::MODEL_DESCRIPTION_XML;
+    match out {
+        Some(path) => write_atomic(&path, xml.as_bytes())?,
+        None => print!("{xml}"),
+    }
+    Ok(())
+}

@@ -1,0 +1,8 @@
+//! The command-line tool's commands, one module per group; `src/main.rs`
+//! holds the grammar (clap), the loading of scenes shared by all commands,
+//! and the dispatch.
+
+pub(crate) mod dynamics;
+pub(crate) mod fmu;
+pub(crate) mod study;
+pub(crate) mod wear;

@@ -1,0 +1,177 @@
+//! The studies of the published example: `validate`, `calibrate` and
+//! `work-precision`.
+
+use crate::*;
+
+pub(crate) fn validate_command(ValidateArgs { out, quick, scene }: ValidateArgs) -> Result<()> {
+    use planetwear::analysis::study::validation::{validate, ValidationPlan};
+    let s = load_scene(&scene)?;
+    let set = validated(&s)?;
+    let plan = if quick { ValidationPlan::quick() } else { ValidationPlan::full() };
+    let v = validate(&s, &plan).map_err(|e| anyhow::anyhow!("validation of {scene}: {e}"))?;
+    let command = format!(
+        "planetwear validate --out {}{}{}",
+        out.display(),
+        if quick { " --quick" } else { "" },
+        if scene == "example-2004" { String::new() } else { format!(" --scene {scene}") }
+    );
+    planetwear::report::validation::write_report(&v, &out, set.sun().face_width, &command)?;
+    for r in &v.rows {
+        println!(
+            "{:<5} {:<40} ours {}",
+            if r.verdict == planetwear::analysis::study::validation::Verdict::Pass { "pass" } else { "FAIL" },
+            r.id,
+            r.ours
+        );
+    }
+    let failing = planetwear::report::validation::failing(&v);
+    println!(
+        "{} of {} rows pass ({:.0} s); report {}",
+        v.rows.len() - failing.len(),
+        v.rows.len(),
+        v.seconds,
+        out.join("VALIDATION.md").display()
+    );
+    Ok(())
+}
+
+pub(crate) fn calibrate_command(CalibrateArgs { plan, out, show_plan, json }: CalibrateArgs) -> Result<()> {
+    calibrate(&plan, out.as_deref(), show_plan, json)?;
+    Ok(())
+}
+
+pub(crate) fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: bool) -> Result<()> {
+    use planetwear::analysis::study::calibrate::{calibrate, CalibrationError, PlanFile};
+    let (text, dir) = match Scene::builtin_plan(plan) {
+        Some(t) => (t.to_string(), PathBuf::from(".")),
+        None => {
+            let path = Path::new(plan);
+            if !path.is_file() {
+                bail!("--plan {plan}: neither a built-in scene with a calibration (example-2004) nor a plan file");
+            }
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading plan file {plan}"))?;
+            (text, path.parent().map(Path::to_path_buf).unwrap_or_default())
+        }
+    };
+    if show_plan {
+        print!("{text}");
+        return Ok(());
+    }
+    let file = PlanFile::from_toml(&text).with_context(|| format!("--plan {plan}"))?;
+    let base_name = if Scene::builtin(&file.base).is_some() {
+        file.base.clone()
+    } else {
+        dir.join(&file.base).to_string_lossy().into_owned()
+    };
+    let base = load_scene(&base_name).with_context(|| format!("base = {} in --plan {plan}", file.base))?;
+    let plan_value = file.plan(&base).with_context(|| format!("--plan {plan}"))?;
+    match calibrate(&plan_value) {
+        Ok(done) => {
+            if json {
+                println!("{}", serde_json::to_string_pretty(&done.report)?);
+            } else {
+                print_calibration(&done.report, &file.base);
+            }
+            if let Some(path) = out {
+                write_atomic(path, done.scene.to_toml().as_bytes())?;
+                if !json {
+                    println!("wrote the calibrated scene {} to {}", done.scene.name, path.display());
+                }
+            }
+            Ok(())
+        }
+        Err(CalibrationError::IllPosed { why, report }) => {
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print_calibration(&report, &file.base);
+            }
+            bail!("ill-posed calibration, no scene written: {why}")
+        }
+        Err(e) => Err(e.into()),
+    }
+}
+
+pub(crate) fn print_calibration(r: &planetwear::analysis::study::calibrate::Report, base: &str) {
+    println!(
+        "calibration of {} from {base}: {} iterations, {} evaluations, {} contact models, {:.1} s",
+        r.name, r.iterations, r.evaluations, r.contact_models, r.seconds
+    );
+    println!("targets:");
+    println!(
+        "  {:<3} {:<44} {:>11} {:>8} {:>11} {:>11} {:>9}  met",
+        "#", "measure", "target", "tol", "start", "reached", "residual"
+    );
+    for (i, t) in r.targets.iter().enumerate() {
+        println!(
+            "  {:<3} {:<44} {:>11.4} {:>7.2}% {:>11.4} {:>11.4} {:>+8.3}%  {}",
+            i + 1,
+            t.target.measure.describe(),
+            t.target.value,
+            100.0 * t.target.tolerance,
+            t.start,
+            t.reached,
+            100.0 * t.residual,
+            if t.met { "yes" } else { "NO" }
+        );
+    }
+    println!("parameters (file units):");
+    for (k, p) in r.parameters.iter().enumerate() {
+        println!(
+            "  p{} {}: bounds [{:.4e}, {:.4e}], start {:.5e}, fitted {:.5e}, ratio {:.4}{}",
+            k + 1,
+            p.free.name(),
+            p.free.min,
+            p.free.max,
+            p.start,
+            p.fitted,
+            p.ratio,
+            p.at_bound.as_ref().map(|b| format!("  AT ITS {}", b.to_uppercase())).unwrap_or_default()
+        );
+    }
+    print!("sensitivity ∂ln(target)/∂ln(parameter) at the fit:\n  {:<3}", "#");
+    for k in 0..r.parameters.len() {
+        print!(" {:>9}", format!("p{}", k + 1));
+    }
+    println!();
+    for (i, _) in r.targets.iter().enumerate() {
+        print!("  {:<3}", i + 1);
+        for p in &r.parameters {
+            print!(" {:>+9.4}", p.sensitivity[i]);
+        }
+        println!();
+    }
+    println!(
+        "singular values of the scaled Jacobian: {}",
+        r.singular_values.iter().map(|v| format!("{v:.3e}")).collect::<Vec<_>>().join(", ")
+    );
+}
+
+pub(crate) fn work_precision(out: &Path, quick: bool) -> Result<()> {
+    use planetwear::analysis::accuracy::StudyPlan;
+    use planetwear::model::lumped::Fidelity;
+    use planetwear::report::accuracy::{operating_points, run_study, tables_markdown, write_study};
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let (plan, mut points) = if quick {
+        (StudyPlan::quick(), operating_points(Fidelity::Torsional)?)
+    } else {
+        (StudyPlan::full(), operating_points(Fidelity::Torsional)?)
+    };
+    if !quick {
+        points.extend(operating_points(Fidelity::TransverseTorsional)?);
+    }
+    let study = run_study(&points, &plan, None, |point, run| {
+        if run == "reference checks" {
+            eprintln!("{point}: reference done; running the methods");
+        }
+    })?;
+    let context = serde_json::json!({
+        "command": std::env::args().collect::<Vec<_>>().join(" "),
+        "machine": planetwear::report::accuracy::machine(),
+        "independent_integrator": "none in the CLI (cargo bench --bench work_precision adds DOP853)",
+    });
+    let files = write_study(&study, out, context)?;
+    print!("{}", tables_markdown(&study));
+    println!("\nstudy took {:.1} s; {} files in {}", study.wall_seconds, files.len(), out.display());
+    Ok(())
+}

@@ -1,0 +1,241 @@
+//! The wear commands: `wear run`, `wear step`, `wear compare` and `wear effect`.
+
+use crate::*;
+
+pub(crate) fn wear_model(
+    set: &GearSet,
+    ring: bool,
+    threshold_um: Option<f64>,
+    dynamic_rpm: Option<f64>,
+) -> Result<WearModel> {
+    let mut settings = WearSettings::for_set(set);
+    if let Some(rpm) = dynamic_rpm {
+        if !(rpm.is_finite() && rpm > 0.0) {
+            bail!("--dynamic-speed {rpm}: must be a finite input speed > 0 rpm");
+        }
+        settings.source = PressureSource::Dynamic { speed_rpm: rpm };
+    }
+    if ring {
+        settings.wearing = WearingFlanks::both_meshes();
+    }
+    if let Some(t) = threshold_um {
+        settings.update_depth = t * 1e-6;
+    }
+    WearModel::new(set, settings).map_err(|e| match threshold_um {
+        Some(t) => anyhow::anyhow!("--threshold {t} µm: {e}"),
+        None => e.into(),
+    })
+}
+
+pub(crate) fn wear_run(
+    scene: &str,
+    to_kappa: u32,
+    out: &Path,
+    ring: bool,
+    dynamic: Option<f64>,
+    json: bool,
+) -> Result<()> {
+    let set = validated(&load_scene(scene)?)?;
+    let model = wear_model(&set, ring, None, dynamic)?;
+    std::fs::create_dir_all(out.join("plots")).with_context(|| format!("creating {}", out.display()))?;
+    let mut state = model.unworn();
+    let mut states = vec![state.clone()];
+    let mut seconds = vec![0.0];
+    planetwear::wear::state::write_worn_state(&out.join("kappa-0.json"), &state)?;
+    let bar = progress_bar(u64::from(to_kappa));
+    let mut stopped = None;
+    for _ in 0..to_kappa {
+        let started = std::time::Instant::now();
+        match model.step(&state, Limit::Update) {
+            Ok(next) => state = next,
+            Err(e @ WearError::TotalWearReached { .. }) => {
+                stopped = Some(e.to_string());
+                break;
+            }
+            Err(e) => return Err(e.into()),
+        }
+        seconds.push(started.elapsed().as_secs_f64());
+        planetwear::wear::state::write_worn_state(&out.join(format!("kappa-{}.json", state.kappa)), &state)?;
+        states.push(state.clone());
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let doc = planetwear::report::wear::summary(&set, &states, &seconds);
+    write_atomic(&out.join("summary.json"), serde_json::to_string_pretty(&doc)?.as_bytes())?;
+    let files = planetwear::report::wear::write_plots(&set, &states, &out.join("plots"))?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&doc)?);
+        return Ok(());
+    }
+    println!(
+        "wear of {}: {} updates, states and summary.json in {}, {} plot files",
+        set.name(),
+        states.len() - 1,
+        out.display(),
+        files.len()
+    );
+    println!("   κ  cycles sun  cycles planet   input rev   sun max µm @ roll   planet max µm @ roll   time");
+    for s in doc["states"].as_array().into_iter().flatten().skip(1) {
+        let f = |m: &str, k: &str| s["flanks"][m][k].as_f64().unwrap_or(f64::NAN);
+        println!(
+            "  {:>2}  {:>10.4e}  {:>13.4e}  {:>10.4e}   {:>6.3} @ {:>6.2}°     {:>6.3} @ {:>6.2}°      {:.2} s",
+            s["kappa"],
+            s["cycles_sun"].as_f64().unwrap_or(f64::NAN),
+            s["cycles_planet"].as_f64().unwrap_or(f64::NAN),
+            s["input_revolutions"].as_f64().unwrap_or(f64::NAN),
+            f("sun", "max_um"),
+            f("sun", "max_roll_deg"),
+            f("planet", "max_um"),
+            f("planet", "max_roll_deg"),
+            s["seconds"].as_f64().unwrap_or(0.0),
+        );
+    }
+    if let Some(why) = stopped {
+        println!("stopped before κ = {to_kappa}: {why}");
+    }
+    Ok(())
+}
+
+pub(crate) fn wear_run_command(
+    WearRunArgs { scene, to_kappa, out, ring, dynamic_speed, json }: WearRunArgs,
+) -> Result<()> {
+    wear_run(&scene, to_kappa, &out, ring, dynamic_speed, json)?;
+    Ok(())
+}
+
+pub(crate) fn wear_compare_command(
+    WearCompareArgs { scene, state, speeds, json }: WearCompareArgs,
+) -> Result<()> {
+    let set = validated(&load_scene(&scene)?)?;
+    let model = wear_model(&set, false, None, None)?;
+    let state = match &state {
+        Some(path) => planetwear::wear::state::read_worn_state(path, &set)
+            .with_context(|| format!("--state {}", path.display()))?,
+        None => model.unworn(),
+    };
+    let face_mm = set.sun().face_width * 1e3;
+    let mut docs = Vec::new();
+    for rpm in speeds {
+        if !(rpm.is_finite() && rpm > 0.0) {
+            bail!("--speeds {rpm}: speeds must be finite and > 0 rpm");
+        }
+        let c = compare_sources(&model, &state, rpm)?;
+        if json {
+            docs.push(serde_json::json!({
+                "speed_rpm": rpm,
+                "flanks": c.flanks.iter().map(|f| serde_json::json!({
+                    "flank": f.flank.name(), "roll": f.roll, "quasi_static": f.quasi_static,
+                    "dynamic": f.dynamic, "ratio": f.ratio,
+                    "quasi_static_max_roll": f.quasi_static_max_roll, "dynamic_max_roll": f.dynamic_max_roll,
+                })).collect::<Vec<_>>(),
+                "meshes": c.meshes.iter().map(|m| serde_json::json!({
+                    "mesh": m.mesh.name(), "mean_force": m.mean_mesh_force, "rms_force": m.rms_mesh_force,
+                    "quasi_static_max_pair_load": m.quasi_static_max_pair_load,
+                    "dynamic_max_pair_load": m.dynamic_max_pair_load,
+                })).collect::<Vec<_>>(),
+            }));
+            continue;
+        }
+        println!("{rpm:.0} rpm (κ = {}):", state.kappa);
+        for m in &c.meshes {
+            println!(
+                "  {}: F(rms) {:.1} N/mm; largest pair load quasi-static {:.1}, dynamic {:.1} N/mm ({:.3}×)",
+                m.mesh.name(),
+                m.rms_mesh_force / face_mm,
+                m.quasi_static_max_pair_load / face_mm,
+                m.dynamic_max_pair_load / face_mm,
+                m.dynamic_max_pair_load / m.quasi_static_max_pair_load
+            );
+        }
+        for f in &c.flanks {
+            println!(
+                "  {}: largest wear per cycle quasi-static {:.4} pm at {:.2}°, dynamic {:.4} pm at {:.2}° ({:.3}×)",
+                f.flank.name(),
+                f.quasi_static_max * 1e12,
+                f.quasi_static_max_roll.to_degrees(),
+                f.dynamic_max * 1e12,
+                f.dynamic_max_roll.to_degrees(),
+                f.ratio
+            );
+        }
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(&docs)?);
+    }
+    Ok(())
+}
+
+pub(crate) fn wear_effect_command(
+    WearEffectArgs { scene, kappa, speeds, only, out }: WearEffectArgs,
+) -> Result<()> {
+    use planetwear::analysis::study::wear_effect::{run_all, variants};
+    let base = load_scene(&scene)?;
+    validated(&base)?;
+    for rpm in &speeds {
+        if !(rpm.is_finite() && *rpm > 0.0) {
+            bail!("--speeds {rpm}: every speed must be a finite positive input speed in rpm");
+        }
+    }
+    let mut list = variants(&base);
+    if !only.is_empty() {
+        let keys: Vec<String> = list.iter().map(|v| v.key.clone()).collect();
+        if let Some(bad) = only.iter().find(|k| !keys.contains(k)) {
+            bail!("--only {bad}: not a variant; the variants are {}", keys.join(", "));
+        }
+        list.retain(|v| only.contains(&v.key));
+    }
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let started = std::time::Instant::now();
+    let results: Vec<_> = run_all(&list, kappa, &speeds)
+        .into_iter()
+        .collect::<Result<_, _>>()
+        .map_err(|e| anyhow::anyhow!("wear effect: {e}"))?;
+    let table = planetwear::report::wear_effect::markdown(&results);
+    write_atomic(&out.join("effect.md"), table.as_bytes())?;
+    write_atomic(&out.join("effect.json"), serde_json::to_string_pretty(&results)?.as_bytes())?;
+    for v in &list {
+        println!("{}: {}", v.key, v.description);
+    }
+    println!("\n{table}");
+    println!(
+        "{} variants in {:.1} s; effect.md and effect.json in {}",
+        results.len(),
+        started.elapsed().as_secs_f64(),
+        out.display()
+    );
+    Ok(())
+}
+
+pub(crate) fn wear_step_command(
+    WearStepArgs { scene, state, out, threshold, revolutions, ring, dynamic_speed }: WearStepArgs,
+) -> Result<()> {
+    let set = validated(&load_scene(&scene)?)?;
+    let model = wear_model(&set, ring, threshold, dynamic_speed)?;
+    let before = match &state {
+        Some(path) => planetwear::wear::state::read_worn_state(path, &set)
+            .with_context(|| format!("--state {}", path.display()))?,
+        None => model.unworn(),
+    };
+    let limit = match revolutions {
+        Some(n) if n.is_finite() && n > 0.0 => Limit::Revolutions(n),
+        Some(n) => bail!("--revolutions {n}: must be a finite number of input revolutions > 0"),
+        None => Limit::Update,
+    };
+    let after = model.step(&before, limit)?;
+    planetwear::wear::state::write_worn_state(&out, &after)?;
+    let deepest = |s: &planetwear::wear::state::WornState, f| s.deepest_on(f);
+    let (sun, planet) = (Flank::SunDrive, Flank::PlanetSunSide);
+    println!(
+        "κ {} → {}: {:.4e} input revolutions ({:.4e} in all); deepest wear sun {:.3} µm at {:.2}°, planet {:.3} µm at {:.2}°; wrote {}",
+        before.kappa,
+        after.kappa,
+        after.revolutions - before.revolutions,
+        after.revolutions,
+        deepest(&after, sun).depth * 1e6,
+        deepest(&after, sun).roll.to_degrees(),
+        deepest(&after, planet).depth * 1e6,
+        deepest(&after, planet).roll.to_degrees(),
+        out.display()
+    );
+    Ok(())
+}
