@@ -15,21 +15,11 @@ use std::time::Instant;
 
 use faer::linalg::solvers::Solve;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use planetwear::analysis::modes::modal_matrix;
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
-use planetwear::model::lumped::LumpedSet;
 use planetwear::scene::lumped::LumpedScene;
 use planetwear::scene::{Fidelity, Scene};
-
-/// The symmetric modal matrix of a lumped set, as `natural_modes` forms it.
-fn modal_matrix(set: &LumpedSet) -> DMatrix<f64> {
-    let m = set.mass();
-    let k = set.stiffness();
-    let d = m.len();
-    let inv_sqrt: Vec<f64> = m.iter().map(|x| 1.0 / x.sqrt()).collect();
-    let a = DMatrix::from_fn(d, d, |i, j| inv_sqrt[i] * k[(i, j)] * inv_sqrt[j]);
-    (&a + a.transpose()) * 0.5
-}
 
 /// Median time per call [s] of `f` over `reps` calls, in 7 rounds.
 fn time(reps: usize, mut f: impl FnMut() -> f64) -> f64 {

@@ -121,16 +121,14 @@ fn planet_mode_frequencies_do_not_depend_on_the_number_of_planets() {
 /// structure for 12 planets (n = 3·(3 + 12) = 45 > FAER_FROM) intact.
 #[test]
 fn large_sets_solved_by_faer_keep_the_frequencies_and_the_mode_structure() {
-    use planetwear::analysis::modes::{symmetric_eigen, FAER_FROM};
+    use planetwear::analysis::modes::{modal_matrix, symmetric_eigen, FAER_FROM};
     let s = set(12, Fidelity::TransverseTorsional, None);
     let (m, k) = (s.mass(), s.stiffness());
     let n = m.len();
     assert!(n >= FAER_FROM, "n = {n} must take the faer path");
     let modes = natural_modes(&s);
     // Frequencies against nalgebra's symmetric QR on the same matrix.
-    let inv_sqrt: Vec<f64> = m.iter().map(|x| 1.0 / x.sqrt()).collect();
-    let a = nalgebra::DMatrix::from_fn(n, n, |i, j| inv_sqrt[i] * k[(i, j)] * inv_sqrt[j]);
-    let a = (&a + a.transpose()) * 0.5;
+    let a = modal_matrix(&s);
     let mut reference: Vec<f64> =
         nalgebra::SymmetricEigen::new(a.clone()).eigenvalues.iter().copied().collect();
     reference.sort_by(f64::total_cmp);

@@ -79,16 +79,25 @@ pub fn symmetric_eigen(a: DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
     }
 }
 
+/// The symmetric modal matrix M^-1/2 K M^-1/2 of a lumped set (M diagonal),
+/// symmetrized against round-off: its eigenvalues are the squared natural
+/// circular frequencies, its eigenvectors the mass-normalized shapes scaled
+/// by M^1/2.
+pub fn modal_matrix(set: &LumpedSet) -> DMatrix<f64> {
+    let m = set.mass();
+    let k = set.stiffness();
+    let d = m.len();
+    let inv_sqrt: Vec<f64> = m.iter().map(|x| 1.0 / x.sqrt()).collect();
+    let a = DMatrix::from_fn(d, d, |i, j| inv_sqrt[i] * k[(i, j)] * inv_sqrt[j]);
+    (&a + a.transpose()) * 0.5
+}
+
 /// Natural modes of a lumped set, by increasing frequency.
 pub fn natural_modes(set: &LumpedSet) -> Vec<Mode> {
     let red = set.reduction();
-    let m = set.mass();
-    let k = set.stiffness();
     let d = red.dim();
-    let inv_sqrt: Vec<f64> = m.iter().map(|x| 1.0 / x.sqrt()).collect();
-    let a = DMatrix::from_fn(d, d, |i, j| inv_sqrt[i] * k[(i, j)] * inv_sqrt[j]);
-    let a = (&a + a.transpose()) * 0.5;
-    let (eigenvalues, eigenvectors) = symmetric_eigen(a);
+    let inv_sqrt: Vec<f64> = set.mass().iter().map(|x| 1.0 / x.sqrt()).collect();
+    let (eigenvalues, eigenvectors) = symmetric_eigen(modal_matrix(set));
     let mut order: Vec<usize> = (0..d).collect();
     order.sort_by(|i, j| eigenvalues[*i].total_cmp(&eigenvalues[*j]));
     let omega_max = eigenvalues.iter().cloned().fold(0.0, f64::max).max(0.0).sqrt();
