@@ -7,7 +7,8 @@ The modules form layers; a module imports only modules of lower layers
 (lazy imports inside functions included), so there is no import circle.
 tests/python/test_package_layers.py holds the list and checks it:
 
-  0. `files` (write_atomic, sha256_file) and this `__init__`, which imports
+  0. `files` (write_atomic, sha256_file), `extras` (which optional extra a
+     command needs) and this `__init__`, which imports
      nothing: importing any module of the package runs it first, so it
      must not pull in the others;
   1. `campaign_file`: the campaign file and the worn-profile state's format;

@@ -36,6 +36,7 @@ from pathlib import Path
 from .bench import add_arguments as add_bench_arguments
 from .bench import run_bench
 from .campaign_file import CampaignError
+from .extras import MissingExtra, require
 from .fmu_check import load_campaign
 from .loop import LoopError, print_loop, run_loop
 from .plots import plot_results
@@ -82,6 +83,11 @@ def main(argv=None):
     if getattr(a, "workers", None) is not None and a.workers < 1:
         p.error(f"--workers {a.workers}: must be at least 1")
     try:
+        # What the command needs, checked before any work starts.
+        if a.command in ("run", "loop", "bench"):
+            require("dask", f"campaign {a.command}")
+        if a.command == "plot" or (a.command in ("run", "loop") and not getattr(a, "no_plots", False)):
+            require("plot", f"campaign {a.command}")
         if a.command == "check":
             c = load_campaign(a.file)
             print(f"{c.source}: {len(c.states)} wear state(s) ({', '.join(s.label for s in c.states)}), "
@@ -110,7 +116,7 @@ def main(argv=None):
                 return 2
             for f in plot_results(pq.read_table(d / "results.parquet"), d / "plots"):
                 print(f)
-    except CampaignError as e:
+    except (CampaignError, MissingExtra) as e:
         print(e, file=sys.stderr)
         return 2
     except CampaignRunError as e:

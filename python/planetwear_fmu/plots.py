@@ -19,6 +19,7 @@ import io
 from collections import defaultdict
 from pathlib import Path
 
+from .extras import require
 from .files import write_atomic
 
 MESHES = (("sun_frms_n_per_mm", "sun–planet mesh"), ("ring_frms_n_per_mm", "ring–planet mesh"))
@@ -45,6 +46,7 @@ def _save(fig, path):
 def plot_results(table, directory):
     """Draws the figures of a results table (pyarrow) into `directory`;
     returns the files written."""
+    require("plot", "drawing a campaign's plots")
     import matplotlib
 
     matplotlib.use("Agg")

@@ -33,6 +33,7 @@ import uuid
 from pathlib import Path
 
 from .campaign_file import CampaignError, Problem
+from .extras import require
 from .files import write_atomic
 from .fmu_check import task_parameters
 from .plots import plot_results
@@ -152,6 +153,7 @@ def dask_client(scheduler=None, workers=None):
     """A Dask client: of the scheduler at `scheduler`, or of a new
     LocalCluster with `workers` processes (default: one per core), one thread
     each."""
+    require("dask", "running a campaign")
     from distributed import Client, LocalCluster
 
     if scheduler:

@@ -26,6 +26,8 @@ LAYERS = {
     "__init__": 0,
     # write_atomic, sha256_file.
     "files": 0,
+    # The optional extras and the check that one is installed.
+    "extras": 0,
     # The campaign file and the worn-profile state's format.
     "campaign_file": 1,
     # FMU access and results: the FMU's verdict and the full check of a
@@ -228,3 +230,86 @@ def test_the_entry_points_of_the_pyproject_exist():
         for part in filter(None, attr.split(".")):
             obj = getattr(obj, part)
         assert obj is not None, target
+
+
+# Top-level module → the distribution that provides it, for every
+# third-party import of the package.
+DISTRIBUTION_OF = {
+    "fmpy": "fmpy",
+    "pyarrow": "pyarrow",
+    "distributed": "dask",
+    "dask": "dask",
+    "tqdm": "tqdm",
+    "matplotlib": "matplotlib",
+}
+# Imported only where its own host loads it: the pytest plugin runs inside pytest.
+PROVIDED_BY_HOST = {"pytest"}
+
+
+def third_party_imports():
+    """{top-level module: [file:line]} of every import outside the standard
+    library and the package, lazy imports included."""
+    import sys
+
+    found = {}
+    for name, path in package_modules().items():
+        for node in ast.walk(ast.parse(path.read_text(), filename=path.name)):
+            if isinstance(node, ast.Import):
+                tops = [a.name.split(".")[0] for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                tops = [node.module.split(".")[0]]
+            else:
+                continue
+            for top in tops:
+                if top != PACKAGE and top not in sys.stdlib_module_names and top != "__future__":
+                    found.setdefault(top, []).append(f"{path.name}:{node.lineno}")
+    return found
+
+
+def _requirement_name(req):
+    """The distribution name of a requirement string ('dask[distributed]>=1' → 'dask')."""
+    import re
+
+    return re.split(r"[\[<>=!~; ]", req, maxsplit=1)[0].lower()
+
+
+def test_every_third_party_import_is_declared_in_the_pyproject():
+    """`pip install ./python` (with the extras the module's part needs)
+    installs everything the package imports: each third-party import maps
+    to a distribution named in `dependencies` or in an optional extra, and
+    the `extras` module's table agrees with the pyproject's extras."""
+    from planetwear_fmu import extras
+
+    project = tomllib.loads((PACKAGE_DIR.parent / "pyproject.toml").read_text())["project"]
+    base = {_requirement_name(r) for r in project["dependencies"]}
+    optional = {k: {_requirement_name(r) for r in v} for k, v in project["optional-dependencies"].items()}
+    declared = base.union(*optional.values())
+    imports = third_party_imports()
+    assert {"fmpy", "pyarrow", "distributed", "matplotlib"} <= set(imports), imports
+    for top, where in imports.items():
+        if top in PROVIDED_BY_HOST:
+            continue
+        assert top in DISTRIBUTION_OF, f"{top} (imported at {', '.join(where)}): name its distribution here"
+        assert DISTRIBUTION_OF[top] in declared, (
+            f"{top} (imported at {', '.join(where)}) comes from {DISTRIBUTION_OF[top]}, which "
+            f"python/pyproject.toml declares neither in dependencies nor in an extra")
+    for extra, modules in extras.EXTRAS.items():
+        assert extra in optional, f"extras.EXTRAS names '{extra}', which the pyproject does not declare"
+        for m in modules:
+            assert DISTRIBUTION_OF[m] in optional[extra], f"module {m} of extra '{extra}' is not installed by it"
+
+
+def test_a_missing_extra_is_named_with_its_install_command(monkeypatch):
+    """A command that needs an extra which is not installed stops with the
+    extra's name, the missing module and the pip command."""
+    import importlib.util
+
+    import pytest
+
+    from planetwear_fmu import extras
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda n, *a: None if n == "matplotlib" else real(n, *a))
+    assert extras.missing("plot") == ["matplotlib"]
+    with pytest.raises(extras.MissingExtra, match=r"the 'plot' extra .*missing: matplotlib.*pip install"):
+        extras.require("plot", "the campaign's plots")
