@@ -521,11 +521,37 @@ fn progress_bar(len: u64) -> indicatif::ProgressBar {
     bar
 }
 
+/// An error with its causes, each said once: a cause whose text its
+/// parent's message already ends with (an error that prints its source
+/// and also names it as its source) is not repeated.
+fn error_report(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if out.ends_with(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
+}
+
 fn main() -> ExitCode {
+    // A reader that closes the pipe early (`planetwear simulate … | head`)
+    // ends the process by SIGPIPE, as for any Unix filter, instead of a
+    // failed print panicking. Rust sets SIGPIPE to ignored before main.
+    // SAFETY: called once at start, before any thread is spawned; SIG_DFL
+    // is a valid disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_report(&e));
             ExitCode::from(2)
         }
     }

@@ -192,3 +192,44 @@ fn work_precision_quick_writes_the_study_and_a_default() {
         assert!(e <= 1e-3, "{overall}");
     }
 }
+
+/// Each cause of an error is said once: a truncated wear-state file gives
+/// its reason once, not once per error layer that repeats its source.
+#[test]
+fn an_error_names_each_cause_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let state = dir.path().join("state.json");
+    let out = planetwear(&["wear", "step", "--scene", "example-2004", "--out", state.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read(&state).unwrap();
+    let cut = dir.path().join("cut.json");
+    std::fs::write(&cut, &text[..text.len() / 2]).unwrap();
+    let out = planetwear(&["ltca", "--scene", "example-2004", "--wear-state", cut.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.matches("the document is truncated").count(), 1, "{err}");
+    assert!(err.starts_with("error: --wear-state "), "{err}");
+}
+
+/// A reader that closes the pipe early ends the tool quietly, as any Unix
+/// filter: killed by SIGPIPE, no panic message on stderr.
+#[test]
+fn a_closed_pipe_ends_the_tool_quietly() {
+    use std::io::{BufRead, BufReader};
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_planetwear"))
+        .args(["simulate", "--scene", "example-2004", "--stop", "0.05", "--step", "1e-5"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("runs");
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut first).unwrap();
+    assert!(first.starts_with('{'), "{first}");
+    // The reader (dropped here) closed the pipe after one line.
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked") && !err.contains("Broken pipe"), "{err}");
+    assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "status {:?}", out.status);
+}
