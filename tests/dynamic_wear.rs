@@ -8,6 +8,7 @@
 
 use planetwear::model::gear::{GearSet, MeshKind};
 use planetwear::model::mesh::PathOfContact;
+use planetwear::model::run::RunSettings;
 use planetwear::scene::{Fidelity, Scene};
 use planetwear::wear::archard::{CycleWear, Limit, PressureSource, WearError, WearSettings};
 use planetwear::wear::compare::{compare_sources, SourceComparison};
@@ -27,8 +28,13 @@ fn torsional() -> GearSet {
     s.validate().unwrap()
 }
 
+/// The run settings of the example's dynamic runs.
+fn run_settings() -> RunSettings {
+    Scene::example_2004_annulus().validate_with_run().unwrap().1
+}
+
 fn model(set: &GearSet) -> WearModel {
-    WearModel::new(set, WearSettings::for_set(set)).unwrap()
+    WearModel::with_run(set, &run_settings(), WearSettings::for_set(set)).unwrap()
 }
 
 fn max_wear(c: &CycleWear, flank: Flank) -> f64 {
@@ -189,7 +195,13 @@ fn the_source_is_an_option_of_the_wear_model() {
     // dynamic loads reaches the update depth on its limiting flank, as a
     // quasi-static one does.
     let source = PressureSource::Dynamic { speed_rpm: 5000.0 };
-    let dynamic = WearModel::new(&set, WearSettings { source, ..WearSettings::for_set(&set) }).unwrap();
+    let settings = WearSettings { source, ..WearSettings::for_set(&set) };
+    // The dynamic loads need run settings: a model without them refuses the
+    // source at once, and a quasi-static model refuses a dynamic cycle.
+    assert!(matches!(WearModel::new(&set, settings), Err(WearError::NoRunSettings)));
+    let quasi_static = WearModel::new(&set, WearSettings::for_set(&set)).unwrap();
+    assert!(matches!(quasi_static.cycle_with(&state, source), Err(WearError::NoRunSettings)));
+    let dynamic = WearModel::with_run(&set, &run_settings(), settings).unwrap();
     let c = dynamic.cycle(&state).unwrap();
     assert_eq!(c.source, source);
     let next = dynamic.step(&state, Limit::Update).unwrap();

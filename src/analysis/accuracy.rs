@@ -54,6 +54,7 @@ use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics, SpectrumError};
 use crate::model::gear::{GearSet, IntegratorKind};
 use crate::model::lumped::Fidelity;
+use crate::model::run::RunSettings;
 use crate::scene::SceneError;
 
 /// Number of mesh harmonics in the error measure.
@@ -216,11 +217,10 @@ impl Method {
         format!("{}, {}", self.family(), self.setting())
     }
 
-    /// The gear set with this method as its integrator setting (the rest of
-    /// the dynamics settings unchanged); a setting outside the scene's rules
-    /// is refused.
-    pub fn apply(&self, set: &GearSet) -> Result<GearSet, SceneError> {
-        set.with_run_settings(|d| match *self {
+    /// The run settings with this method as their integrator setting (the
+    /// rest unchanged); a setting outside the scene's rules is refused.
+    pub fn apply(&self, run: &RunSettings) -> Result<RunSettings, SceneError> {
+        run.with(|d| match *self {
             Method::GeneralizedAlpha { rho_infinity, steps_per_mesh_cycle } => {
                 d.integrator = IntegratorKind::GeneralizedAlpha;
                 d.rho_infinity = rho_infinity;
@@ -551,7 +551,7 @@ fn check_speed(speed_rpm: f64) -> Result<(), AccuracyError> {
 /// time the median of `repeats` runs (at least one).
 pub fn measure(
     model: &PlanetaryDynamics,
-    set: &GearSet,
+    run: &RunSettings,
     speed_rpm: f64,
     method: &Method,
     protocol: &Protocol,
@@ -562,7 +562,7 @@ pub fn measure(
     let period = mesh_period(model, speed_rpm);
     let label = method.label();
     let configured =
-        method.apply(set).map_err(|source| AccuracyError::Settings { method: label.clone(), source })?;
+        method.apply(run).map_err(|source| AccuracyError::Settings { method: label.clone(), source })?;
     let err = |source| AccuracyError::Integration { method: label.clone(), speed_rpm, source };
     let steps = match method {
         Method::GeneralizedAlpha { steps_per_mesh_cycle, .. } => (*steps_per_mesh_cycle).max(1),
@@ -730,7 +730,8 @@ fn median(values: &mut [f64]) -> f64 {
 }
 
 /// An operating point of the study: a validated gear set (its fidelity and
-/// damping included) and a speed.
+/// damping included), the run settings the methods are varied from, and a
+/// speed.
 #[derive(Clone, Debug)]
 pub struct OperatingPoint {
     /// Short name (file names).
@@ -739,6 +740,8 @@ pub struct OperatingPoint {
     pub description: String,
     /// The gear set.
     pub set: GearSet,
+    /// The run settings each method changes.
+    pub run: RunSettings,
     /// Input speed \[rpm\].
     pub speed_rpm: f64,
 }
@@ -900,7 +903,7 @@ pub fn study_point(
     };
     let mut settings = Vec::new();
     for method in plan.methods() {
-        let result = match measure(&model, &point.set, speed, &method, &protocol, plan.repeats) {
+        let result = match measure(&model, &point.run, speed, &method, &protocol, plan.repeats) {
             Ok(m) => SettingResult {
                 method,
                 error: Some(harmonic_error(&m.harmonics, &reference.measured.harmonics)),
@@ -915,7 +918,7 @@ pub fn study_point(
     Ok(PointResult {
         name: point.name.clone(),
         description: point.description.clone(),
-        fidelity: point.set.dynamics().fidelity,
+        fidelity: point.set.fidelity(),
         speed_rpm: speed,
         mesh_frequency: 1.0 / period,
         dof: model.dim(),

@@ -29,6 +29,7 @@ use crate::dynamics::response::{static_state, ResponseError, Stepper, Work};
 use crate::dynamics::solver::{Rk45, SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
 use crate::model::gear::{GearSet, IntegratorKind};
+use crate::model::run::RunSettings;
 
 /// Mesh harmonics counted in the window (F^(1..6)).
 pub const HARMONICS: usize = 6;
@@ -61,13 +62,14 @@ pub struct TrackedRun {
 type Sample = (f64, f64, f64);
 
 /// Runs the set from the FMU's initial state at input speed `omega` [rad/s]
-/// with the adaptive method of `set` (which must be RK 5(4)) and returns
+/// with the adaptive method of `run` (which must be RK 5(4)) and returns
 /// the order-tracked windows of `window_cycles` mesh cycles at
 /// `samples_per_cycle` samples each that end `ends` mesh cycles after the
 /// start (each window holds the last samples whose travel crossing is not
 /// later than its end, as the FMU's window at that communication point).
 pub fn order_tracked_windows(
     set: &GearSet,
+    run: &RunSettings,
     model: &mut PlanetaryDynamics,
     omega: f64,
     window_cycles: usize,
@@ -80,10 +82,10 @@ pub fn order_tracked_windows(
         value,
         reason: reason.into(),
     };
-    if set.dynamics().integrator != IntegratorKind::Rk45 {
+    if run.integrator() != IntegratorKind::Rk45 {
         return Err(invalid(
             "integrator",
-            format!("{:?}", set.dynamics().integrator),
+            format!("{:?}", run.integrator()),
             "order tracking samples the adaptive method's dense output: use rk45",
         ));
     }
@@ -120,7 +122,7 @@ pub fn order_tracked_windows(
     model.set_torques(torques[0], torques[1], torques[2]);
     model.set_drive_speed(omega);
     model.rebase_drive(&start.q);
-    let mut rk = match Stepper::new(set, period).map_err(err)? {
+    let mut rk = match Stepper::new(run, period).map_err(err)? {
         Stepper::Rk(r) => r,
         Stepper::Alpha(_) => {
             return Err(invalid("integrator", "generalized_alpha".into(), "use rk45"));

@@ -4,6 +4,7 @@ use crate::*;
 
 pub(crate) fn wear_model(
     set: &GearSet,
+    run: &RunSettings,
     ring: bool,
     threshold_um: Option<f64>,
     dynamic_rpm: Option<f64>,
@@ -21,7 +22,7 @@ pub(crate) fn wear_model(
     if let Some(t) = threshold_um {
         settings.update_depth = t * 1e-6;
     }
-    WearModel::new(set, settings).map_err(|e| match threshold_um {
+    WearModel::with_run(set, run, settings).map_err(|e| match threshold_um {
         Some(t) => anyhow::anyhow!("--threshold {t} µm: {e}"),
         None => e.into(),
     })
@@ -35,8 +36,8 @@ pub(crate) fn wear_run(
     dynamic: Option<f64>,
     json: bool,
 ) -> Result<()> {
-    let set = validated(&load_scene(scene)?)?;
-    let model = wear_model(&set, ring, None, dynamic)?;
+    let (set, run) = validated_with_run(&load_scene(scene)?)?;
+    let model = wear_model(&set, &run, ring, None, dynamic)?;
     std::fs::create_dir_all(out.join("plots")).with_context(|| format!("creating {}", out.display()))?;
     let mut state = model.unworn();
     let mut states = vec![state.clone()];
@@ -106,8 +107,8 @@ pub(crate) fn wear_run_command(
 pub(crate) fn wear_compare_command(
     WearCompareArgs { scene, state, speeds, json }: WearCompareArgs,
 ) -> Result<()> {
-    let set = validated(&load_scene(&scene)?)?;
-    let model = wear_model(&set, false, None, None)?;
+    let (set, run) = validated_with_run(&load_scene(&scene)?)?;
+    let model = wear_model(&set, &run, false, None, None)?;
     let state = match &state {
         Some(path) => planetwear::wear::state::read_worn_state(path, &set)
             .with_context(|| format!("--state {}", path.display()))?,
@@ -209,8 +210,8 @@ pub(crate) fn wear_effect_command(
 pub(crate) fn wear_step_command(
     WearStepArgs { scene, state, out, threshold, revolutions, ring, dynamic_speed }: WearStepArgs,
 ) -> Result<()> {
-    let set = validated(&load_scene(&scene)?)?;
-    let model = wear_model(&set, ring, threshold, dynamic_speed)?;
+    let (set, run) = validated_with_run(&load_scene(&scene)?)?;
+    let model = wear_model(&set, &run, ring, threshold, dynamic_speed)?;
     let before = match &state {
         Some(path) => planetwear::wear::state::read_worn_state(path, &set)
             .with_context(|| format!("--state {}", path.display()))?,

@@ -19,6 +19,7 @@ use crate::dynamics::solver::{
 };
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics, SpectrumError};
 use crate::model::gear::{GearSet, IntegratorKind, MeshKind};
+use crate::model::run::RunSettings;
 
 /// Integrator work of a run (a copy of the solver's counters).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -137,8 +138,8 @@ pub(crate) enum Stepper {
 }
 
 impl Stepper {
-    pub(crate) fn new(set: &GearSet, mesh_period: f64) -> Result<Self, SolverError> {
-        let d = &set.dynamics();
+    pub(crate) fn new(run: &RunSettings, mesh_period: f64) -> Result<Self, SolverError> {
+        let d = run.values();
         Ok(match d.integrator {
             IntegratorKind::GeneralizedAlpha => {
                 let mut s = GeneralizedAlphaSettings::chung_hulbert(d.rho_infinity)?;
@@ -272,14 +273,15 @@ pub fn static_state(model: &PlanetaryDynamics, input_speed: f64) -> State {
 }
 
 /// Steady-state response at input speed `omega` [rad/s], continuing from
-/// `start` when given.
+/// `start` when given, run and sampled as `run` sets.
 pub fn steady_state(
     model: &mut PlanetaryDynamics,
     set: &GearSet,
+    run: &RunSettings,
     omega: f64,
     start: Option<&State>,
 ) -> Result<SteadyState, ResponseError> {
-    steady_state_observed(model, set, omega, start, |_, _| {})
+    steady_state_observed(model, set, run, omega, start, |_, _| {})
 }
 
 /// [`steady_state`], calling `observe(k, model)` at every sample k of the
@@ -290,6 +292,7 @@ pub fn steady_state(
 pub fn steady_state_observed(
     model: &mut PlanetaryDynamics,
     set: &GearSet,
+    run: &RunSettings,
     omega: f64,
     start: Option<&State>,
     mut observe: impl FnMut(usize, &PlanetaryDynamics),
@@ -303,7 +306,7 @@ pub fn steady_state_observed(
             reason: "must be non-zero and finite: the steady state is measured over mesh cycles".into(),
         });
     }
-    let d = &set.dynamics();
+    let d = run.values();
     let period = 1.0 / fm;
     let cycles_per_rev = model.mesh_frequency_per_input_speed * 2.0 * std::f64::consts::PI;
     let run_in_cycles = (d.run_in_revolutions * cycles_per_rev).ceil() as u64;
@@ -324,7 +327,7 @@ pub fn steady_state_observed(
     };
     model.set_drive_speed(omega);
     model.rebase_drive(&q0);
-    let mut stepper = Stepper::new(set, period).map_err(err)?;
+    let mut stepper = Stepper::new(run, period).map_err(err)?;
     stepper.init(model, 0.0, &q0, &v0).map_err(err)?;
     // Run-in, one mesh cycle at a time. The excitation repeats every mesh
     // cycle, so the steady state does too: the run-in ends once the mesh
@@ -453,6 +456,7 @@ pub struct Sweep {
 /// listed in `keep_histories_rpm`.
 pub fn sweep(
     set: &GearSet,
+    run: &RunSettings,
     model: &mut PlanetaryDynamics,
     direction: Direction,
     speeds_rpm: &[f64],
@@ -463,7 +467,7 @@ pub fn sweep(
     let mut state: Option<State> = None;
     for (i, rpm) in speeds_rpm.iter().enumerate() {
         let omega = rpm * std::f64::consts::PI / 30.0;
-        let mut ss = steady_state(model, set, omega, state.as_ref())?;
+        let mut ss = steady_state(model, set, run, omega, state.as_ref())?;
         // Report the grid speed as given, not its rpm → rad/s → rpm round trip.
         ss.input_speed_rpm = *rpm;
         state = Some(ss.end.clone());

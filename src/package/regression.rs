@@ -274,8 +274,8 @@ pub fn example_references(
     let mut scene = Scene::example_2004();
     scene.dynamics.integrator = IntegratorKind::Rk45;
     scene.dynamics.relative_tolerance = rtol;
-    let set = scene.validate().map_err(|e| ReferenceError::Setup(e.to_string()))?;
-    let samples = set.dynamics().samples_per_mesh_cycle;
+    let (set, run_settings) = scene.validate_with_run().map_err(|e| ReferenceError::Setup(e.to_string()))?;
+    let samples = run_settings.samples_per_mesh_cycle();
     let allowed_drift = 0.25 * (INTEGRATOR_ERROR + WINDOW_INTERPOLATION_ERROR);
     let computed: Vec<Case> = cases
         .par_iter()
@@ -295,6 +295,7 @@ pub fn example_references(
             let end = RUN_IN_CYCLES + WINDOW_CYCLES;
             let run = order_tracked_windows(
                 &set,
+                &run_settings,
                 &mut model,
                 omega,
                 WINDOW_CYCLES,

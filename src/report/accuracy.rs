@@ -48,8 +48,9 @@ pub enum StudyError {
 }
 
 fn point(name: &str, description: &str, scene: &Scene, speed_rpm: f64) -> Result<OperatingPoint, StudyError> {
-    let set = scene.validate().map_err(|source| StudyError::Scene { point: name.into(), source })?;
-    Ok(OperatingPoint { name: name.into(), description: description.into(), set, speed_rpm })
+    let (set, run) =
+        scene.validate_with_run().map_err(|source| StudyError::Scene { point: name.into(), source })?;
+    Ok(OperatingPoint { name: name.into(), description: description.into(), set, run, speed_rpm })
 }
 
 /// The study's operating points of the example (`example-2004`) at one

@@ -313,6 +313,9 @@ pub enum WearError {
         /// What failed (the dynamic model's or the integrator's error).
         reason: String,
     },
+    /// A dynamic source asked of a wear model made without run settings.
+    #[error("the dynamic tooth loads need run settings: make the wear model with WearModel::with_run")]
+    NoRunSettings,
     /// The total wear limit is already reached.
     #[error("the deepest wear {depth:e} m already reaches total_depth = {limit:e} m: no further update")]
     TotalWearReached {

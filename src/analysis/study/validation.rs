@@ -33,6 +33,7 @@ use crate::dynamics::spectrum::mesh_phases;
 use crate::model::gear::{GearSet, IntegratorKind, MeshKind};
 use crate::model::lumped::Fidelity;
 use crate::model::mesh::PathOfContact;
+use crate::model::run::RunSettings;
 use crate::scene::Scene;
 use crate::wear::archard::{passage_wear, Band, WearSettings};
 use crate::wear::flank::Flank;
@@ -221,8 +222,8 @@ impl Validation {
     }
 }
 
-fn integrator_words(set: &GearSet) -> String {
-    let d = &set.dynamics();
+fn integrator_words(run: &RunSettings) -> String {
+    let d = run.values();
     match d.integrator {
         IntegratorKind::Rk45 => format!(
             "RK 5(4) at relative tolerance {:e}; run-in ≤ {} input revolution, window {} revolutions, {} samples per mesh cycle",
@@ -339,17 +340,20 @@ impl Rows {
 /// Runs the validation of `scene` (the built-in example) under `plan`.
 pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, String> {
     let started = Instant::now();
-    let set = scene.validate().map_err(|e| e.to_string())?;
+    let (set, run) = scene.validate_with_run().map_err(|e| e.to_string())?;
     let width = set.sun().face_width;
     let per_mm = |f: f64| f / (width * 1e3);
     let mut rows = Rows { rows: Vec::new() };
-    let integrator = integrator_words(&set);
+    let integrator = integrator_words(&run);
 
     // Natural modes of both fidelities.
     let t = Instant::now();
     let contact = SetModel::new(&set);
     let dynamics_of = |fidelity: Fidelity| -> Result<PlanetaryDynamics, String> {
-        let s = set.with_run_settings(|d| d.fidelity = fidelity).map_err(|e| e.to_string())?;
+        // The fidelity is a term of the equations, so of the gear set.
+        let mut at = scene.clone();
+        at.dynamics.fidelity = fidelity;
+        let s = at.validate().map_err(|e| e.to_string())?;
         PlanetaryDynamics::new(&s, contact.clone()).map_err(|e| e.to_string())
     };
     // The torsional model also serves the closed-form planet-mode check.
@@ -652,17 +656,17 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     let speeds = plan.speeds();
     let model0 = PlanetaryDynamics::new(&set, unworn.set_model(&set)).map_err(|e| e.to_string())?;
     let model6 = PlanetaryDynamics::new(&set, worn.set_model(&set)).map_err(|e| e.to_string())?;
-    let run = |model: &PlanetaryDynamics, d: Direction| -> Result<Sweep, String> {
+    let run_sweep = |model: &PlanetaryDynamics, d: Direction| -> Result<Sweep, String> {
         let mut m = model.clone();
         let mut grid = speeds.clone();
         if d == Direction::Down {
             grid.reverse();
         }
-        sweep(&set, &mut m, d, &grid, &[], |_| {}).map_err(|e| e.to_string())
+        sweep(&set, &run, &mut m, d, &grid, &[], |_| {}).map_err(|e| e.to_string())
     };
     let ((a, b), (c, d)) = rayon::join(
-        || rayon::join(|| run(&model0, Direction::Up), || run(&model0, Direction::Down)),
-        || rayon::join(|| run(&model6, Direction::Up), || run(&model6, Direction::Down)),
+        || rayon::join(|| run_sweep(&model0, Direction::Up), || run_sweep(&model0, Direction::Down)),
+        || rayon::join(|| run_sweep(&model6, Direction::Up), || run_sweep(&model6, Direction::Down)),
     );
     let (up0, down0, up6, down6) = (a?, b?, c?, d?);
     let t_sweeps = t.elapsed().as_secs_f64();
@@ -814,14 +818,14 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
         "> 0 on the branch of the jump",
         sep > 0.0,
         &sweep_method,
-        format!("samples of {} per mesh cycle: 1/{} of the cycle", set.dynamics().samples_per_mesh_cycle, set.dynamics().samples_per_mesh_cycle),
+        format!("samples of {} per mesh cycle: 1/{} of the cycle", run.samples_per_mesh_cycle(), run.samples_per_mesh_cycle()),
         t_sweeps,
     );
 
     // Off-resonance loads at κ = 0 and κ, with a reference at a tight tolerance.
     let t = Instant::now();
-    let tight = set
-        .with_run_settings(|d| {
+    let tight = run
+        .with(|d| {
             d.integrator = IntegratorKind::Rk45;
             d.relative_tolerance = plan.reference_tolerance;
         })
@@ -829,13 +833,13 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     let mut figures = Vec::new();
     for rpm in OFF_RESONANCE {
         let omega = rpm * std::f64::consts::PI / 30.0;
-        let at = |s: &GearSet, m: &PlanetaryDynamics| -> Result<(f64, f64), String> {
+        let at = |r: &RunSettings, m: &PlanetaryDynamics| -> Result<(f64, f64), String> {
             let mut m = m.clone();
-            steady_state(&mut m, s, omega, None)
+            steady_state(&mut m, &set, r, omega, None)
                 .map(|ss| sun_planet(&ss))
                 .map_err(|e| format!("{rpm} rpm: {e}"))
         };
-        let (a0, a6) = (at(&set, &model0)?, at(&set, &model6)?);
+        let (a0, a6) = (at(&run, &model0)?, at(&run, &model6)?);
         let (r0, r6) = (at(&tight, &model0)?, at(&tight, &model6)?);
         figures.push((rpm, a0, a6, r0, r6));
     }
@@ -915,8 +919,8 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     // Mesh phasing from the steady state at 3000 rpm.
     let t = Instant::now();
     let mut m = model0.clone();
-    let ss =
-        steady_state(&mut m, &set, 3000.0 * std::f64::consts::PI / 30.0, None).map_err(|e| e.to_string())?;
+    let ss = steady_state(&mut m, &set, &run, 3000.0 * std::f64::consts::PI / 30.0, None)
+        .map_err(|e| e.to_string())?;
     let n = set.planet_angles().len();
     let phases: Vec<Vec<f64>> = (0..n)
         .map(|p| mesh_phases(&ss.mesh_force[2 * p], ss.cycles, 6).map_err(|e| e.to_string()))

@@ -20,6 +20,7 @@ use crate::dynamics::response::steady_state;
 use crate::geometry::profile::ProfileEnds;
 use crate::model::gear::{Drive, GearSet, MeshKind};
 use crate::model::lumped::Fidelity;
+use crate::model::run::RunSettings;
 use crate::scene::{ChamferSpec, Scene};
 use crate::wear::archard::{PressureSource, WearSettings, WearingFlanks};
 use crate::wear::flank::Flank;
@@ -263,12 +264,17 @@ pub struct MeshLoads {
 }
 
 /// The steady-state loads of `state` on `set` at each of `speeds_rpm`.
-pub fn mesh_loads(set: &GearSet, state: &WornState, speeds_rpm: &[f64]) -> Result<Vec<MeshLoads>, String> {
+pub fn mesh_loads(
+    set: &GearSet,
+    run: &RunSettings,
+    state: &WornState,
+    speeds_rpm: &[f64],
+) -> Result<Vec<MeshLoads>, String> {
     let mut model = PlanetaryDynamics::new(set, state.set_model(set)).map_err(|e| e.to_string())?;
     speeds_rpm
         .iter()
         .map(|rpm| {
-            let ss = steady_state(&mut model, set, rpm * std::f64::consts::PI / 30.0, None)
+            let ss = steady_state(&mut model, set, run, rpm * std::f64::consts::PI / 30.0, None)
                 .map_err(|e| format!("{rpm} rpm: {e}"))?;
             let m = |k: MeshKind| {
                 ss.meshes
@@ -321,15 +327,15 @@ impl VariantResult {
 /// Runs one variant: the wear model to `kappa`, then the figures at κ = 0 and κ.
 pub fn run_variant(v: &Variant, kappa: u32, speeds_rpm: &[f64]) -> Result<VariantResult, String> {
     let started = std::time::Instant::now();
-    let set = v.scene.validate().map_err(|e| format!("{}: {e}", v.key))?;
+    let (set, run) = v.scene.validate_with_run().map_err(|e| format!("{}: {e}", v.key))?;
     let mut settings = WearSettings::for_set(&set);
     (v.wear)(&mut settings);
-    let model = WearModel::new(&set, settings).map_err(|e| format!("{}: {e}", v.key))?;
+    let model = WearModel::with_run(&set, &run, settings).map_err(|e| format!("{}: {e}", v.key))?;
     let unworn = model.unworn();
     let worn = model.run_to_kappa(&unworn, kappa).map_err(|e| format!("{}: {e}", v.key))?;
     let samples = set.analysis().positions_per_mesh_cycle;
     let statics = [StaticFigures::of(&unworn, &set, samples), StaticFigures::of(&worn, &set, samples)];
-    let loads = [mesh_loads(&set, &unworn, speeds_rpm)?, mesh_loads(&set, &worn, speeds_rpm)?];
+    let loads = [mesh_loads(&set, &run, &unworn, speeds_rpm)?, mesh_loads(&set, &run, &worn, speeds_rpm)?];
     Ok(VariantResult {
         key: v.key.clone(),
         description: v.description.clone(),
