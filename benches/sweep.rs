@@ -32,7 +32,8 @@ fn main() {
     let mut newton = 0u64;
     for (dir, grid) in [(Direction::Up, &up), (Direction::Down, &down)] {
         let mut m = model.clone();
-        let sw = sweep(&set, &run, &mut m, dir, grid, &[], |_| {}).expect("sweep");
+        let grid: Vec<f64> = grid.iter().copied().map(planetwear::scene::units::rpm_to_rad_per_s).collect();
+        let sw = sweep(&set, &run, &mut m, dir, &grid, &[], |_| {}).expect("sweep");
         steps += sw.points.iter().map(|p| p.stats.steps).sum::<u64>();
         newton += sw.points.iter().map(|p| p.stats.newton_iterations).sum::<u64>();
     }

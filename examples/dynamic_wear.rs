@@ -6,6 +6,7 @@
 //! cargo run --release --example dynamic_wear [-- [--profiles] rpm ...]
 
 use planetwear::model::gear::MeshKind;
+use planetwear::scene::units::rpm_to_rad_per_s;
 use planetwear::scene::Scene;
 use planetwear::wear::archard::WearSettings;
 use planetwear::wear::compare::compare_sources;
@@ -34,11 +35,11 @@ fn main() -> anyhow::Result<()> {
         wear.settings().positions,
         wear.settings().archard_coefficient
     );
-    let (low, _) = dynamic_cycle(&wear, &state, LOW_SPEED_RPM)?;
+    let (low, _) = dynamic_cycle(&wear, &state, rpm_to_rad_per_s(LOW_SPEED_RPM))?;
     let low_max = |flank: Flank| low.flank(flank, 0).map_or(f64::NAN, |f| f.max_wear().0);
     for rpm in speeds {
         let started = std::time::Instant::now();
-        let c = compare_sources(&wear, &state, rpm)?;
+        let c = compare_sources(&wear, &state, rpm_to_rad_per_s(rpm))?;
         let l = &c.loads;
         println!(
             "\n{rpm} rpm: f_m = {:.1} Hz, {} mesh cycles × {} samples averaged, {} steps, {:.1} s",

@@ -19,7 +19,7 @@ use planetwear::report::sweep::{
 };
 use planetwear::report::write_atomic;
 use planetwear::scene::lumped::LumpedScene;
-use planetwear::scene::units::rpm_to_rad_per_s;
+use planetwear::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 use planetwear::scene::Scene;
 use planetwear::wear::archard::{Limit, PressureSource, WearError, WearSettings, WearingFlanks};
 use planetwear::wear::compare::compare_sources;

@@ -27,7 +27,8 @@ fn case() -> (RunSettings, PlanetaryDynamics, Protocol) {
     (run, model, Protocol { run_in_cycles: 12, window_cycles: 4, ..Protocol::default() })
 }
 
-const SPEED: f64 = 3000.0;
+/// 3000 rpm [rad/s].
+const SPEED: f64 = 3000.0 * std::f64::consts::PI / 30.0;
 
 fn errors(methods: &[Method]) -> Vec<SettingResult> {
     let (run, model, protocol) = case();

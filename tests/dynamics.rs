@@ -8,6 +8,7 @@ use planetwear::dynamics::solver::{GeneralizedAlpha, GeneralizedAlphaSettings, S
 use planetwear::dynamics::spectrum::mesh_harmonics;
 use planetwear::model::gear::{GearSet, MeshKind};
 use planetwear::model::run::RunSettings;
+use planetwear::scene::units::rad_per_s_to_rpm;
 use planetwear::scene::{Fidelity, IntegratorKind, Scene};
 
 const RPM: f64 = std::f64::consts::PI / 30.0;
@@ -84,14 +85,17 @@ fn a_separating_set_shows_a_softening_jump_and_two_branches() {
     let speeds: Vec<f64> = (0..=14).map(|i| 9000.0 + 250.0 * f64::from(i)).collect();
     let run = |d: Direction, grid: &[f64]| {
         let mut m = model.clone();
-        sweep(&set, &run, &mut m, d, grid, &[], |_| {}).unwrap()
+        let grid: Vec<f64> = grid.iter().map(|r| r * RPM).collect();
+        sweep(&set, &run, &mut m, d, &grid, &[], |_| {}).unwrap()
     };
     let up = run(Direction::Up, &speeds);
     let mut rev = speeds.clone();
     rev.reverse();
     let down = run(Direction::Down, &rev);
     let rms = |sw: &planetwear::dynamics::response::Sweep, rpm: f64| {
-        sw.points.iter().find(|p| (p.input_speed_rpm - rpm).abs() < 1e-9).unwrap().meshes[0].harmonics.rms
+        sw.points.iter().find(|p| (rad_per_s_to_rpm(p.input_speed) - rpm).abs() < 1e-9).unwrap().meshes[0]
+            .harmonics
+            .rms
     };
     let sep = |sw: &planetwear::dynamics::response::Sweep| {
         sw.points.iter().map(|p| p.meshes[0].separation).fold(0.0, f64::max)

@@ -30,6 +30,7 @@ use crate::dynamics::solver::{Rk45, SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
 use crate::model::gear::{GearSet, IntegratorKind};
 use crate::model::run::RunSettings;
+use crate::scene::units::rad_per_s_to_rpm;
 
 /// Mesh harmonics counted in the window (F^(1..6)).
 pub const HARMONICS: usize = 6;
@@ -76,7 +77,6 @@ pub fn order_tracked_windows(
     samples_per_cycle: usize,
     ends: &[usize],
 ) -> Result<TrackedRun, ResponseError> {
-    let rpm = omega * 30.0 / std::f64::consts::PI;
     let invalid = |name: &str, value: String, reason: &str| ResponseError::InvalidRequest {
         name: name.into(),
         value,
@@ -93,7 +93,7 @@ pub fn order_tracked_windows(
     if !(fm.is_finite() && fm > 0.0) {
         return Err(invalid(
             "input speed",
-            format!("{rpm} rpm"),
+            format!("{} rpm", rad_per_s_to_rpm(omega)),
             "must be positive and finite (the travel is tracked upwards)",
         ));
     }
@@ -115,7 +115,7 @@ pub fn order_tracked_windows(
         return Err(invalid("planets", "0".into(), "planet 1's meshes are tracked: need a planet"));
     }
     let period = 1.0 / fm;
-    let err = |source| ResponseError::Integration { speed_rpm: rpm, source };
+    let err = |source| ResponseError::Integration { speed: omega, source };
     // The FMU's start (Simulation::new): static deflection, balanced torques.
     let start = static_state(model, omega);
     let torques = set.balanced_torques();
@@ -187,7 +187,7 @@ pub fn order_tracked_windows(
         let ring: Vec<f64> = window.iter().map(|s| s.2).collect();
         let harmonics = |f: &[f64]| {
             mesh_harmonics(f, window_cycles, HARMONICS)
-                .map_err(|source| ResponseError::Spectrum { speed_rpm: rpm, source })
+                .map_err(|source| ResponseError::Spectrum { speed: omega, source })
         };
         windows.push(WindowMeasure {
             end_cycle: end,

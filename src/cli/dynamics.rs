@@ -63,9 +63,12 @@ pub(crate) fn sweep_command(
     let modes = natural_modes(&model.lumped);
     let bar = progress_bar((speeds.len() * dirs.len()) as u64);
     let started = std::time::Instant::now();
+    // The core takes rad/s; the report shows each point's speed in rpm as
+    // given (rad_per_s_to_rpm returns a speed written in rpm exactly).
+    let histories: Vec<f64> = histories.into_iter().map(rpm_to_rad_per_s).collect();
     let run = |d: Direction| {
         let mut m = model.clone();
-        let mut grid = speeds.clone();
+        let mut grid: Vec<f64> = speeds.iter().copied().map(rpm_to_rad_per_s).collect();
         if d == Direction::Down {
             grid.reverse();
         }
@@ -127,7 +130,7 @@ pub(crate) fn sweep_command(
                 "  peak {:?} {} at {:.0} rpm: F(rms) {:.1} N/mm; {}×f_m = {:.0} Hz ≈ {:?} mode at {:.0} Hz ({:.1} %)",
                 p.direction,
                 p.mesh.name(),
-                p.speed_rpm,
+                rad_per_s_to_rpm(p.speed),
                 p.rms_n_per_mm,
                 p.harmonic,
                 f64::from(p.harmonic) * p.mesh_frequency,
@@ -203,7 +206,11 @@ pub(crate) fn ltca_command(
 pub(crate) fn print_steady_state(ss: &SteadyState, width_mm: f64) {
     println!(
         "steady state at {:.1} rpm (mesh frequency {:.1} Hz, {} mesh cycles; {} steps, {} Newton iterations)",
-        ss.input_speed_rpm, ss.mesh_frequency, ss.cycles, ss.stats.steps, ss.stats.newton_iterations
+        rad_per_s_to_rpm(ss.input_speed),
+        ss.mesh_frequency,
+        ss.cycles,
+        ss.stats.steps,
+        ss.stats.newton_iterations
     );
     println!(
         "  {:<16} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7}",

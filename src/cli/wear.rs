@@ -14,7 +14,7 @@ pub(crate) fn wear_model(
         if !(rpm.is_finite() && rpm > 0.0) {
             bail!("--dynamic-speed {rpm}: must be a finite input speed > 0 rpm");
         }
-        settings.source = PressureSource::Dynamic { speed_rpm: rpm };
+        settings.source = PressureSource::Dynamic { speed: rpm_to_rad_per_s(rpm) };
     }
     if ring {
         settings.wearing = WearingFlanks::both_meshes();
@@ -120,7 +120,7 @@ pub(crate) fn wear_compare_command(
         if !(rpm.is_finite() && rpm > 0.0) {
             bail!("--speeds {rpm}: speeds must be finite and > 0 rpm");
         }
-        let c = compare_sources(&model, &state, rpm)?;
+        let c = compare_sources(&model, &state, rpm_to_rad_per_s(rpm))?;
         if json {
             docs.push(serde_json::json!({
                 "speed_rpm": rpm,
@@ -187,6 +187,7 @@ pub(crate) fn wear_effect_command(
     }
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     let started = std::time::Instant::now();
+    let speeds: Vec<f64> = speeds.into_iter().map(rpm_to_rad_per_s).collect();
     let results: Vec<_> = run_all(&list, kappa, &speeds)
         .into_iter()
         .collect::<Result<_, _>>()

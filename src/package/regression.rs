@@ -291,7 +291,7 @@ pub fn example_references(
             let state = WornState::from_json(text, &set).map_err(|e| run_error(e.to_string()))?;
             let mut model =
                 PlanetaryDynamics::new(&set, state.set_model(&set)).map_err(|e| run_error(e.to_string()))?;
-            let omega = rpm * std::f64::consts::PI / 30.0;
+            let omega = crate::scene::units::rpm_to_rad_per_s(rpm);
             let end = RUN_IN_CYCLES + WINDOW_CYCLES;
             let run = order_tracked_windows(
                 &set,

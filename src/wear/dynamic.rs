@@ -100,8 +100,9 @@ impl PairLoadProfile {
 /// The tooth-pair loads of a dynamic steady state, each planet and mesh.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DynamicPairLoads {
-    /// Input speed \[rpm\].
-    pub speed_rpm: f64,
+    /// Input speed [rad/s] (written in rpm, as `speed_rpm`).
+    #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]
+    pub speed: f64,
     /// Mesh frequency \[Hz\].
     pub mesh_frequency: f64,
     /// Mesh cycles in the window, averaged [-].
@@ -177,7 +178,7 @@ pub fn samples_per_cycle(set: &GearSet, run: &RunSettings, positions: usize) -> 
     run.samples_per_mesh_cycle().max((positions as f64 / ratio).ceil() as usize)
 }
 /// Runs the dynamic model on `contact` (the contact models of a worn or
-/// unworn set) to steady state at `speed_rpm` \[rpm\] and records each planet's
+/// unworn set) to steady state at input speed `speed` [rad/s] and records each planet's
 /// tooth-pair load per face slice through its passage, at
 /// [`samples_per_cycle`] samples per mesh cycle for `positions` wear
 /// positions. Gives the contact models back for the wear cycle.
@@ -185,11 +186,11 @@ pub fn record_pair_loads(
     set: &GearSet,
     run: &RunSettings,
     contact: SetModel,
-    speed_rpm: f64,
+    speed: f64,
     positions: usize,
 ) -> Result<(DynamicPairLoads, SetModel), WearError> {
-    PressureSource::Dynamic { speed_rpm }.validate()?;
-    let failed = |reason: String| WearError::DynamicRun { speed_rpm, reason };
+    PressureSource::Dynamic { speed }.validate()?;
+    let failed = |reason: String| WearError::DynamicRun { speed, reason };
     let samples = samples_per_cycle(set, run, positions);
     let run = run.with(|d| d.samples_per_mesh_cycle = samples).map_err(|e| failed(e.to_string()))?;
     let mut dynamics = PlanetaryDynamics::new(set, contact).map_err(|e| failed(e.to_string()))?;
@@ -200,8 +201,7 @@ pub fn record_pair_loads(
     let mut sums: Vec<HashMap<(usize, i64), Accumulator>> = vec![HashMap::new(); n_mesh];
     let mut pairs: Vec<PairContact> = Vec::new();
     let mut slice = Vec::new();
-    let omega = speed_rpm * std::f64::consts::PI / 30.0;
-    let ss = steady_state_observed(&mut dynamics, set, &run, omega, None, |k, model| {
+    let ss = steady_state_observed(&mut dynamics, set, &run, speed, None, |k, model| {
         let phase = k % samples;
         for (i, state) in model.meshes.iter().enumerate() {
             let (_, kind) = model.mesh_identity(i);
@@ -252,7 +252,7 @@ pub fn record_pair_loads(
         });
     }
     let loads = DynamicPairLoads {
-        speed_rpm,
+        speed,
         mesh_frequency: ss.mesh_frequency,
         cycles: ss.cycles,
         samples_per_cycle: samples,

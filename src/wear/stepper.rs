@@ -145,8 +145,8 @@ impl WearModel {
                 let loads = QuasiStaticLoads { wear: self, model: &model };
                 Ok(self.cycle_on(state, &model, &loads, source))
             }
-            PressureSource::Dynamic { speed_rpm } => {
-                crate::wear::stepper::dynamic_cycle(self, state, speed_rpm).map(|(cycle, _)| cycle)
+            PressureSource::Dynamic { speed } => {
+                crate::wear::stepper::dynamic_cycle(self, state, speed).map(|(cycle, _)| cycle)
             }
         }
     }
@@ -540,18 +540,18 @@ impl WearModel {
     }
 }
 /// One wear cycle on the state's geometry with the tooth-pair loads of the
-/// dynamic steady state at `speed_rpm` \[rpm\], and those loads.
+/// dynamic steady state at input speed `speed` [rad/s], and those loads.
 pub fn dynamic_cycle(
     wear: &WearModel,
     state: &WornState,
-    speed_rpm: f64,
+    speed: f64,
 ) -> Result<(CycleWear, DynamicPairLoads), WearError> {
-    let source = PressureSource::Dynamic { speed_rpm };
+    let source = PressureSource::Dynamic { speed };
     source.validate()?;
     let run = wear.run_settings().ok_or(WearError::NoRunSettings)?;
     wear.check(state)?;
     let contact = state.set_model(wear.set());
-    let (loads, contact) = record_pair_loads(wear.set(), run, contact, speed_rpm, wear.settings().positions)?;
+    let (loads, contact) = record_pair_loads(wear.set(), run, contact, speed, wear.settings().positions)?;
     let cycle = wear.cycle_on(state, &contact, &loads, source);
     Ok((cycle, loads))
 }

@@ -34,6 +34,7 @@ use crate::model::gear::{GearSet, IntegratorKind, MeshKind};
 use crate::model::lumped::Fidelity;
 use crate::model::mesh::PathOfContact;
 use crate::model::run::RunSettings;
+use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 use crate::scene::Scene;
 use crate::wear::archard::{passage_wear, Band, WearSettings};
 use crate::wear::flank::Flank;
@@ -162,8 +163,9 @@ pub struct Row {
 /// One point of a forced-response curve.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CurvePoint {
-    /// Input speed \[rpm\].
-    pub speed_rpm: f64,
+    /// Input speed [rad/s] (written in rpm, as `speed_rpm`).
+    #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]
+    pub speed: f64,
     /// F^(rms) of planet 1's sun–planet and ring–planet mesh \[N\].
     pub rms: [f64; 2],
     /// Separation fraction of both meshes [-].
@@ -283,13 +285,13 @@ fn curve(s: &Sweep, kappa: u32) -> Curve {
             let m = |k: MeshKind| p.meshes.iter().find(|m| m.planet == 0 && m.mesh == k);
             let (a, b) = (m(MeshKind::SunPlanet), m(MeshKind::RingPlanet));
             CurvePoint {
-                speed_rpm: p.input_speed_rpm,
+                speed: p.input_speed,
                 rms: [a.map_or(0.0, |m| m.harmonics.rms), b.map_or(0.0, |m| m.harmonics.rms)],
                 separation: [a.map_or(0.0, |m| m.separation), b.map_or(0.0, |m| m.separation)],
             }
         })
         .collect();
-    points.sort_by(|a, b| a.speed_rpm.total_cmp(&b.speed_rpm));
+    points.sort_by(|a, b| a.speed.total_cmp(&b.speed));
     Curve { kappa, direction: s.direction, points }
 }
 
@@ -653,7 +655,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
 
     // Dynamics: sweeps at κ = 0 and κ, up and down, in parallel.
     let t = Instant::now();
-    let speeds = plan.speeds();
+    let speeds: Vec<f64> = plan.speeds().into_iter().map(rpm_to_rad_per_s).collect();
     let model0 = PlanetaryDynamics::new(&set, unworn.set_model(&set)).map_err(|e| e.to_string())?;
     let model6 = PlanetaryDynamics::new(&set, worn.set_model(&set)).map_err(|e| e.to_string())?;
     let run_sweep = |model: &PlanetaryDynamics, d: Direction| -> Result<Sweep, String> {
@@ -679,7 +681,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
         speeds.len()
     );
     let sec = "Forced response (κ = 0)";
-    let xs: Vec<f64> = curves[0].points.iter().map(|p| p.speed_rpm).collect();
+    let xs: Vec<f64> = curves[0].points.iter().map(|p| rad_per_s_to_rpm(p.speed)).collect();
     let ys = |c: &Curve| c.points.iter().map(|p| p.rms[0]).collect::<Vec<f64>>();
     // A peak counts where either direction has one.
     let mut peaks0 = prominent_peaks(&xs, &ys(&curves[0]), 0.1);
@@ -744,10 +746,12 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
             .iter()
             .zip(&down.points)
             .filter(|(u, d)| {
-                let r = 2.0 * fm_per_rpm * u.speed_rpm / f_rot1;
+                let r = 2.0 * fm_per_rpm * rad_per_s_to_rpm(u.speed) / f_rot1;
                 (0.7..=1.1).contains(&r) && (u.rms[0] - d.rms[0]).abs() > 0.1 * u.rms[0].max(d.rms[0])
             })
-            .map(|(u, d)| (u.speed_rpm, u.rms[0], d.rms[0], d.separation[0].max(u.separation[0])))
+            .map(|(u, d)| {
+                (rad_per_s_to_rpm(u.speed), u.rms[0], d.rms[0], d.separation[0].max(u.separation[0]))
+            })
             .collect()
     };
     let band = branches(&curves[0], &curves[1]);
@@ -802,7 +806,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     let (sep_all, sep_rpm) = curves[..2]
         .iter()
         .flat_map(|c| c.points.iter())
-        .map(|p| (p.separation[0], p.speed_rpm))
+        .map(|p| (p.separation[0], rad_per_s_to_rpm(p.speed)))
         .fold((0.0, 0.0), |m, p| if p.0 > m.0 { p } else { m });
     rows.push(
         "separation-large-peak",
@@ -832,7 +836,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
         .map_err(|e| e.to_string())?;
     let mut figures = Vec::new();
     for rpm in OFF_RESONANCE {
-        let omega = rpm * std::f64::consts::PI / 30.0;
+        let omega = rpm_to_rad_per_s(rpm);
         let at = |r: &RunSettings, m: &PlanetaryDynamics| -> Result<(f64, f64), String> {
             let mut m = m.clone();
             steady_state(&mut m, &set, r, omega, None)
@@ -887,7 +891,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
         "as the rows above".into(),
         t_off,
     );
-    let xs6: Vec<f64> = curves[2].points.iter().map(|p| p.speed_rpm).collect();
+    let xs6: Vec<f64> = curves[2].points.iter().map(|p| rad_per_s_to_rpm(p.speed)).collect();
     let mut peaks6 = prominent_peaks(&xs6, &ys(&curves[2]), 0.1);
     peaks6.extend(prominent_peaks(&xs6, &ys(&curves[3]), 0.1));
     peaks6.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -919,8 +923,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     // Mesh phasing from the steady state at 3000 rpm.
     let t = Instant::now();
     let mut m = model0.clone();
-    let ss = steady_state(&mut m, &set, &run, 3000.0 * std::f64::consts::PI / 30.0, None)
-        .map_err(|e| e.to_string())?;
+    let ss = steady_state(&mut m, &set, &run, rpm_to_rad_per_s(3000.0), None).map_err(|e| e.to_string())?;
     let n = set.planet_angles().len();
     let phases: Vec<Vec<f64>> = (0..n)
         .map(|p| mesh_phases(&ss.mesh_force[2 * p], ss.cycles, 6).map_err(|e| e.to_string()))
