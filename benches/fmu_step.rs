@@ -57,9 +57,9 @@ fn native_run(fidelity: Fidelity, integrator: IntegratorKind, h: f64, span: f64)
     let mut s = Scene::example_2004();
     s.dynamics.fidelity = fidelity;
     s.dynamics.integrator = integrator;
-    let set = s.validate().expect("valid");
+    let (set, run) = s.validate_with_run().expect("valid");
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
-    let mut sim = Simulation::new(&set, model, 0.0, 3000.0 * std::f64::consts::PI / 30.0).expect("sim");
+    let mut sim = Simulation::new(&set, &run, model, 0.0, 3000.0 * std::f64::consts::PI / 30.0).expect("sim");
     let n = (span / h).round() as u64;
     let start = Instant::now();
     for k in 0..n {

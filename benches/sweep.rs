@@ -18,7 +18,7 @@ fn main() {
     if std::env::args().any(|a| a == "--torsional") {
         scene.dynamics.fidelity = planetwear::scene::Fidelity::Torsional;
     }
-    let set = scene.validate().expect("the example is valid");
+    let (set, run) = scene.validate_with_run().expect("the example is valid");
     let built = Instant::now();
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
     let build_time = built.elapsed().as_secs_f64();
@@ -32,17 +32,14 @@ fn main() {
     let mut newton = 0u64;
     for (dir, grid) in [(Direction::Up, &up), (Direction::Down, &down)] {
         let mut m = model.clone();
-        let sw = sweep(&set, &mut m, dir, grid, &[], |_| {}).expect("sweep");
+        let grid: Vec<f64> = grid.iter().copied().map(planetwear::scene::units::rpm_to_rad_per_s).collect();
+        let sw = sweep(&set, &run, &mut m, dir, &grid, &[], |_| {}).expect("sweep");
         steps += sw.points.iter().map(|p| p.stats.steps).sum::<u64>();
         newton += sw.points.iter().map(|p| p.stats.newton_iterations).sum::<u64>();
     }
     let wall = start.elapsed().as_secs_f64();
     let dof = model.dim();
-    println!(
-        "sweep benchmark: example-2004, {:?}, {} speeds × 2 directions, one thread",
-        set.dynamics().fidelity,
-        n
-    );
+    println!("sweep benchmark: example-2004, {:?}, {} speeds × 2 directions, one thread", set.fidelity(), n);
     println!("  model build (contact tables, LTCA for the mean stiffness): {build_time:.3} s");
     println!("  wall time of both sweeps: {wall:.2} s");
     println!("  internal steps: {steps} ({:.0} steps/s), Newton iterations {newton}", steps as f64 / wall);

@@ -6,6 +6,7 @@
 //! cargo run --release --example dynamic_wear [-- [--profiles] rpm ...]
 
 use planetwear::model::gear::MeshKind;
+use planetwear::scene::units::rpm_to_rad_per_s;
 use planetwear::scene::Scene;
 use planetwear::wear::archard::WearSettings;
 use planetwear::wear::compare::compare_sources;
@@ -24,21 +25,21 @@ fn main() -> anyhow::Result<()> {
     if speeds.is_empty() {
         speeds = vec![3000.0, 5000.0];
     }
-    let set = Scene::example_2004().validate()?;
-    let wear = WearModel::new(&set, WearSettings::for_set(&set))?;
+    let (set, run) = Scene::example_2004().validate_with_run()?;
+    let wear = WearModel::with_run(&set, &run, WearSettings::for_set(&set))?;
     let state = wear.unworn();
     let face_mm = set.sun().face_width.min(set.planet().face_width) * 1e3;
     println!(
         "example-2004 ({:?}), unworn (κ = 0), R = {}, k = {:e} m²/N; wear per tooth cycle [pm], mean over the planets",
-        set.dynamics().fidelity,
+        set.fidelity(),
         wear.settings().positions,
         wear.settings().archard_coefficient
     );
-    let (low, _) = dynamic_cycle(&wear, &state, LOW_SPEED_RPM)?;
+    let (low, _) = dynamic_cycle(&wear, &state, rpm_to_rad_per_s(LOW_SPEED_RPM))?;
     let low_max = |flank: Flank| low.flank(flank, 0).map_or(f64::NAN, |f| f.max_wear().0);
     for rpm in speeds {
         let started = std::time::Instant::now();
-        let c = compare_sources(&wear, &state, rpm)?;
+        let c = compare_sources(&wear, &state, rpm_to_rad_per_s(rpm))?;
         let l = &c.loads;
         println!(
             "\n{rpm} rpm: f_m = {:.1} Hz, {} mesh cycles × {} samples averaged, {} steps, {:.1} s",

@@ -12,12 +12,14 @@ use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::response::{steady_state, sweep, Direction, SteadyState};
 use planetwear::model::gear::GearSet;
 use planetwear::model::lumped::LumpedSet;
+use planetwear::model::run::RunSettings;
 use planetwear::report::ltca::LtcaStudy;
 use planetwear::report::sweep::{
     find_peaks, sweep_csv, write_csv, write_forced_response, write_steady_state,
 };
 use planetwear::report::write_atomic;
 use planetwear::scene::lumped::LumpedScene;
+use planetwear::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 use planetwear::scene::Scene;
 use planetwear::wear::archard::{Limit, PressureSource, WearError, WearSettings, WearingFlanks};
 use planetwear::wear::compare::compare_sources;
@@ -443,6 +445,11 @@ fn load_scene(arg: &str) -> Result<Scene> {
 
 fn validated(scene: &Scene) -> Result<GearSet> {
     scene.validate().map_err(anyhow::Error::from)
+}
+
+/// The gear set and the run settings of a scene.
+fn validated_with_run(scene: &Scene) -> Result<(GearSet, RunSettings)> {
+    scene.validate_with_run().map_err(anyhow::Error::from)
 }
 
 /// The contact model of the set, unworn or with the flanks of a worn-profile state.

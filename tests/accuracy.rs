@@ -15,28 +15,29 @@ use planetwear::analysis::accuracy::{
 };
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
-use planetwear::model::gear::GearSet;
+use planetwear::model::run::RunSettings;
 use planetwear::scene::{Fidelity, Scene};
 
 /// The torsional example at 3000 rpm (no separation), a short run.
-fn case() -> (GearSet, PlanetaryDynamics, Protocol) {
+fn case() -> (RunSettings, PlanetaryDynamics, Protocol) {
     let mut scene = Scene::example_2004_annulus();
     scene.dynamics.fidelity = Fidelity::Torsional;
-    let set = scene.validate().unwrap();
+    let (set, run) = scene.validate_with_run().unwrap();
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
-    (set, model, Protocol { run_in_cycles: 12, window_cycles: 4, ..Protocol::default() })
+    (run, model, Protocol { run_in_cycles: 12, window_cycles: 4, ..Protocol::default() })
 }
 
-const SPEED: f64 = 3000.0;
+/// 3000 rpm [rad/s].
+const SPEED: f64 = 3000.0 * std::f64::consts::PI / 30.0;
 
 fn errors(methods: &[Method]) -> Vec<SettingResult> {
-    let (set, model, protocol) = case();
+    let (run, model, protocol) = case();
     let r = reference(&model, SPEED, &protocol, 1e-12).unwrap();
     assert_eq!(r.measured.separation, vec![0.0, 0.0], "the case must not separate");
     methods
         .iter()
         .map(|m| {
-            let x = measure(&model, &set, SPEED, m, &protocol, 1).unwrap();
+            let x = measure(&model, &run, SPEED, m, &protocol, 1).unwrap();
             SettingResult {
                 method: *m,
                 error: Some(harmonic_error(&x.harmonics, &r.measured.harmonics)),
@@ -81,12 +82,12 @@ fn adaptive_error_falls_with_the_tolerance() {
 /// (RK 5(4) at 1e-8).
 #[test]
 fn reference_agrees_with_an_independent_integrator() {
-    let (set, model, protocol) = case();
+    let (run, model, protocol) = case();
     let r = reference(&model, SPEED, &protocol, 1e-12).unwrap();
     let a = confirm(&model, SPEED, &protocol, &r, &independent::Dop853 { rtol: 1e-11 }).unwrap();
     assert!(a.error < 1e-8, "agreement {}", a.error);
     let tight =
-        measure(&model, &set, SPEED, &Method::Rk45 { relative_tolerance: 1e-8 }, &protocol, 1).unwrap();
+        measure(&model, &run, SPEED, &Method::Rk45 { relative_tolerance: 1e-8 }, &protocol, 1).unwrap();
     let smallest = harmonic_error(&tight.harmonics, &r.measured.harmonics);
     assert!(a.error <= 1e-2 * smallest, "agreement {} vs smallest error {smallest}", a.error);
 }

@@ -8,6 +8,8 @@
 
 use planetwear::model::gear::{GearSet, MeshKind};
 use planetwear::model::mesh::PathOfContact;
+use planetwear::model::run::RunSettings;
+use planetwear::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 use planetwear::scene::{Fidelity, Scene};
 use planetwear::wear::archard::{CycleWear, Limit, PressureSource, WearError, WearSettings};
 use planetwear::wear::compare::{compare_sources, SourceComparison};
@@ -27,8 +29,13 @@ fn torsional() -> GearSet {
     s.validate().unwrap()
 }
 
+/// The run settings of the example's dynamic runs.
+fn run_settings() -> RunSettings {
+    Scene::example_2004_annulus().validate_with_run().unwrap().1
+}
+
 fn model(set: &GearSet) -> WearModel {
-    WearModel::new(set, WearSettings::for_set(set)).unwrap()
+    WearModel::with_run(set, &run_settings(), WearSettings::for_set(set)).unwrap()
 }
 
 fn max_wear(c: &CycleWear, flank: Flank) -> f64 {
@@ -44,7 +51,7 @@ fn print(c: &SourceComparison) {
     for f in &c.flanks {
         println!(
             "{} rpm {}: quasi-static {:.4e} m at {:.2}°, dynamic {:.4e} m at {:.2}°, ratio {:.4}, largest difference {:.2} %",
-            c.speed_rpm,
+            rad_per_s_to_rpm(c.speed),
             f.flank.name(),
             f.quasi_static_max,
             f.quasi_static_max_roll.to_degrees(),
@@ -66,7 +73,7 @@ fn in_the_low_speed_limit_the_dynamic_loads_give_the_quasi_static_wear() {
     // point, largest pair load 287.6 vs 287.5 N/mm.
     let set = torsional();
     let wear = model(&set);
-    let c = compare_sources(&wear, &wear.unworn(), 100.0).unwrap();
+    let c = compare_sources(&wear, &wear.unworn(), rpm_to_rad_per_s(100.0)).unwrap();
     print(&c);
     for flank in [Flank::SunDrive, Flank::PlanetSunSide] {
         let f = c.flank(flank).unwrap();
@@ -99,7 +106,7 @@ fn at_the_resonant_speed_the_dynamic_loads_wear_the_flanks_more() {
     let set = example();
     let wear = model(&set);
     let state = wear.unworn();
-    let c = compare_sources(&wear, &state, 5000.0).unwrap();
+    let c = compare_sources(&wear, &state, rpm_to_rad_per_s(5000.0)).unwrap();
     print(&c);
     let m = c.mesh(MeshKind::SunPlanet).unwrap();
     let (mean, rms) = (per_mm(&set, m.mean_mesh_force), per_mm(&set, m.rms_mesh_force));
@@ -113,8 +120,8 @@ fn at_the_resonant_speed_the_dynamic_loads_wear_the_flanks_more() {
         m.dynamic_max_pair_load,
         m.quasi_static_max_pair_load
     );
-    let (slow, _) = dynamic_cycle(&wear, &state, 100.0).unwrap();
-    let (off, _) = dynamic_cycle(&wear, &state, 3000.0).unwrap();
+    let (slow, _) = dynamic_cycle(&wear, &state, rpm_to_rad_per_s(100.0)).unwrap();
+    let (off, _) = dynamic_cycle(&wear, &state, rpm_to_rad_per_s(3000.0)).unwrap();
     for flank in [Flank::SunDrive, Flank::PlanetSunSide] {
         let f = c.flank(flank).unwrap();
         assert!(f.ratio > 1.02, "{}: dynamic/quasi-static {}", flank.name(), f.ratio);
@@ -141,7 +148,7 @@ fn a_pair_carries_the_mean_mesh_force_times_the_base_pitch() {
     let set = example();
     let wear = model(&set);
     let state = wear.unworn();
-    let (cycle, loads) = dynamic_cycle(&wear, &state, 5000.0).unwrap();
+    let (cycle, loads) = dynamic_cycle(&wear, &state, rpm_to_rad_per_s(5000.0)).unwrap();
     let pb = PathOfContact::new(&set, MeshKind::SunPlanet).base_pitch;
     let passage = cycle.mesh(MeshKind::SunPlanet).unwrap();
     for (p, profile) in loads.of(MeshKind::SunPlanet).enumerate() {
@@ -167,14 +174,18 @@ fn the_source_is_an_option_of_the_wear_model() {
     let set = example();
     // A speed that cannot be run is refused, naming the setting.
     for bad in [0.0, -100.0, f64::NAN] {
-        let settings =
-            WearSettings { source: PressureSource::Dynamic { speed_rpm: bad }, ..WearSettings::default() };
+        let settings = WearSettings {
+            source: PressureSource::Dynamic { speed: rpm_to_rad_per_s(bad) },
+            ..WearSettings::default()
+        };
         match WearModel::new(&set, settings) {
             Err(WearError::InvalidSetting { name, .. }) => assert_eq!(name, "source.speed_rpm"),
             other => panic!("{bad} rpm: {other:?}"),
         }
         let wear = model(&set);
-        let err = wear.cycle_with(&wear.unworn(), PressureSource::Dynamic { speed_rpm: bad }).unwrap_err();
+        let err = wear
+            .cycle_with(&wear.unworn(), PressureSource::Dynamic { speed: rpm_to_rad_per_s(bad) })
+            .unwrap_err();
         assert!(err.to_string().contains("source.speed_rpm"), "{err}");
     }
     // The default source is the quasi-static one, and an explicit choice of it
@@ -188,8 +199,14 @@ fn the_source_is_an_option_of_the_wear_model() {
     // The settings' source drives `cycle` and `step`: an update from the
     // dynamic loads reaches the update depth on its limiting flank, as a
     // quasi-static one does.
-    let source = PressureSource::Dynamic { speed_rpm: 5000.0 };
-    let dynamic = WearModel::new(&set, WearSettings { source, ..WearSettings::for_set(&set) }).unwrap();
+    let source = PressureSource::Dynamic { speed: rpm_to_rad_per_s(5000.0) };
+    let settings = WearSettings { source, ..WearSettings::for_set(&set) };
+    // The dynamic loads need run settings: a model without them refuses the
+    // source at once, and a quasi-static model refuses a dynamic cycle.
+    assert!(matches!(WearModel::new(&set, settings), Err(WearError::NoRunSettings)));
+    let quasi_static = WearModel::new(&set, WearSettings::for_set(&set)).unwrap();
+    assert!(matches!(quasi_static.cycle_with(&state, source), Err(WearError::NoRunSettings)));
+    let dynamic = WearModel::with_run(&set, &run_settings(), settings).unwrap();
     let c = dynamic.cycle(&state).unwrap();
     assert_eq!(c.source, source);
     let next = dynamic.step(&state, Limit::Update).unwrap();
@@ -203,4 +220,22 @@ fn the_source_is_an_option_of_the_wear_model() {
     let sun = c.flank(Flank::SunDrive, 0).unwrap().max_wear().0;
     let expected = record.revolutions * dynamic.cycles_per_revolution().sun * sun;
     assert!((next.deepest_on(Flank::SunDrive).depth / expected - 1.0).abs() < 1e-9);
+}
+
+#[test]
+fn the_dynamic_source_is_written_and_read_in_rpm_as_before() {
+    // Held in rad/s, the source keeps its file form: `speed_rpm` in rpm. A
+    // document written before the core moved to SI reads to the same speed
+    // and is written back unchanged.
+    let old = r#"{"kind":"dynamic","speed_rpm":3000.0}"#;
+    let source: PressureSource = serde_json::from_str(old).unwrap();
+    assert_eq!(source, PressureSource::Dynamic { speed: rpm_to_rad_per_s(3000.0) });
+    assert_eq!(serde_json::to_string(&source).unwrap(), old);
+    let mut settings = serde_json::to_value(WearSettings::default()).unwrap();
+    settings["source"] = serde_json::json!({ "kind": "dynamic", "speed_rpm": 4250.5 });
+    let read: WearSettings = serde_json::from_value(settings).unwrap();
+    assert_eq!(read.source, PressureSource::Dynamic { speed: rpm_to_rad_per_s(4250.5) });
+    let written = serde_json::to_value(read).unwrap();
+    assert_eq!(written["source"]["speed_rpm"], serde_json::json!(4250.5));
+    assert_eq!(PressureSource::QuasiStatic, serde_json::from_str(r#"{"kind":"quasi_static"}"#).unwrap());
 }

@@ -7,6 +7,8 @@ use planetwear::dynamics::response::{static_state, steady_state, sweep, Directio
 use planetwear::dynamics::solver::{GeneralizedAlpha, GeneralizedAlphaSettings, SecondOrderSystem};
 use planetwear::dynamics::spectrum::mesh_harmonics;
 use planetwear::model::gear::{GearSet, MeshKind};
+use planetwear::model::run::RunSettings;
+use planetwear::scene::units::rad_per_s_to_rpm;
 use planetwear::scene::{Fidelity, IntegratorKind, Scene};
 
 const RPM: f64 = std::f64::consts::PI / 30.0;
@@ -17,10 +19,10 @@ const PINNED_STEPS: u64 = 32885;
 const PINNED_REJECTED: u64 = 4919;
 const PINNED_RHS: u64 = 231716;
 
-fn build(scene: &Scene) -> (GearSet, PlanetaryDynamics) {
-    let set = scene.validate().unwrap_or_else(|e| panic!("{e}"));
+fn build(scene: &Scene) -> (GearSet, RunSettings, PlanetaryDynamics) {
+    let (set, run) = scene.validate_with_run().unwrap_or_else(|e| panic!("{e}"));
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
-    (set, model)
+    (set, run, model)
 }
 
 /// The torsional example with light mesh damping: its sun–planet teeth
@@ -34,8 +36,8 @@ fn separating() -> Scene {
 
 #[test]
 fn mean_mesh_force_balances_the_input_torque() {
-    let (set, mut model) = build(&Scene::example_2004());
-    let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
+    let (set, run, mut model) = build(&Scene::example_2004());
+    let r = steady_state(&mut model, &set, &run, 3000.0 * RPM, None).unwrap();
     let f0 = set.mesh_load_per_planet();
     for m in &r.meshes {
         assert!((m.harmonics.mean / f0 - 1.0).abs() < 1e-3, "{:?} mean {} vs {f0}", m.mesh, m.harmonics.mean);
@@ -48,8 +50,8 @@ fn planet_phasing_follows_from_the_tooth_positions() {
     // planets iff 34·l/4 (70·l/4) is an integer, i.e. for even l. The sum of
     // the four sun (ring) mesh forces therefore holds only even harmonics, at
     // four times one mesh's amplitude; the odd ones cancel.
-    let (set, mut model) = build(&Scene::example_2004());
-    let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
+    let (set, run, mut model) = build(&Scene::example_2004());
+    let r = steady_state(&mut model, &set, &run, 3000.0 * RPM, None).unwrap();
     for kind in [MeshKind::SunPlanet, MeshKind::RingPlanet] {
         let idx: Vec<usize> = (0..model.mesh_count()).filter(|i| model.mesh_identity(*i).1 == kind).collect();
         let one = mesh_harmonics(&r.mesh_force[idx[0]], r.cycles, 6).unwrap();
@@ -79,18 +81,21 @@ fn planet_phasing_follows_from_the_tooth_positions() {
 
 #[test]
 fn a_separating_set_shows_a_softening_jump_and_two_branches() {
-    let (set, model) = build(&separating());
+    let (set, run, model) = build(&separating());
     let speeds: Vec<f64> = (0..=14).map(|i| 9000.0 + 250.0 * f64::from(i)).collect();
     let run = |d: Direction, grid: &[f64]| {
         let mut m = model.clone();
-        sweep(&set, &mut m, d, grid, &[], |_| {}).unwrap()
+        let grid: Vec<f64> = grid.iter().map(|r| r * RPM).collect();
+        sweep(&set, &run, &mut m, d, &grid, &[], |_| {}).unwrap()
     };
     let up = run(Direction::Up, &speeds);
     let mut rev = speeds.clone();
     rev.reverse();
     let down = run(Direction::Down, &rev);
     let rms = |sw: &planetwear::dynamics::response::Sweep, rpm: f64| {
-        sw.points.iter().find(|p| (p.input_speed_rpm - rpm).abs() < 1e-9).unwrap().meshes[0].harmonics.rms
+        sw.points.iter().find(|p| (rad_per_s_to_rpm(p.input_speed) - rpm).abs() < 1e-9).unwrap().meshes[0]
+            .harmonics
+            .rms
     };
     let sep = |sw: &planetwear::dynamics::response::Sweep| {
         sw.points.iter().map(|p| p.meshes[0].separation).fold(0.0, f64::max)
@@ -111,13 +116,13 @@ fn a_separating_set_shows_a_softening_jump_and_two_branches() {
 fn both_integrators_agree_on_a_steady_state_with_separation() {
     let mut a = separating();
     a.dynamics.steps_per_mesh_cycle = 960;
-    let (set_a, mut model_a) = build(&a);
-    let ra = steady_state(&mut model_a, &set_a, 9750.0 * RPM, None).unwrap();
+    let (set_a, run_a, mut model_a) = build(&a);
+    let ra = steady_state(&mut model_a, &set_a, &run_a, 9750.0 * RPM, None).unwrap();
     let mut b = separating();
     b.dynamics.integrator = IntegratorKind::Rk45;
     b.dynamics.relative_tolerance = 1e-9;
-    let (set_b, mut model_b) = build(&b);
-    let rb = steady_state(&mut model_b, &set_b, 9750.0 * RPM, None).unwrap();
+    let (set_b, run_b, mut model_b) = build(&b);
+    let rb = steady_state(&mut model_b, &set_b, &run_b, 9750.0 * RPM, None).unwrap();
     assert!(ra.meshes[0].separation > 0.1, "the case separates: {}", ra.meshes[0].separation);
     for (x, y) in ra.meshes.iter().zip(&rb.meshes) {
         let d = (x.harmonics.rms / y.harmonics.rms - 1.0).abs();
@@ -141,7 +146,7 @@ fn undamped_energy_balance_includes_the_work_of_the_time_varying_stiffness() {
     s.dynamics.mesh_damping_ratio = 0.0;
     s.supports.bearing_damping_ratio = 0.0;
     assert!(s.supports.planet_damping_ratio.is_none());
-    let (set, mut model) = build(&s);
+    let (set, _, mut model) = build(&s);
     let omega = 3000.0 * RPM;
     let start = static_state(&model, omega);
     let fm = model.mesh_frequency_per_input_speed * omega;
@@ -182,11 +187,11 @@ fn undamped_energy_balance_includes_the_work_of_the_time_varying_stiffness() {
 
 #[test]
 fn runs_are_deterministic() {
-    let (set, model) = build(&separating());
+    let (set, run, model) = build(&separating());
     let mut m1 = model.clone();
     let mut m2 = model.clone();
-    let a = steady_state(&mut m1, &set, 11500.0 * RPM, None).unwrap();
-    let b = steady_state(&mut m2, &set, 11500.0 * RPM, None).unwrap();
+    let a = steady_state(&mut m1, &set, &run, 11500.0 * RPM, None).unwrap();
+    let b = steady_state(&mut m2, &set, &run, 11500.0 * RPM, None).unwrap();
     assert_eq!(a.mesh_force, b.mesh_force);
     assert_eq!(a.end, b.end);
 }
@@ -198,10 +203,10 @@ fn the_integrator_work_is_pinned() {
     // the full revolution.
     let mut scene = Scene::example_2004_annulus();
     scene.dynamics.integrator = IntegratorKind::GeneralizedAlpha;
-    let (set, mut model) = build(&scene);
-    let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
-    let cycles = (set.dynamics().run_in_revolutions * 34.0).ceil() as u64 + 68;
-    assert_eq!(r.stats.steps, cycles * set.dynamics().steps_per_mesh_cycle as u64);
+    let (set, run, mut model) = build(&scene);
+    let r = steady_state(&mut model, &set, &run, 3000.0 * RPM, None).unwrap();
+    let cycles = (run.run_in_revolutions() * 34.0).ceil() as u64 + 68;
+    assert_eq!(r.stats.steps, cycles * run.steps_per_mesh_cycle() as u64);
     let per_step = r.stats.newton_iterations as f64 / r.stats.steps as f64;
     assert!(per_step < 1.1, "Newton iterations per step {per_step}");
     let _ = model.dim();
@@ -213,9 +218,9 @@ fn the_default_adaptive_work_is_pinned() {
     // rejections and force evaluations within 2 % of the figures measured
     // when the default was chosen (on the uncalibrated reading); a silent
     // cost regression fails here.
-    let (set, mut model) = build(&Scene::example_2004_annulus());
-    assert_eq!(set.dynamics().integrator, IntegratorKind::Rk45);
-    let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
+    let (set, run, mut model) = build(&Scene::example_2004_annulus());
+    assert_eq!(run.integrator(), IntegratorKind::Rk45);
+    let r = steady_state(&mut model, &set, &run, 3000.0 * RPM, None).unwrap();
     let near = |x: u64, pinned: u64| (x as f64 / pinned as f64 - 1.0).abs() <= 0.02;
     assert!(near(r.stats.steps, PINNED_STEPS), "steps {}", r.stats.steps);
     assert!(near(r.stats.rejected_steps, PINNED_REJECTED), "rejected {}", r.stats.rejected_steps);
@@ -229,13 +234,13 @@ fn the_speed_drive_holds_the_set_speed_and_carries_the_torque() {
     let mut s = Scene::example_2004_annulus();
     s.dynamics.fidelity = Fidelity::Torsional;
     s.dynamics.drive = planetwear::scene::Drive::Speed;
-    let (set, mut model) = build(&s);
+    let (set, run, mut model) = build(&s);
     // Start 5 % below the set speed (the state claims the set speed, so the
     // continuation does not rescale it): the shaft pulls the train up to it.
     let omega = 3000.0 * RPM;
     let mut start = static_state(&model, omega * 0.95);
     start.input_speed = omega;
-    let r = steady_state(&mut model, &set, omega, Some(&start)).unwrap();
+    let r = steady_state(&mut model, &set, &run, omega, Some(&start)).unwrap();
     let mean = r.mean_input_speed;
     // The start transient decays over the run-in (about 8 time constants of
     // the train on its shaft): 1e-4 of the speed.
@@ -245,8 +250,8 @@ fn the_speed_drive_holds_the_set_speed_and_carries_the_torque() {
         assert!((ratio - 1.0).abs() < 1e-3, "{:?} mean force / load {ratio}", m.mesh);
     }
     // With a torque drive the speed is whatever it was given.
-    let (set_t, mut model_t) = build(&Scene::example_2004());
-    let r = steady_state(&mut model_t, &set_t, omega, None).unwrap();
+    let (set_t, run_t, mut model_t) = build(&Scene::example_2004());
+    let r = steady_state(&mut model_t, &set_t, &run_t, omega, None).unwrap();
     assert!((r.mean_input_speed / omega - 1.0).abs() < 1e-6);
 }
 
@@ -257,7 +262,7 @@ fn per_planet_bearings_and_per_member_damping_take_effect() {
     // The uncalibrated reading, whose planets sit on needle bearings.
     let mut s = Scene::example_2004_annulus();
     s.supports.planet_bearings_n_per_m = Some(vec![6e8, 3e8, 3e8, 3e8]);
-    let (_, model) = build(&s);
+    let (_, _, model) = build(&s);
     let modes = planetwear::analysis::modes::natural_modes(&model.lumped);
     assert!(
         modes.iter().all(|m| m.multiplicity == 1),
@@ -269,8 +274,8 @@ fn per_planet_bearings_and_per_member_damping_take_effect() {
     let response = |zeta: f64| {
         let mut s = Scene::example_2004_annulus();
         s.supports.planet_damping_ratio = Some(zeta);
-        let (set, mut model) = build(&s);
-        steady_state(&mut model, &set, 5000.0 * RPM, None).unwrap().meshes[0].harmonics.rms
+        let (set, run, mut model) = build(&s);
+        steady_state(&mut model, &set, &run, 5000.0 * RPM, None).unwrap().meshes[0].harmonics.rms
     };
     let (low, high) = (response(0.0), response(0.1));
     assert!(low > high * 1.02, "F(rms) with ζ_planet = 0: {low}, with 0.1: {high}");
@@ -316,9 +321,9 @@ fn the_low_rank_jacobian_assembles_to_the_dense_one() {
         let mut s = Scene::example_2004();
         s.dynamics.fidelity = fidelity;
         s.dynamics.drive = planetwear::scene::Drive::Speed;
-        let (set, mut model) = build(&s);
+        let (set, run, mut model) = build(&s);
         let omega = 5000.0 * RPM;
-        let r = steady_state(&mut model.clone(), &set, omega, None).unwrap();
+        let r = steady_state(&mut model.clone(), &set, &run, omega, None).unwrap();
         let structure = model.low_rank_jacobian().expect("the dynamic model gives its structure");
         let n = model.dim();
         let mut coefficients = vec![Default::default(); structure.terms.len()];
@@ -350,7 +355,7 @@ fn the_woodbury_solve_follows_the_dense_solve() {
     // The same run with the dense LU and with the Woodbury solve of the iteration matrix: both
     // converge each step's Newton iteration to rtol 1e-10, so they agree to a few times that
     // over 20 mesh cycles, here through a resonance (5000 rpm) with contacts opening and closing.
-    let (_, model) = build(&Scene::example_2004());
+    let (_, _, model) = build(&Scene::example_2004());
     let omega = 5000.0 * RPM;
     let start = static_state(&model, omega);
     let fm = model.mesh_frequency_per_input_speed * omega;

@@ -32,10 +32,10 @@ fn scene(rtol: f64, steps: u32) -> Scene {
 
 /// The FMU's window after END mesh cycles of doStep of one mesh period.
 fn fmu_window(steps: u32) -> WindowMeasure {
-    let set = scene(1e-9, steps).validate().unwrap();
+    let (set, run) = scene(1e-9, steps).validate_with_run().unwrap();
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
     let period = 1.0 / (model.mesh_frequency_per_input_speed * OMEGA);
-    let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    let mut sim = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
     sim.set_window(WINDOW, SAMPLES).unwrap();
     for k in 0..END {
         sim.do_step(k as f64 * period, period).unwrap();
@@ -47,9 +47,9 @@ fn fmu_window(steps: u32) -> WindowMeasure {
 
 #[test]
 fn the_fmu_window_converges_to_the_order_tracked_harmonics_at_second_order() {
-    let set = scene(1e-10, 120).validate().unwrap();
+    let (set, run) = scene(1e-10, 120).validate_with_run().unwrap();
     let mut model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
-    let reference = order_tracked_windows(&set, &mut model, OMEGA, WINDOW, SAMPLES, &[END]).unwrap();
+    let reference = order_tracked_windows(&set, &run, &mut model, OMEGA, WINDOW, SAMPLES, &[END]).unwrap();
     let exact = &reference.windows[0];
     // The mean mesh force is the static load: 750 N·m over 4 planets at the
     // sun's base radius.
@@ -72,13 +72,13 @@ fn the_fmu_window_converges_to_the_order_tracked_harmonics_at_second_order() {
 fn a_generalized_alpha_setting_or_a_window_longer_than_the_run_is_refused() {
     let mut s = scene(1e-8, 120);
     s.dynamics.integrator = IntegratorKind::GeneralizedAlpha;
-    let set = s.validate().unwrap();
+    let (set, run) = s.validate_with_run().unwrap();
     let mut model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
-    let e = order_tracked_windows(&set, &mut model, OMEGA, WINDOW, SAMPLES, &[END]).unwrap_err();
+    let e = order_tracked_windows(&set, &run, &mut model, OMEGA, WINDOW, SAMPLES, &[END]).unwrap_err();
     assert!(matches!(&e, ResponseError::InvalidRequest { name, .. } if name == "integrator"), "{e}");
-    let set = scene(1e-8, 120).validate().unwrap();
-    let e = order_tracked_windows(&set, &mut model, OMEGA, 30, SAMPLES, &[END]).unwrap_err();
+    let (set, run) = scene(1e-8, 120).validate_with_run().unwrap();
+    let e = order_tracked_windows(&set, &run, &mut model, OMEGA, 30, SAMPLES, &[END]).unwrap_err();
     assert!(e.to_string().contains("window ends"), "{e}");
-    let e = order_tracked_windows(&set, &mut model, -OMEGA, WINDOW, SAMPLES, &[END]).unwrap_err();
+    let e = order_tracked_windows(&set, &run, &mut model, -OMEGA, WINDOW, SAMPLES, &[END]).unwrap_err();
     assert!(e.to_string().contains("input speed"), "{e}");
 }

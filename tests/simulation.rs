@@ -9,20 +9,21 @@ use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::simulation::{Simulation, SimulationError};
 use planetwear::dynamics::solver::SecondOrderSystem;
 use planetwear::model::gear::{GearSet, Member, MeshKind};
+use planetwear::model::run::RunSettings;
 use planetwear::scene::{Fidelity, IntegratorKind, Scene};
 
 const OMEGA: f64 = 3000.0 * std::f64::consts::PI / 30.0;
 
-fn setup(fidelity: Fidelity) -> (GearSet, PlanetaryDynamics) {
+fn setup(fidelity: Fidelity) -> (GearSet, RunSettings, PlanetaryDynamics) {
     let mut s = Scene::example_2004_annulus();
     s.dynamics.fidelity = fidelity;
-    let set = s.validate().unwrap();
+    let (set, run) = s.validate_with_run().unwrap();
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
-    (set, model)
+    (set, run, model)
 }
 
-fn nominal_step(model: &PlanetaryDynamics, set: &GearSet) -> f64 {
-    1.0 / (model.mesh_frequency_per_input_speed * OMEGA * set.dynamics().steps_per_mesh_cycle as f64)
+fn nominal_step(model: &PlanetaryDynamics, run: &RunSettings) -> f64 {
+    1.0 / (model.mesh_frequency_per_input_speed * OMEGA * run.steps_per_mesh_cycle() as f64)
 }
 
 /// Generalized-α takes the same internal steps whatever the communication
@@ -36,12 +37,12 @@ fn communication_steps_that_are_multiples_of_the_internal_step_give_one_trajecto
         let mut s = Scene::example_2004_annulus();
         s.dynamics.fidelity = Fidelity::Torsional;
         s.dynamics.integrator = integrator;
-        let set = s.validate().unwrap();
+        let (set, run) = s.validate_with_run().unwrap();
         let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
         let scale = set.mesh_load_per_planet();
-        let h = nominal_step(&model, &set);
-        let mut a = Simulation::new(&set, model.clone(), 0.0, OMEGA).unwrap();
-        let mut b = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+        let h = nominal_step(&model, &run);
+        let mut a = Simulation::new(&set, &run, model.clone(), 0.0, OMEGA).unwrap();
+        let mut b = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
         let mut worst: f64 = 0.0;
         for k in 0..40 {
             a.do_step(a.time(), 10.0 * h).unwrap();
@@ -62,8 +63,8 @@ fn communication_steps_that_are_multiples_of_the_internal_step_give_one_trajecto
 
 #[test]
 fn a_snapshot_continues_bit_identically() {
-    let (set, model) = setup(Fidelity::TransverseTorsional);
-    let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    let (set, run, model) = setup(Fidelity::TransverseTorsional);
+    let mut sim = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
     for _ in 0..50 {
         sim.do_step(sim.time(), 2e-5).unwrap();
     }
@@ -85,8 +86,8 @@ fn a_snapshot_continues_bit_identically() {
 
 #[test]
 fn bad_steps_and_inputs_are_refused_with_their_names() {
-    let (set, model) = setup(Fidelity::Torsional);
-    let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    let (set, run, model) = setup(Fidelity::Torsional);
+    let mut sim = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
     let name = |e: SimulationError| match e {
         SimulationError::InvalidInput { name, .. } => name,
         other => panic!("{other}"),
@@ -104,9 +105,9 @@ fn bad_steps_and_inputs_are_refused_with_their_names() {
 
 #[test]
 fn balanced_torques_hold_the_speed_and_carry_the_mean_load() {
-    let (set, model) = setup(Fidelity::Torsional);
+    let (set, run, model) = setup(Fidelity::Torsional);
     let fm = model.mesh_frequency_per_input_speed * OMEGA;
-    let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    let mut sim = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
     let cycle = 1.0 / fm;
     for _ in 0..40 {
         sim.do_step(sim.time(), cycle).unwrap();
@@ -133,11 +134,11 @@ fn an_unbalanced_torque_accelerates_the_train_at_the_rigid_body_rate() {
     // ω̇ = ΔT / J_eff, J_eff = Σ M_ii r_i² with r the rigid-body velocity
     // pattern per unit sun speed (kinetic energy ½ J_eff ω²) and ΔT the
     // sun torque in excess of the balance.
-    let (set, model) = setup(Fidelity::Torsional);
+    let (set, run, model) = setup(Fidelity::Torsional);
     let r = model.rigid_velocity.clone();
     let j_eff: f64 = model.mass().iter().zip(&r).map(|(m, r)| m * r * r).sum();
     let fm = model.mesh_frequency_per_input_speed * OMEGA;
-    let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    let mut sim = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
     let t = set.balanced_torques();
     let extra = 50.0;
     sim.set_torques(t[0] + extra, t[1], t[2]).unwrap();
@@ -175,10 +176,10 @@ mod outputs {
 
     #[test]
     fn the_windowed_harmonics_match_the_steady_state_analysis() {
-        let (set, model) = setup(Fidelity::TransverseTorsional);
+        let (set, run, model) = setup(Fidelity::TransverseTorsional);
         let fm = model.mesh_frequency_per_input_speed * OMEGA;
-        let reference = steady_state(&mut model.clone(), &set, OMEGA, None).unwrap();
-        let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+        let reference = steady_state(&mut model.clone(), &set, &run, OMEGA, None).unwrap();
+        let mut sim = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
         sim.set_window(34, 60).unwrap();
         // Communication steps of 2.5 mesh cycles: longer than a cycle.
         for _ in 0..60 {
@@ -196,9 +197,9 @@ mod outputs {
 
     #[test]
     fn the_tracked_pair_meshes_once_per_sun_revolution_for_the_loaded_contact_ratio() {
-        let (set, model) = setup(Fidelity::TransverseTorsional);
+        let (set, run, model) = setup(Fidelity::TransverseTorsional);
         let fm = model.mesh_frequency_per_input_speed * OMEGA;
-        let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+        let mut sim = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
         let (mut loaded, mut total, mut peak) = (0usize, 0usize, 0.0f64);
         run_cycles(&mut sim, fm, 34, 60, |s| {
             let f = s.tracked_pair_force(MeshKind::SunPlanet);
@@ -220,10 +221,10 @@ mod outputs {
 
     #[test]
     fn static_te_and_bearing_forces_agree_with_the_quasi_static_analysis() {
-        let (set, model) = setup(Fidelity::TransverseTorsional);
+        let (set, run, model) = setup(Fidelity::TransverseTorsional);
         let fm = model.mesh_frequency_per_input_speed * OMEGA;
         let alpha = set.operating_pressure_angle(MeshKind::SunPlanet);
-        let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+        let mut sim = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
         run_cycles(&mut sim, fm, 20, 10, |_| {});
         let (mut te, mut bearing, mut n) = (0.0, 0.0, 0.0);
         run_cycles(&mut sim, fm, 4, 60, |s| {
@@ -241,18 +242,18 @@ mod outputs {
     }
 }
 
-fn speed_steps_setup() -> (GearSet, PlanetaryDynamics) {
+fn speed_steps_setup() -> (GearSet, RunSettings, PlanetaryDynamics) {
     let mut s = Scene::example_2004_annulus();
     s.dynamics.drive = planetwear::scene::Drive::SpeedSteps;
-    let set = s.validate().unwrap();
+    let (set, run) = s.validate_with_run().unwrap();
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
-    (set, model)
+    (set, run, model)
 }
 
 #[test]
 fn a_speed_step_moves_the_rigid_body_speed_and_keeps_the_elastic_state() {
-    let (set, model) = speed_steps_setup();
-    let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    let (set, run, model) = speed_steps_setup();
+    let mut sim = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
     let h = 1.0 / (34.0 * OMEGA / (2.0 * std::f64::consts::PI));
     for _ in 0..20 {
         sim.do_step(sim.time(), h).unwrap();
@@ -294,15 +295,15 @@ fn assert_same_continuation(a: &mut Simulation, b: &mut Simulation, h: f64) {
 
 #[test]
 fn a_snapshot_after_speed_steps_continues_bit_identically() {
-    let (set, model) = speed_steps_setup();
-    let mut a = Simulation::new(&set, model.clone(), 0.0, OMEGA).unwrap();
+    let (set, run, model) = speed_steps_setup();
+    let mut a = Simulation::new(&set, &run, model.clone(), 0.0, OMEGA).unwrap();
     let h = 2e-4;
     for k in 0..10 {
         a.set_speed_reference(OMEGA * (1.0 + 0.1 * f64::from(k))).unwrap();
         a.do_step(a.time(), h).unwrap();
     }
     let snap = a.snapshot();
-    let mut b = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    let mut b = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
     b.restore(&snap).unwrap();
     assert_same_continuation(&mut a, &mut b, h);
 }
@@ -313,9 +314,9 @@ fn a_snapshot_after_speed_steps_continues_bit_identically() {
 /// from its last stage).
 #[test]
 fn a_torque_change_continues_as_a_restart_with_the_new_torques() {
-    let (set, model) = speed_steps_setup();
-    assert_eq!(set.dynamics().integrator, planetwear::scene::IntegratorKind::Rk45);
-    let mut a = Simulation::new(&set, model.clone(), 0.0, OMEGA).unwrap();
+    let (set, run, model) = speed_steps_setup();
+    assert_eq!(run.integrator(), planetwear::scene::IntegratorKind::Rk45);
+    let mut a = Simulation::new(&set, &run, model.clone(), 0.0, OMEGA).unwrap();
     let h = 1e-4;
     for _ in 0..10 {
         a.do_step(a.time(), h).unwrap();
@@ -324,7 +325,7 @@ fn a_torque_change_continues_as_a_restart_with_the_new_torques() {
     let (sun, ring) = (1.2 * t[0], 1.2 * t[1]);
     a.set_torques(sun, ring, t[2]).unwrap();
     let snap = a.snapshot();
-    let mut b = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    let mut b = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
     b.set_torques(sun, ring, t[2]).unwrap();
     b.restore(&snap).unwrap();
     assert_same_continuation(&mut a, &mut b, h);
@@ -338,10 +339,10 @@ fn a_torque_change_continues_as_a_restart_with_the_new_torques() {
 /// within a bounded number of steps, never a hang.
 #[test]
 fn a_run_away_coupling_ends_in_a_refused_step_not_a_hang() {
-    let (set, model) = setup(Fidelity::TransverseTorsional);
-    assert_eq!(set.dynamics().integrator, IntegratorKind::Rk45);
+    let (set, run, model) = setup(Fidelity::TransverseTorsional);
+    assert_eq!(run.integrator(), IntegratorKind::Rk45);
     let [t_sun, t_ring, t_carrier] = set.balanced_torques();
-    let mut sim = Simulation::new(&set, model, 0.0, OMEGA).unwrap();
+    let mut sim = Simulation::new(&set, &run, model, 0.0, OMEGA).unwrap();
     let h = 1e-4;
     let mut failure = None;
     for k in 0..400 {

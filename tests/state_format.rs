@@ -91,9 +91,9 @@ fn foreign_and_future_states_are_refused_by_name() {
 fn a_simulation_continues_bit_identically_from_a_state_file() {
     let mut s = Scene::example_2004();
     s.dynamics.fidelity = Fidelity::Torsional;
-    let set = s.validate().unwrap();
+    let (set, run) = s.validate_with_run().unwrap();
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
-    let mut sim = Simulation::new(&set, model.clone(), 0.0, 314.159).unwrap();
+    let mut sim = Simulation::new(&set, &run, model.clone(), 0.0, 314.159).unwrap();
     for _ in 0..30 {
         sim.do_step(sim.time(), 3e-5).unwrap();
     }
@@ -104,7 +104,7 @@ fn a_simulation_continues_bit_identically_from_a_state_file() {
         sim.do_step(sim.time(), 3e-5).unwrap();
     }
     // A fresh simulation (as after a process restart) restores from the file.
-    let mut other = Simulation::new(&set, model, 0.0, 314.159).unwrap();
+    let mut other = Simulation::new(&set, &run, model, 0.0, 314.159).unwrap();
     other.restore(&decode(&std::fs::read(&path).unwrap(), FP).unwrap()).unwrap();
     for _ in 0..30 {
         other.do_step(other.time(), 3e-5).unwrap();

@@ -17,14 +17,15 @@ use planetwear::dynamics::solver::{
 };
 use planetwear::geometry::profile::ProfileDeviation;
 use planetwear::model::gear::{GearSet, Member, MeshKind};
+use planetwear::model::run::RunSettings;
 use planetwear::scene::{Fidelity, IntegratorKind, Scene};
 
 const RPM: f64 = std::f64::consts::PI / 30.0;
 
-fn build(scene: &Scene) -> (GearSet, PlanetaryDynamics) {
-    let set = scene.validate().unwrap_or_else(|e| panic!("{e}"));
+fn build(scene: &Scene) -> (GearSet, RunSettings, PlanetaryDynamics) {
+    let (set, run) = scene.validate_with_run().unwrap_or_else(|e| panic!("{e}"));
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
-    (set, model)
+    (set, run, model)
 }
 
 /// Largest |mesh force| over the window [N].
@@ -59,8 +60,9 @@ fn refine(scene: &Scene, rpm: f64) -> (f64, f64, SteadyState) {
         // Refinement of the fixed-step method (the adaptive default refines by tolerance).
         s.dynamics.integrator = IntegratorKind::GeneralizedAlpha;
         s.dynamics.steps_per_mesh_cycle = steps;
-        let (set, mut model) = build(&s);
-        let r = steady_state(&mut model, &set, rpm * RPM, None).unwrap_or_else(|e| panic!("{steps}: {e}"));
+        let (set, run, mut model) = build(&s);
+        let r =
+            steady_state(&mut model, &set, &run, rpm * RPM, None).unwrap_or_else(|e| panic!("{steps}: {e}"));
         assert!(finite(&r), "non-finite response at {steps} steps per mesh cycle");
         runs.push(r);
     }
@@ -87,7 +89,7 @@ fn thirty_thousand_rpm_stays_bounded_and_converges() {
     let (d1, d2, r) = refine(&Scene::example_2004_annulus(), 30000.0);
     eprintln!("30000 rpm: E_h 120→240 {d1:.2e}, 240→480 {d2:.2e}, peak {:.0} N", peak(&r));
     assert!(d2 < d1, "no convergence under refinement: {d1:e}, {d2:e}");
-    let (set, _) = build(&Scene::example_2004_annulus());
+    let (set, _, _) = build(&Scene::example_2004_annulus());
     // The mean tooth force still balances the torque at 30 000 rpm.
     let f = set.mesh_load_per_planet();
     assert!((r.meshes[0].harmonics.mean / f - 1.0).abs() < 0.02, "{} vs {f}", r.meshes[0].harmonics.mean);
@@ -98,8 +100,8 @@ fn thirty_thousand_rpm_stays_bounded_and_converges() {
 fn reversed_torque_loads_the_back_flanks_and_mirrors_the_mean_load() {
     let mut s = Scene::example_2004_annulus();
     s.operation.input_torque_nm = -750.0;
-    let (set, mut model) = build(&s);
-    let r = steady_state(&mut model, &set, 3000.0 * RPM, None).unwrap();
+    let (set, run, mut model) = build(&s);
+    let r = steady_state(&mut model, &set, &run, 3000.0 * RPM, None).unwrap();
     assert!(finite(&r));
     let f = 750.0 / (4.0 * set.sun().base_radius());
     for m in &r.meshes {
@@ -118,7 +120,7 @@ fn zero_torque_rattle_across_the_backlash_stays_bounded_and_loses_energy() {
     let mut s = Scene::example_2004_annulus();
     s.operation.input_torque_nm = 0.0;
     s.dynamics.fidelity = Fidelity::Torsional;
-    let (set, mut model) = build(&s);
+    let (set, _, mut model) = build(&s);
     let omega = 3000.0 * RPM;
     let start = static_state(&model, omega);
     let mut v = start.v.clone();
@@ -165,7 +167,7 @@ fn undamped_run(rho: f64, steps: u64, cycles: u64) -> (f64, f64, f64) {
     s.dynamics.fidelity = Fidelity::Torsional;
     s.dynamics.mesh_damping_ratio = 0.0;
     s.supports.bearing_damping_ratio = 0.0;
-    let (set, mut model) = build(&s);
+    let (set, _, mut model) = build(&s);
     let omega = 3000.0 * RPM;
     let start = static_state(&model, omega);
     let fm = model.mesh_frequency_per_input_speed * omega;
@@ -237,12 +239,12 @@ fn undamped_default_run(samples: u64, checkpoints: &[u64]) -> Vec<(f64, f64)> {
     s.dynamics.fidelity = Fidelity::Torsional;
     s.dynamics.mesh_damping_ratio = 0.0;
     s.supports.bearing_damping_ratio = 0.0;
-    let (set, mut model) = build(&s);
-    assert_eq!(set.dynamics().integrator, IntegratorKind::Rk45);
+    let (set, run, mut model) = build(&s);
+    assert_eq!(run.integrator(), IntegratorKind::Rk45);
     let omega = 3000.0 * RPM;
     let start = static_state(&model, omega);
     let period = 1.0 / (model.mesh_frequency_per_input_speed * omega);
-    let rtol = set.dynamics().relative_tolerance;
+    let rtol = run.relative_tolerance();
     let settings = Rk45Settings {
         rtol,
         atol_q: rtol * 1e-6,
@@ -310,9 +312,9 @@ fn undamped_over_two_thousand_mesh_cycles_the_default_stays_bounded_and_drifts_s
 
 #[test]
 fn a_step_in_input_torque_settles_to_the_new_load() {
-    let (set, model) = build(&Scene::example_2004_annulus());
+    let (set, run, model) = build(&Scene::example_2004_annulus());
     let omega = 3000.0 * RPM;
-    let mut sim = Simulation::new(&set, model, 0.0, omega).unwrap();
+    let mut sim = Simulation::new(&set, &run, model, 0.0, omega).unwrap();
     let fm = sim_mesh_frequency(&set, omega);
     let h = 1.0 / fm;
     for _ in 0..10 {
@@ -352,7 +354,7 @@ fn fifty_micrometres_of_wear_and_pairs_that_never_touch() {
     // The sun's dedendum worn 50 µm deep at the start of active profile,
     // tapering to nothing at the pitch point; the pairs in the deepest zone
     // never touch under the example's load, and the rest carry it.
-    let (set0, _) = build(&Scene::example_2004_annulus());
+    let (set0, run0, _) = build(&Scene::example_2004_annulus());
     let sp = SetModel::new(&set0);
     let path = sp.sun_planet.path().clone();
     let roll_start = path.start / set0.sun().base_radius();
@@ -370,7 +372,7 @@ fn fifty_micrometres_of_wear_and_pairs_that_never_touch() {
     let first_pair = model_set.sun_planet.pair_force(path.start + 1e-6, 20e-6);
     assert_eq!(first_pair, 0.0, "a pair 50 µm deep touched under 20 µm of approach");
     let mut model = PlanetaryDynamics::new(&set0, model_set).unwrap();
-    let r = steady_state(&mut model, &set0, 3000.0 * RPM, None).unwrap();
+    let r = steady_state(&mut model, &set0, &run0, 3000.0 * RPM, None).unwrap();
     assert!(finite(&r));
     assert!((r.meshes[0].harmonics.mean / load - 1.0).abs() < 0.01);
     eprintln!(
@@ -420,9 +422,9 @@ fn very_small_and_very_large_gear_sets_obey_dynamic_similarity() {
     let mut reference = None;
     for f in [1.0, 0.1, 10.0] {
         let s = scaled(f);
-        let (set, mut model) = build(&s);
-        let r =
-            steady_state(&mut model, &set, 5000.0 / f * RPM, None).unwrap_or_else(|e| panic!("f = {f}: {e}"));
+        let (set, run, mut model) = build(&s);
+        let r = steady_state(&mut model, &set, &run, 5000.0 / f * RPM, None)
+            .unwrap_or_else(|e| panic!("f = {f}: {e}"));
         assert!(finite(&r), "f = {f}");
         let m = &r.meshes[0].harmonics;
         let scaled_h: Vec<f64> =

@@ -353,7 +353,7 @@ fn a_state_file_moves_the_unloaded_separation_and_the_static_te_of_the_dynamic_m
     use planetwear::dynamics::equations::PlanetaryDynamics;
     use planetwear::dynamics::simulation::Simulation;
     use planetwear::model::gear::MeshKind;
-    let set = planetwear::scene::Scene::example_2004().validate().unwrap();
+    let (set, run) = planetwear::scene::Scene::example_2004().validate_with_run().unwrap();
     let mut state = planetwear::wear::state::WornState::unworn(&set, 50, 1);
     for d in &mut state.flanks.sun_drive {
         d.depth.iter_mut().for_each(|x| *x = 4e-6);
@@ -383,8 +383,8 @@ fn a_state_file_moves_the_unloaded_separation_and_the_static_te_of_the_dynamic_m
     // The same through the simulation's static-TE output (FMU output
     // planet[1].sunStaticTransmissionError).
     let omega = 3000.0 * std::f64::consts::PI / 30.0;
-    let a = Simulation::new(&set, PlanetaryDynamics::new(&set, worn).unwrap(), 0.0, omega).unwrap();
-    let b = Simulation::new(&set, PlanetaryDynamics::new(&set, fresh).unwrap(), 0.0, omega).unwrap();
+    let a = Simulation::new(&set, &run, PlanetaryDynamics::new(&set, worn).unwrap(), 0.0, omega).unwrap();
+    let b = Simulation::new(&set, &run, PlanetaryDynamics::new(&set, fresh).unwrap(), 0.0, omega).unwrap();
     let dte = a.static_transmission_error(0, MeshKind::SunPlanet)
         - b.static_transmission_error(0, MeshKind::SunPlanet);
     assert!((dte - 5e-6).abs() < 0.05e-6, "simulation static TE moved by {dte}");

@@ -54,6 +54,8 @@ use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics, SpectrumError};
 use crate::model::gear::{GearSet, IntegratorKind};
 use crate::model::lumped::Fidelity;
+use crate::model::run::RunSettings;
+use crate::scene::units::rad_per_s_to_rpm;
 use crate::scene::SceneError;
 
 /// Number of mesh harmonics in the error measure.
@@ -71,22 +73,22 @@ pub enum AccuracyError {
         source: SceneError,
     },
     /// An integrator failed.
-    #[error("{method} at {speed_rpm} rpm: {source}")]
+    #[error("{method} at {} rpm: {source}", rad_per_s_to_rpm(*.speed))]
     Integration {
         /// The method and setting.
         method: String,
-        /// Input speed \[rpm\].
-        speed_rpm: f64,
+        /// Input speed [rad/s].
+        speed: f64,
         /// The integrator's error.
         source: SolverError,
     },
     /// The harmonics could not be formed from the samples.
-    #[error("{method} at {speed_rpm} rpm: {source}")]
+    #[error("{method} at {} rpm: {source}", rad_per_s_to_rpm(*.speed))]
     Spectrum {
         /// The method and setting.
         method: String,
-        /// Input speed \[rpm\].
-        speed_rpm: f64,
+        /// Input speed [rad/s].
+        speed: f64,
         /// Cause.
         source: SpectrumError,
     },
@@ -216,11 +218,10 @@ impl Method {
         format!("{}, {}", self.family(), self.setting())
     }
 
-    /// The gear set with this method as its integrator setting (the rest of
-    /// the dynamics settings unchanged); a setting outside the scene's rules
-    /// is refused.
-    pub fn apply(&self, set: &GearSet) -> Result<GearSet, SceneError> {
-        set.with_run_settings(|d| match *self {
+    /// The run settings with this method as their integrator setting (the
+    /// rest unchanged); a setting outside the scene's rules is refused.
+    pub fn apply(&self, run: &RunSettings) -> Result<RunSettings, SceneError> {
+        run.with(|d| match *self {
             Method::GeneralizedAlpha { rho_infinity, steps_per_mesh_cycle } => {
                 d.integrator = IntegratorKind::GeneralizedAlpha;
                 d.rho_infinity = rho_infinity;
@@ -521,27 +522,26 @@ fn harmonics_of(
     Ok((harmonics, force.iter().map(|f| separation_fraction(f)).collect()))
 }
 
-/// The mesh period at input speed `speed_rpm` \[s\].
-pub fn mesh_period(model: &PlanetaryDynamics, speed_rpm: f64) -> f64 {
-    1.0 / (model.mesh_frequency_per_input_speed * speed_rpm.abs() * std::f64::consts::PI / 30.0)
+/// The mesh period at input speed `speed` [rad/s] \[s\].
+pub fn mesh_period(model: &PlanetaryDynamics, speed: f64) -> f64 {
+    1.0 / (model.mesh_frequency_per_input_speed * speed.abs())
 }
 
-/// The static initial state at `speed_rpm`, with the speed drive (if any) set up for it.
-fn initial_state(model: &mut PlanetaryDynamics, speed_rpm: f64) -> (Vec<f64>, Vec<f64>) {
-    let omega = speed_rpm * std::f64::consts::PI / 30.0;
+/// The static initial state at `omega` [rad/s], with the speed drive (if any) set up for it.
+fn initial_state(model: &mut PlanetaryDynamics, omega: f64) -> (Vec<f64>, Vec<f64>) {
     let s = static_state(model, omega);
     model.set_drive_speed(omega);
     model.rebase_drive(&s.q);
     (s.q, s.v)
 }
 
-fn check_speed(speed_rpm: f64) -> Result<(), AccuracyError> {
-    if speed_rpm.is_finite() && speed_rpm > 0.0 {
+fn check_speed(speed: f64) -> Result<(), AccuracyError> {
+    if speed.is_finite() && speed > 0.0 {
         Ok(())
     } else {
         Err(AccuracyError::InvalidParameter {
             name: "speed_rpm".into(),
-            value: speed_rpm.to_string(),
+            value: rad_per_s_to_rpm(speed).to_string(),
             reason: "the input speed must be positive and finite".into(),
         })
     }
@@ -551,19 +551,19 @@ fn check_speed(speed_rpm: f64) -> Result<(), AccuracyError> {
 /// time the median of `repeats` runs (at least one).
 pub fn measure(
     model: &PlanetaryDynamics,
-    set: &GearSet,
-    speed_rpm: f64,
+    run: &RunSettings,
+    speed: f64,
     method: &Method,
     protocol: &Protocol,
     repeats: usize,
 ) -> Result<Measured, AccuracyError> {
     protocol.check()?;
-    check_speed(speed_rpm)?;
-    let period = mesh_period(model, speed_rpm);
+    check_speed(speed)?;
+    let period = mesh_period(model, speed);
     let label = method.label();
     let configured =
-        method.apply(set).map_err(|source| AccuracyError::Settings { method: label.clone(), source })?;
-    let err = |source| AccuracyError::Integration { method: label.clone(), speed_rpm, source };
+        method.apply(run).map_err(|source| AccuracyError::Settings { method: label.clone(), source })?;
+    let err = |source| AccuracyError::Integration { method: label.clone(), speed, source };
     let steps = match method {
         Method::GeneralizedAlpha { steps_per_mesh_cycle, .. } => (*steps_per_mesh_cycle).max(1),
         Method::Rk45 { .. } => 1,
@@ -573,7 +573,7 @@ pub fn measure(
     let mut m = model.clone();
     for _ in 0..repeats.max(1) {
         m.clone_from(model);
-        let (q0, v0) = initial_state(&mut m, speed_rpm);
+        let (q0, v0) = initial_state(&mut m, speed);
         let stepper = Stepper::new(&configured, period).map_err(err)?;
         let samples = integrate(&mut m, stepper, steps, period, protocol, &q0, &v0).map_err(err)?;
         times.push(samples.cpu_seconds);
@@ -587,7 +587,7 @@ pub fn measure(
     })?;
     let (harmonics, separation) =
         harmonics_of(&mut m, &protocol.sample_times(period), &samples.q, &samples.v, protocol.window_cycles)
-            .map_err(|source| AccuracyError::Spectrum { method: label.clone(), speed_rpm, source })?;
+            .map_err(|source| AccuracyError::Spectrum { method: label.clone(), speed, source })?;
     Ok(Measured { harmonics, separation, work: samples.work, cpu_seconds: median(&mut times) })
 }
 
@@ -597,15 +597,15 @@ pub fn measure(
 /// to check that no sample sits on one.
 pub fn reference(
     model: &PlanetaryDynamics,
-    speed_rpm: f64,
+    speed: f64,
     protocol: &Protocol,
     tolerance: f64,
 ) -> Result<Reference, AccuracyError> {
     protocol.check()?;
-    check_speed(speed_rpm)?;
-    let period = mesh_period(model, speed_rpm);
+    check_speed(speed)?;
+    let period = mesh_period(model, speed);
     let label = format!("reference RK 5(4) rtol {tolerance:e}");
-    let err = |source| AccuracyError::Integration { method: label.clone(), speed_rpm, source };
+    let err = |source| AccuracyError::Integration { method: label.clone(), speed, source };
     let settings = Rk45Settings {
         rtol: tolerance,
         atol_q: tolerance * 1e-6,
@@ -616,8 +616,8 @@ pub fn reference(
         ..Rk45Settings::default()
     };
     let mut m = model.clone();
-    let (q0, v0) = initial_state(&mut m, speed_rpm);
-    let rigid = m.rigid_velocity_at(speed_rpm * std::f64::consts::PI / 30.0);
+    let (q0, v0) = initial_state(&mut m, speed);
+    let rigid = m.rigid_velocity_at(speed);
     let ve0: Vec<f64> = v0.iter().zip(&rigid).map(|(v, r)| v - r).collect();
     let stepper = Stepper::Rk(Box::new(Rk45::new(settings).map_err(err)?));
     let mut frame = RigidFrame::new(&mut m, rigid.clone());
@@ -626,7 +626,7 @@ pub fn reference(
     to_absolute(&rigid, &times, &mut samples.q, &mut samples.v);
     let (harmonics, separation) =
         harmonics_of(&mut m, &times, &samples.q, &samples.v, protocol.window_cycles)
-            .map_err(|source| AccuracyError::Spectrum { method: label.clone(), speed_rpm, source })?;
+            .map_err(|source| AccuracyError::Spectrum { method: label.clone(), speed, source })?;
     let interval = period / f64::from(protocol.samples_per_cycle);
     let window_start = f64::from(protocol.run_in_cycles) * period;
     let in_window: Vec<f64> = samples.events.iter().copied().filter(|t| *t >= window_start).collect();
@@ -667,18 +667,18 @@ pub fn clear_phase(events: &[f64], window_start: f64, interval: f64) -> f64 {
 /// rigid-body frame as the reference) and compares it with the reference.
 pub fn confirm(
     model: &PlanetaryDynamics,
-    speed_rpm: f64,
+    speed: f64,
     protocol: &Protocol,
     reference: &Reference,
     independent: &dyn IndependentIntegrator,
 ) -> Result<Agreement, AccuracyError> {
     protocol.check()?;
-    check_speed(speed_rpm)?;
-    let period = mesh_period(model, speed_rpm);
+    check_speed(speed)?;
+    let period = mesh_period(model, speed);
     let name = independent.name();
     let mut m = model.clone();
-    let (q0, v0) = initial_state(&mut m, speed_rpm);
-    let rigid = m.rigid_velocity_at(speed_rpm * std::f64::consts::PI / 30.0);
+    let (q0, v0) = initial_state(&mut m, speed);
+    let rigid = m.rigid_velocity_at(speed);
     let ve0: Vec<f64> = v0.iter().zip(&rigid).map(|(v, r)| v - r).collect();
     let times = protocol.sample_times(period);
     let clock = Clock::now();
@@ -696,7 +696,7 @@ pub fn confirm(
     let (mut q, mut v) = (solution.q, solution.v);
     to_absolute(&rigid, &times, &mut q, &mut v);
     let (harmonics, _) = harmonics_of(&mut m, &times, &q, &v, protocol.window_cycles)
-        .map_err(|source| AccuracyError::Spectrum { method: name.clone(), speed_rpm, source })?;
+        .map_err(|source| AccuracyError::Spectrum { method: name.clone(), speed, source })?;
     Ok(Agreement {
         error: harmonic_error(&harmonics, &reference.measured.harmonics),
         name,
@@ -730,7 +730,8 @@ fn median(values: &mut [f64]) -> f64 {
 }
 
 /// An operating point of the study: a validated gear set (its fidelity and
-/// damping included) and a speed.
+/// damping included), the run settings the methods are varied from, and a
+/// speed.
 #[derive(Clone, Debug)]
 pub struct OperatingPoint {
     /// Short name (file names).
@@ -739,8 +740,10 @@ pub struct OperatingPoint {
     pub description: String,
     /// The gear set.
     pub set: GearSet,
-    /// Input speed \[rpm\].
-    pub speed_rpm: f64,
+    /// The run settings each method changes.
+    pub run: RunSettings,
+    /// Input speed [rad/s].
+    pub speed: f64,
 }
 
 /// The grid of the study.
@@ -832,8 +835,9 @@ pub struct PointResult {
     pub description: String,
     /// Fidelity level.
     pub fidelity: Fidelity,
-    /// Input speed \[rpm\].
-    pub speed_rpm: f64,
+    /// Input speed [rad/s] (written in rpm, as `speed_rpm`).
+    #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]
+    pub speed: f64,
     /// Mesh frequency \[Hz\].
     pub mesh_frequency: f64,
     /// Degrees of freedom.
@@ -873,7 +877,7 @@ pub fn study_point(
                 reason: e.to_string(),
             }
         })?;
-    let speed = point.speed_rpm;
+    let speed = point.speed;
     check_speed(speed)?;
     let period = mesh_period(&model, speed);
     let probe = reference(&model, speed, &plan.protocol, 1e-8)?;
@@ -900,7 +904,7 @@ pub fn study_point(
     };
     let mut settings = Vec::new();
     for method in plan.methods() {
-        let result = match measure(&model, &point.set, speed, &method, &protocol, plan.repeats) {
+        let result = match measure(&model, &point.run, speed, &method, &protocol, plan.repeats) {
             Ok(m) => SettingResult {
                 method,
                 error: Some(harmonic_error(&m.harmonics, &reference.measured.harmonics)),
@@ -915,8 +919,8 @@ pub fn study_point(
     Ok(PointResult {
         name: point.name.clone(),
         description: point.description.clone(),
-        fidelity: point.set.dynamics().fidelity,
-        speed_rpm: speed,
+        fidelity: point.set.fidelity(),
+        speed,
         mesh_frequency: 1.0 / period,
         dof: model.dim(),
         protocol,

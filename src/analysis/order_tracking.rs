@@ -29,6 +29,8 @@ use crate::dynamics::response::{static_state, ResponseError, Stepper, Work};
 use crate::dynamics::solver::{Rk45, SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
 use crate::model::gear::{GearSet, IntegratorKind};
+use crate::model::run::RunSettings;
+use crate::scene::units::rad_per_s_to_rpm;
 
 /// Mesh harmonics counted in the window (F^(1..6)).
 pub const HARMONICS: usize = 6;
@@ -61,29 +63,29 @@ pub struct TrackedRun {
 type Sample = (f64, f64, f64);
 
 /// Runs the set from the FMU's initial state at input speed `omega` [rad/s]
-/// with the adaptive method of `set` (which must be RK 5(4)) and returns
+/// with the adaptive method of `run` (which must be RK 5(4)) and returns
 /// the order-tracked windows of `window_cycles` mesh cycles at
 /// `samples_per_cycle` samples each that end `ends` mesh cycles after the
 /// start (each window holds the last samples whose travel crossing is not
 /// later than its end, as the FMU's window at that communication point).
 pub fn order_tracked_windows(
     set: &GearSet,
+    run: &RunSettings,
     model: &mut PlanetaryDynamics,
     omega: f64,
     window_cycles: usize,
     samples_per_cycle: usize,
     ends: &[usize],
 ) -> Result<TrackedRun, ResponseError> {
-    let rpm = omega * 30.0 / std::f64::consts::PI;
     let invalid = |name: &str, value: String, reason: &str| ResponseError::InvalidRequest {
         name: name.into(),
         value,
         reason: reason.into(),
     };
-    if set.dynamics().integrator != IntegratorKind::Rk45 {
+    if run.integrator() != IntegratorKind::Rk45 {
         return Err(invalid(
             "integrator",
-            format!("{:?}", set.dynamics().integrator),
+            format!("{:?}", run.integrator()),
             "order tracking samples the adaptive method's dense output: use rk45",
         ));
     }
@@ -91,7 +93,7 @@ pub fn order_tracked_windows(
     if !(fm.is_finite() && fm > 0.0) {
         return Err(invalid(
             "input speed",
-            format!("{rpm} rpm"),
+            format!("{} rpm", rad_per_s_to_rpm(omega)),
             "must be positive and finite (the travel is tracked upwards)",
         ));
     }
@@ -113,14 +115,14 @@ pub fn order_tracked_windows(
         return Err(invalid("planets", "0".into(), "planet 1's meshes are tracked: need a planet"));
     }
     let period = 1.0 / fm;
-    let err = |source| ResponseError::Integration { speed_rpm: rpm, source };
+    let err = |source| ResponseError::Integration { speed: omega, source };
     // The FMU's start (Simulation::new): static deflection, balanced torques.
     let start = static_state(model, omega);
     let torques = set.balanced_torques();
     model.set_torques(torques[0], torques[1], torques[2]);
     model.set_drive_speed(omega);
     model.rebase_drive(&start.q);
-    let mut rk = match Stepper::new(set, period).map_err(err)? {
+    let mut rk = match Stepper::new(run, period).map_err(err)? {
         Stepper::Rk(r) => r,
         Stepper::Alpha(_) => {
             return Err(invalid("integrator", "generalized_alpha".into(), "use rk45"));
@@ -185,7 +187,7 @@ pub fn order_tracked_windows(
         let ring: Vec<f64> = window.iter().map(|s| s.2).collect();
         let harmonics = |f: &[f64]| {
             mesh_harmonics(f, window_cycles, HARMONICS)
-                .map_err(|source| ResponseError::Spectrum { speed_rpm: rpm, source })
+                .map_err(|source| ResponseError::Spectrum { speed: omega, source })
         };
         windows.push(WindowMeasure {
             end_cycle: end,

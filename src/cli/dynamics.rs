@@ -4,13 +4,13 @@
 use crate::*;
 
 pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: SimulateArgs) -> Result<()> {
-    let set = validated(&load_scene(&scene)?)?;
+    let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     if !(step.is_finite() && step > 0.0 && stop.is_finite() && stop > 0.0) {
         bail!("--stop and --step must be finite and positive (got {stop} and {step})");
     }
     let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
     let mut sim =
-        planetwear::dynamics::simulation::Simulation::new(&set, model, 0.0, set.dynamics().input_speed)?;
+        planetwear::dynamics::simulation::Simulation::new(&set, &run, model, 0.0, run.input_speed())?;
     let n = (stop / step).round() as u64;
     for k in 0..n {
         // Communication points on the integer grid t_k = k·step, each
@@ -31,10 +31,10 @@ pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: S
 }
 
 pub(crate) fn run_command(RunArgs { scene, wear_state, speed, json, plots }: RunArgs) -> Result<()> {
-    let set = validated(&load_scene(&scene)?)?;
+    let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     let mut model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
-    let rpm = speed.unwrap_or(set.dynamics().input_speed * 30.0 / std::f64::consts::PI);
-    let ss = steady_state(&mut model, &set, rpm * std::f64::consts::PI / 30.0, None)?;
+    let omega = speed.map(rpm_to_rad_per_s).unwrap_or(run.input_speed());
+    let ss = steady_state(&mut model, &set, &run, omega, None)?;
     if let Some(dir) = &plots {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         write_steady_state(&ss, &set, dir)?;
@@ -50,7 +50,7 @@ pub(crate) fn run_command(RunArgs { scene, wear_state, speed, json, plots }: Run
 pub(crate) fn sweep_command(
     SweepArgs { scene, wear_state, from, to, step, direction, out, histories, json }: SweepArgs,
 ) -> Result<()> {
-    let set = validated(&load_scene(&scene)?)?;
+    let (set, run_settings) = validated_with_run(&load_scene(&scene)?)?;
     let speeds = speed_grid(from, to, step)?;
     let dirs: Vec<Direction> = match direction.as_str() {
         "up" => vec![Direction::Up],
@@ -63,13 +63,16 @@ pub(crate) fn sweep_command(
     let modes = natural_modes(&model.lumped);
     let bar = progress_bar((speeds.len() * dirs.len()) as u64);
     let started = std::time::Instant::now();
+    // The core takes rad/s; the report shows each point's speed in rpm as
+    // given (rad_per_s_to_rpm returns a speed written in rpm exactly).
+    let histories: Vec<f64> = histories.into_iter().map(rpm_to_rad_per_s).collect();
     let run = |d: Direction| {
         let mut m = model.clone();
-        let mut grid = speeds.clone();
+        let mut grid: Vec<f64> = speeds.iter().copied().map(rpm_to_rad_per_s).collect();
         if d == Direction::Down {
             grid.reverse();
         }
-        sweep(&set, &mut m, d, &grid, &histories, |_| bar.inc(1))
+        sweep(&set, &run_settings, &mut m, d, &grid, &histories, |_| bar.inc(1))
     };
     let results: Vec<_> = if dirs.len() == 2 {
         let (a, b) = rayon::join(|| run(Direction::Up), || run(Direction::Down));
@@ -127,7 +130,7 @@ pub(crate) fn sweep_command(
                 "  peak {:?} {} at {:.0} rpm: F(rms) {:.1} N/mm; {}×f_m = {:.0} Hz ≈ {:?} mode at {:.0} Hz ({:.1} %)",
                 p.direction,
                 p.mesh.name(),
-                p.speed_rpm,
+                rad_per_s_to_rpm(p.speed),
                 p.rms_n_per_mm,
                 p.harmonic,
                 f64::from(p.harmonic) * p.mesh_frequency,
@@ -203,7 +206,11 @@ pub(crate) fn ltca_command(
 pub(crate) fn print_steady_state(ss: &SteadyState, width_mm: f64) {
     println!(
         "steady state at {:.1} rpm (mesh frequency {:.1} Hz, {} mesh cycles; {} steps, {} Newton iterations)",
-        ss.input_speed_rpm, ss.mesh_frequency, ss.cycles, ss.stats.steps, ss.stats.newton_iterations
+        rad_per_s_to_rpm(ss.input_speed),
+        ss.mesh_frequency,
+        ss.cycles,
+        ss.stats.steps,
+        ss.stats.newton_iterations
     );
     println!(
         "  {:<16} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7}",

@@ -4,6 +4,7 @@ use crate::*;
 
 pub(crate) fn wear_model(
     set: &GearSet,
+    run: &RunSettings,
     ring: bool,
     threshold_um: Option<f64>,
     dynamic_rpm: Option<f64>,
@@ -13,7 +14,7 @@ pub(crate) fn wear_model(
         if !(rpm.is_finite() && rpm > 0.0) {
             bail!("--dynamic-speed {rpm}: must be a finite input speed > 0 rpm");
         }
-        settings.source = PressureSource::Dynamic { speed_rpm: rpm };
+        settings.source = PressureSource::Dynamic { speed: rpm_to_rad_per_s(rpm) };
     }
     if ring {
         settings.wearing = WearingFlanks::both_meshes();
@@ -21,7 +22,7 @@ pub(crate) fn wear_model(
     if let Some(t) = threshold_um {
         settings.update_depth = t * 1e-6;
     }
-    WearModel::new(set, settings).map_err(|e| match threshold_um {
+    WearModel::with_run(set, run, settings).map_err(|e| match threshold_um {
         Some(t) => anyhow::anyhow!("--threshold {t} µm: {e}"),
         None => e.into(),
     })
@@ -35,8 +36,8 @@ pub(crate) fn wear_run(
     dynamic: Option<f64>,
     json: bool,
 ) -> Result<()> {
-    let set = validated(&load_scene(scene)?)?;
-    let model = wear_model(&set, ring, None, dynamic)?;
+    let (set, run) = validated_with_run(&load_scene(scene)?)?;
+    let model = wear_model(&set, &run, ring, None, dynamic)?;
     std::fs::create_dir_all(out.join("plots")).with_context(|| format!("creating {}", out.display()))?;
     let mut state = model.unworn();
     let mut states = vec![state.clone()];
@@ -106,8 +107,8 @@ pub(crate) fn wear_run_command(
 pub(crate) fn wear_compare_command(
     WearCompareArgs { scene, state, speeds, json }: WearCompareArgs,
 ) -> Result<()> {
-    let set = validated(&load_scene(&scene)?)?;
-    let model = wear_model(&set, false, None, None)?;
+    let (set, run) = validated_with_run(&load_scene(&scene)?)?;
+    let model = wear_model(&set, &run, false, None, None)?;
     let state = match &state {
         Some(path) => planetwear::wear::state::read_worn_state(path, &set)
             .with_context(|| format!("--state {}", path.display()))?,
@@ -119,7 +120,7 @@ pub(crate) fn wear_compare_command(
         if !(rpm.is_finite() && rpm > 0.0) {
             bail!("--speeds {rpm}: speeds must be finite and > 0 rpm");
         }
-        let c = compare_sources(&model, &state, rpm)?;
+        let c = compare_sources(&model, &state, rpm_to_rad_per_s(rpm))?;
         if json {
             docs.push(serde_json::json!({
                 "speed_rpm": rpm,
@@ -186,6 +187,7 @@ pub(crate) fn wear_effect_command(
     }
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     let started = std::time::Instant::now();
+    let speeds: Vec<f64> = speeds.into_iter().map(rpm_to_rad_per_s).collect();
     let results: Vec<_> = run_all(&list, kappa, &speeds)
         .into_iter()
         .collect::<Result<_, _>>()
@@ -209,8 +211,8 @@ pub(crate) fn wear_effect_command(
 pub(crate) fn wear_step_command(
     WearStepArgs { scene, state, out, threshold, revolutions, ring, dynamic_speed }: WearStepArgs,
 ) -> Result<()> {
-    let set = validated(&load_scene(&scene)?)?;
-    let model = wear_model(&set, ring, threshold, dynamic_speed)?;
+    let (set, run) = validated_with_run(&load_scene(&scene)?)?;
+    let model = wear_model(&set, &run, ring, threshold, dynamic_speed)?;
     let before = match &state {
         Some(path) => planetwear::wear::state::read_worn_state(path, &set)
             .with_context(|| format!("--state {}", path.display()))?,

@@ -196,7 +196,7 @@ impl PlanetaryDynamics {
             ring_pressure_angle: alpha_r,
             planet_angles: set.planet_angles().to_vec(),
             held: Some(set.held()),
-            fidelity: set.dynamics().fidelity,
+            fidelity: set.fidelity(),
         };
         let reduction = lumped.reduction();
         let mass = lumped.mass();
@@ -223,7 +223,7 @@ impl PlanetaryDynamics {
             }
         }
         let u = |m: Member| reduction.position(Coordinate::U(m));
-        let zeta_m = set.dynamics().mesh_damping_ratio;
+        let zeta_m = set.mesh_damping_ratio();
         let m_rot = |x: f64, y: f64| x * y / (x + y);
         let c_sp = 2.0
             * zeta_m
@@ -306,12 +306,12 @@ impl PlanetaryDynamics {
         let mesh_frequency_per_input_speed =
             ((ws - wc) * f64::from(set.sun().teeth) / (2.0 * std::f64::consts::PI)).abs();
         let rotations = [(u(Member::Carrier), a), (u(Member::Ring), rbr), (u(Member::Sun), rbs)];
-        let speed_drive = match set.dynamics().drive {
+        let speed_drive = match set.drive() {
             Drive::Torque | Drive::SpeedSteps => None,
             Drive::Speed => {
                 // Shaft stiffness on u: k_θ / lever²; damping ratio 0.05 of the
                 // input body on the shaft.
-                let k = set.dynamics().shaft_stiffness / (input_lever * input_lever);
+                let k = set.shaft_stiffness() / (input_lever * input_lever);
                 let c = 2.0 * 0.05 * (k * mass[input_index]).sqrt();
                 Some(SpeedDrive {
                     stiffness: k,

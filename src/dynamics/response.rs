@@ -19,6 +19,8 @@ use crate::dynamics::solver::{
 };
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics, SpectrumError};
 use crate::model::gear::{GearSet, IntegratorKind, MeshKind};
+use crate::model::run::RunSettings;
+use crate::scene::units::rad_per_s_to_rpm;
 
 /// Integrator work of a run (a copy of the solver's counters).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -54,18 +56,18 @@ impl From<Stats> for Work {
 #[derive(Debug, thiserror::Error)]
 pub enum ResponseError {
     /// The integrator failed (non-finite state, Newton divergence, step too small).
-    #[error("integration failed at {speed_rpm} rpm: {source}")]
+    #[error("integration failed at {} rpm: {source}", rad_per_s_to_rpm(*.speed))]
     Integration {
-        /// Input speed \[rpm\].
-        speed_rpm: f64,
+        /// Input speed [rad/s].
+        speed: f64,
         /// The integrator's error.
         source: SolverError,
     },
     /// The spectrum could not be formed.
-    #[error("spectrum at {speed_rpm} rpm: {source}")]
+    #[error("spectrum at {} rpm: {source}", rad_per_s_to_rpm(*.speed))]
     Spectrum {
-        /// Input speed \[rpm\].
-        speed_rpm: f64,
+        /// Input speed [rad/s].
+        speed: f64,
         /// Cause.
         source: SpectrumError,
     },
@@ -110,8 +112,9 @@ pub struct MeshResponse {
 /// Steady-state response at one speed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SteadyState {
-    /// Input speed \[rpm\].
-    pub input_speed_rpm: f64,
+    /// Input speed [rad/s] (written in files in rpm, as `input_speed_rpm`).
+    #[serde(rename = "input_speed_rpm", with = "crate::scene::units::rpm")]
+    pub input_speed: f64,
     /// Mesh frequency \[Hz\].
     pub mesh_frequency: f64,
     /// Mean speed of the input member over the window, from its rotation [rad/s].
@@ -137,8 +140,8 @@ pub(crate) enum Stepper {
 }
 
 impl Stepper {
-    pub(crate) fn new(set: &GearSet, mesh_period: f64) -> Result<Self, SolverError> {
-        let d = &set.dynamics();
+    pub(crate) fn new(run: &RunSettings, mesh_period: f64) -> Result<Self, SolverError> {
+        let d = run.values();
         Ok(match d.integrator {
             IntegratorKind::GeneralizedAlpha => {
                 let mut s = GeneralizedAlphaSettings::chung_hulbert(d.rho_infinity)?;
@@ -272,14 +275,15 @@ pub fn static_state(model: &PlanetaryDynamics, input_speed: f64) -> State {
 }
 
 /// Steady-state response at input speed `omega` [rad/s], continuing from
-/// `start` when given.
+/// `start` when given, run and sampled as `run` sets.
 pub fn steady_state(
     model: &mut PlanetaryDynamics,
     set: &GearSet,
+    run: &RunSettings,
     omega: f64,
     start: Option<&State>,
 ) -> Result<SteadyState, ResponseError> {
-    steady_state_observed(model, set, omega, start, |_, _| {})
+    steady_state_observed(model, set, run, omega, start, |_, _| {})
 }
 
 /// [`steady_state`], calling `observe(k, model)` at every sample k of the
@@ -290,27 +294,27 @@ pub fn steady_state(
 pub fn steady_state_observed(
     model: &mut PlanetaryDynamics,
     set: &GearSet,
+    run: &RunSettings,
     omega: f64,
     start: Option<&State>,
     mut observe: impl FnMut(usize, &PlanetaryDynamics),
 ) -> Result<SteadyState, ResponseError> {
-    let rpm = omega * 30.0 / std::f64::consts::PI;
     let fm = model.mesh_frequency_per_input_speed * omega.abs();
     if !(fm.is_finite() && fm > 0.0) {
         return Err(ResponseError::InvalidRequest {
             name: "input speed".into(),
-            value: format!("{rpm} rpm"),
+            value: format!("{} rpm", rad_per_s_to_rpm(omega)),
             reason: "must be non-zero and finite: the steady state is measured over mesh cycles".into(),
         });
     }
-    let d = &set.dynamics();
+    let d = run.values();
     let period = 1.0 / fm;
     let cycles_per_rev = model.mesh_frequency_per_input_speed * 2.0 * std::f64::consts::PI;
     let run_in_cycles = (d.run_in_revolutions * cycles_per_rev).ceil() as u64;
     let cycles = ((d.measured_revolutions * cycles_per_rev).round() as usize).max(1);
     let samples = d.samples_per_mesh_cycle;
     let steps_per_sample = (d.steps_per_mesh_cycle as u64).div_ceil(samples as u64).max(1);
-    let err = |source| ResponseError::Integration { speed_rpm: rpm, source };
+    let err = |source| ResponseError::Integration { speed: omega, source };
     let (q0, v0) = match start {
         Some(s) => {
             let dv = omega - s.input_speed;
@@ -324,7 +328,7 @@ pub fn steady_state_observed(
     };
     model.set_drive_speed(omega);
     model.rebase_drive(&q0);
-    let mut stepper = Stepper::new(set, period).map_err(err)?;
+    let mut stepper = Stepper::new(run, period).map_err(err)?;
     stepper.init(model, 0.0, &q0, &v0).map_err(err)?;
     // Run-in, one mesh cycle at a time. The excitation repeats every mesh
     // cycle, so the steady state does too: the run-in ends once the mesh
@@ -407,7 +411,7 @@ pub fn steady_state_observed(
     for (m, f) in force.iter().enumerate() {
         let (planet, mesh) = model.mesh_identity(m);
         let harmonics = mesh_harmonics(f, cycles, 6)
-            .map_err(|source| ResponseError::Spectrum { speed_rpm: rpm, source })?;
+            .map_err(|source| ResponseError::Spectrum { speed: omega, source })?;
         meshes.push(MeshResponse {
             planet,
             mesh,
@@ -417,7 +421,7 @@ pub fn steady_state_observed(
         });
     }
     Ok(SteadyState {
-        input_speed_rpm: rpm,
+        input_speed: omega,
         mesh_frequency: fm,
         mean_input_speed,
         cycles,
@@ -448,26 +452,24 @@ pub struct Sweep {
     pub points: Vec<SteadyState>,
 }
 
-/// Runs a continuation sweep over `speeds_rpm` (in the given order); calls
-/// `progress` after every point. Time histories are kept only for the speeds
-/// listed in `keep_histories_rpm`.
+/// Runs a continuation sweep over the input speeds `speeds` [rad/s] (in the
+/// given order); calls `progress` after every point. Time histories are kept
+/// only for the speeds listed in `keep_histories` [rad/s].
 pub fn sweep(
     set: &GearSet,
+    run: &RunSettings,
     model: &mut PlanetaryDynamics,
     direction: Direction,
-    speeds_rpm: &[f64],
-    keep_histories_rpm: &[f64],
+    speeds: &[f64],
+    keep_histories: &[f64],
     mut progress: impl FnMut(usize),
 ) -> Result<Sweep, ResponseError> {
-    let mut points = Vec::with_capacity(speeds_rpm.len());
+    let mut points = Vec::with_capacity(speeds.len());
     let mut state: Option<State> = None;
-    for (i, rpm) in speeds_rpm.iter().enumerate() {
-        let omega = rpm * std::f64::consts::PI / 30.0;
-        let mut ss = steady_state(model, set, omega, state.as_ref())?;
-        // Report the grid speed as given, not its rpm → rad/s → rpm round trip.
-        ss.input_speed_rpm = *rpm;
+    for (i, omega) in speeds.iter().enumerate() {
+        let mut ss = steady_state(model, set, run, *omega, state.as_ref())?;
         state = Some(ss.end.clone());
-        if !keep_histories_rpm.iter().any(|k| (k - rpm).abs() < 1e-9) {
+        if !keep_histories.iter().any(|k| (k - omega).abs() <= 1e-9 * omega.abs().max(1.0)) {
             ss.time = Vec::new();
             ss.mesh_force = Vec::new();
         }

@@ -18,6 +18,7 @@ use crate::dynamics::solver::{SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
 use crate::model::gear::{Drive, GearSet, Member, MeshKind};
 use crate::model::lumped::{full_index, planet_bearing_vectors, Coordinate, Fidelity};
+use crate::model::run::RunSettings;
 
 /// Why a simulation step or setting was refused.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -177,6 +178,7 @@ pub struct Simulation {
     model: PlanetaryDynamics,
     stepper: Stepper,
     set: GearSet,
+    run: RunSettings,
     time: f64,
     nominal_step: f64,
     torques: [f64; 3],
@@ -195,9 +197,10 @@ pub const MAX_INTERNAL_STEPS: u64 = 10_000_000;
 impl Simulation {
     /// Starts at time `t0` \[s\] from the static deflection with the input
     /// member turning at `input_speed` [rad/s]; internal steps follow the
-    /// scene's steps per mesh cycle at that speed.
+    /// run settings' steps per mesh cycle at that speed.
     pub fn new(
         set: &GearSet,
+        run: &RunSettings,
         model: PlanetaryDynamics,
         t0: f64,
         input_speed: f64,
@@ -214,7 +217,7 @@ impl Simulation {
             return Err(invalid("input speed", input_speed, "must be finite and non-zero"));
         }
         let fm = model.mesh_frequency_per_input_speed * input_speed.abs();
-        let nominal_step = 1.0 / (fm * set.dynamics().steps_per_mesh_cycle as f64);
+        let nominal_step = 1.0 / (fm * run.steps_per_mesh_cycle() as f64);
         let mut model = model;
         let start = static_state(&model, input_speed);
         let torques = set.balanced_torques();
@@ -222,7 +225,7 @@ impl Simulation {
         model.set_drive_speed(input_speed);
         model.rebase_drive(&start.q);
         let err = |source| SimulationError::Integration { t: t0, source };
-        let mut stepper = Stepper::new(set, 1.0 / fm).map_err(err)?;
+        let mut stepper = Stepper::new(run, 1.0 / fm).map_err(err)?;
         stepper.init(&mut model, t0, &start.q, &start.v).map_err(err)?;
         // The outputs at t0 are the initial state's, not a trial state's of
         // the integrator's start.
@@ -232,14 +235,15 @@ impl Simulation {
             model,
             stepper,
             set: set.clone(),
+            run: *run,
             time: t0,
             nominal_step,
             torques,
             speed_reference: input_speed,
             window: Window {
                 cycles: 34,
-                samples_per_cycle: set.dynamics().samples_per_mesh_cycle,
-                spacing: set.sun().base_pitch() / set.dynamics().samples_per_mesh_cycle as f64,
+                samples_per_cycle: run.samples_per_mesh_cycle(),
+                spacing: set.sun().base_pitch() / run.samples_per_mesh_cycle() as f64,
                 last: None,
                 sun: VecDeque::new(),
                 ring: VecDeque::new(),
@@ -322,7 +326,7 @@ impl Simulation {
         if omega == self.speed_reference {
             return Ok(());
         }
-        match self.set.dynamics().drive {
+        match self.set.drive() {
             Drive::Torque => self.speed_reference = omega,
             Drive::Speed => {
                 self.speed_reference = omega;
@@ -372,9 +376,9 @@ impl Simulation {
         if !(fm.is_finite() && fm > 0.0) {
             return Ok(None);
         }
-        self.nominal_step = 1.0 / (fm * self.set.dynamics().steps_per_mesh_cycle as f64);
+        self.nominal_step = 1.0 / (fm * self.run.steps_per_mesh_cycle() as f64);
         let t = self.time;
-        Stepper::new(&self.set, 1.0 / fm)
+        Stepper::new(&self.run, 1.0 / fm)
             .map(Some)
             .map_err(|source| SimulationError::Integration { t, source })
     }
@@ -421,7 +425,7 @@ impl Simulation {
         let budget = WORK_BASE + WORK_PER_INTERNAL_STEP * steps;
         let nominal_speed = 1.0
             / (self.nominal_step
-                * self.set.dynamics().steps_per_mesh_cycle as f64
+                * self.run.steps_per_mesh_cycle() as f64
                 * self.model.mesh_frequency_per_input_speed);
         let work_start = match &self.stepper {
             Stepper::Rk(r) => r.stats().rhs_evaluations,
@@ -689,7 +693,7 @@ impl Simulation {
         self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
         self.speed_reference = s.speed_reference;
         self.model.set_drive_state(&s.drive);
-        if self.set.dynamics().drive != Drive::Torque {
+        if self.set.drive() != Drive::Torque {
             // The internal step follows the reference (see `set_speed_reference`).
             if let Some(stepper) = self.retuned_stepper(s.speed_reference)? {
                 self.stepper = stepper;
@@ -720,5 +724,10 @@ impl Simulation {
     /// The gear set simulated.
     pub fn gear_set(&self) -> &GearSet {
         &self.set
+    }
+
+    /// The run settings of the simulation.
+    pub fn run_settings(&self) -> &RunSettings {
+        &self.run
     }
 }

@@ -405,8 +405,8 @@ impl Instance {
     /// Builds the simulation from the parameters.
     fn build(&mut self) -> Result<(), Refusal> {
         let scene = self.scene()?;
-        let set = scene
-            .validate()
+        let (set, run) = scene
+            .validate_with_run()
             .map_err(|e| Refusal::error(format!("the parameters describe an invalid gear set: {e}")))?;
         if set.planet_angles().len() > 8 {
             return Err(Refusal::error(format!(
@@ -417,11 +417,10 @@ impl Instance {
         let model = PlanetaryDynamics::new(&set, self.contact_model(&set)?)
             .map_err(|e| Refusal::error(e.to_string()))?;
         let speed = self.real(vr::INITIAL_SPEED);
-        let mut sim = Simulation::new(&set, model, self.start_time, speed)
+        let mut sim = Simulation::new(&set, &run, model, self.start_time, speed)
             .map_err(|e| Refusal::error(format!("initialSpeed: {e}")))?;
         let cycles = usize::try_from(self.int(vr::HARMONIC_WINDOW_CYCLES)).unwrap_or(0);
-        sim.set_window(cycles, set.dynamics().samples_per_mesh_cycle)
-            .map_err(|e| Refusal::error(e.to_string()))?;
+        sim.set_window(cycles, run.samples_per_mesh_cycle()).map_err(|e| Refusal::error(e.to_string()))?;
         self.sim = Some(sim);
         self.built_from = self.build_key();
         self.push_inputs()
@@ -1061,7 +1060,7 @@ mod tests {
         let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * y.abs().max(1e-300);
         assert_eq!(format!("{:?}", a.bodies()), format!("{:?}", b.bodies()));
         assert_eq!(format!("{:?}", a.supports()), format!("{:?}", b.supports()));
-        assert_eq!(a.dynamics().mesh_damping_ratio, b.dynamics().mesh_damping_ratio);
+        assert_eq!(a.mesh_damping_ratio(), b.mesh_damping_ratio());
         assert_eq!((a.held(), a.input(), a.input_torque()), (b.held(), b.input(), b.input_torque()));
         for (x, y) in [(&a.sun(), &b.sun()), (&a.planet(), &b.planet()), (&a.ring(), &b.ring())] {
             assert!(close(x.pressure_angle, y.pressure_angle) && close(x.tooth_thickness, y.tooth_thickness));

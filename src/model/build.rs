@@ -1,23 +1,34 @@
 //! The model built from a scene: every rule of the scene checked at once,
 //! every problem named by the user's key (`sun.tip_radius_mm`), and the
 //! values converted to SI. A [`GearSet`] exists only through
-//! [`Scene::validate`], so holding one means it passed every rule.
+//! [`Scene::validate`] (or [`Scene::validate_with_run`]), so holding one means
+//! it passed every rule; a [`RunSettings`] only through the same validation
+//! or [`RunSettings::new`], which checks it by the same rules.
 
 use std::f64::consts::PI;
 use std::fmt;
 
 use crate::model::gear::{
-    Analysis, Bodies, Body, Chamfer, DynamicsSettings, GearKind, GearSet, Material, MeshKind, RootForm,
-    Supports, ToothForm,
+    Analysis, Bodies, Body, Chamfer, GearKind, GearSet, Material, MeshKind, RootForm, Supports, ToothForm,
 };
 use crate::model::mesh::PathOfContact;
+use crate::model::run::{RunSettings, RunValues};
+use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 use crate::scene::{
     default_chamfer, ChamferSpec, ExternalGearSpec, Problem, RingGearSpec, Scene, SceneError,
 };
 
 impl Scene {
-    /// Checks every rule and converts to SI.
+    /// Checks every rule and converts to SI: the gear set. The run settings
+    /// are checked too (a scene is valid only with all its keys), but not
+    /// returned; [`Scene::validate_with_run`] returns both.
     pub fn validate(&self) -> Result<GearSet, SceneError> {
+        validate(self).map(|(set, _)| set)
+    }
+
+    /// Checks every rule and converts to SI: the gear set and the scene's run
+    /// settings, every problem of either listed at once.
+    pub fn validate_with_run(&self) -> Result<(GearSet, RunSettings), SceneError> {
         validate(self)
     }
 
@@ -284,7 +295,7 @@ fn tip_key(gear: &str) -> String {
 }
 
 /// Checks every rule of a scene and converts it to SI.
-fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
+fn validate(scene: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
     let mut c = Checker { problems: Vec::new() };
     let sun = c.external("sun", &scene.sun);
     let planet = c.external("planet", &scene.planet);
@@ -394,19 +405,12 @@ fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         c.in_range(name, v, 0.1, 10.0, "a correction factor on the energy method's pair stiffness");
     }
     let d = &scene.dynamics;
-    if !d.input_speed_rpm.is_finite() || d.input_speed_rpm.abs() > MAX_INPUT_SPEED_RPM {
-        c.fail(
-            "dynamics.input_speed_rpm",
-            d.input_speed_rpm,
-            "must be a finite speed below 1e6 rpm in magnitude",
-        );
+    if !(d.mesh_damping_ratio.is_finite() && (0.0..1.0).contains(&d.mesh_damping_ratio)) {
+        c.fail("dynamics.mesh_damping_ratio", d.mesh_damping_ratio, "must be at least 0 and below 1");
     }
-    let run = DynamicsSettings {
-        fidelity: d.fidelity,
-        mesh_damping_ratio: d.mesh_damping_ratio,
-        drive: d.drive,
-        input_speed: d.input_speed_rpm * std::f64::consts::PI / 30.0,
-        shaft_stiffness: d.shaft_stiffness_nm_per_rad,
+    c.positive("dynamics.shaft_stiffness_nm_per_rad", d.shaft_stiffness_nm_per_rad);
+    let run = RunValues {
+        input_speed: rpm_to_rad_per_s(d.input_speed_rpm),
         integrator: d.integrator,
         rho_infinity: d.rho_infinity,
         steps_per_mesh_cycle: d.steps_per_mesh_cycle as usize,
@@ -416,7 +420,7 @@ fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         measured_revolutions: d.measured_revolutions,
         samples_per_mesh_cycle: d.samples_per_mesh_cycle as usize,
     };
-    check_run_settings(&run, &mut c);
+    check_run_settings(&run, Some(d.input_speed_rpm), &mut c);
 
     let op = &scene.operation;
     if op.held == op.input {
@@ -500,7 +504,10 @@ fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
             ring: Body { mass: 0.0, inertia: 0.0 },
             carrier: Body { mass: 0.0, inertia: 0.0 },
         },
-        dynamics: run,
+        fidelity: d.fidelity,
+        mesh_damping_ratio: d.mesh_damping_ratio,
+        drive: d.drive,
+        shaft_stiffness: d.shaft_stiffness_nm_per_rad,
     };
     // Bodies from the geometry, then the user's overrides.
     let mut set = set;
@@ -662,24 +669,34 @@ fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
     }
 
     if c.problems.is_empty() {
-        Ok(set)
+        Ok((set, RunSettings { values: run }))
     } else {
         Err(SceneError::Invalid { problems: c.problems })
     }
 }
 
-/// Largest input speed a scene may give \[rpm\].
+/// Largest input speed magnitude a scene may give \[rpm\].
 const MAX_INPUT_SPEED_RPM: f64 = 1.0e6;
 
-/// The rules of the run settings that hold in SI as in the scene's units
-/// (everything but the input speed, which the scene gives in rpm), each
-/// problem named by its scene key. Shared by [`Scene::validate`] and
-/// [`GearSet::with_run_settings`].
-fn check_run_settings(d: &DynamicsSettings, c: &mut Checker) {
-    if !(d.mesh_damping_ratio.is_finite() && (0.0..1.0).contains(&d.mesh_damping_ratio)) {
-        c.fail("dynamics.mesh_damping_ratio", d.mesh_damping_ratio, "must be at least 0 and below 1");
+/// The input-speed rule: a finite speed of at most [`MAX_INPUT_SPEED_RPM`] in
+/// magnitude, checked in rad/s. `given_rpm` is the value the user wrote, when
+/// there is one, shown as given in the problem; otherwise the speed is shown
+/// converted to rpm (the scene key's unit).
+fn check_input_speed(omega: f64, given_rpm: Option<f64>, c: &mut Checker) {
+    if !(omega.is_finite() && omega.abs() <= rpm_to_rad_per_s(MAX_INPUT_SPEED_RPM)) {
+        c.fail(
+            "dynamics.input_speed_rpm",
+            given_rpm.unwrap_or_else(|| rad_per_s_to_rpm(omega)),
+            "must be a finite speed below 1e6 rpm in magnitude",
+        );
     }
-    c.positive("dynamics.shaft_stiffness_nm_per_rad", d.shaft_stiffness);
+}
+
+/// Every rule of the run settings, each problem named by its scene key (the
+/// input speed shown in rpm, as the scene gives it). Shared by
+/// [`Scene::validate`] and [`RunSettings::new`].
+fn check_run_settings(d: &RunValues, given_rpm: Option<f64>, c: &mut Checker) {
+    check_input_speed(d.input_speed, given_rpm, c);
     if !(d.rho_infinity.is_finite() && (0.0..=1.0).contains(&d.rho_infinity)) {
         c.fail("dynamics.rho_infinity", d.rho_infinity, "must lie between 0 and 1 (spectral radius)");
     }
@@ -701,26 +718,25 @@ fn check_run_settings(d: &DynamicsSettings, c: &mut Checker) {
     }
 }
 
-impl GearSet {
-    /// The same gear set with other run settings (fidelity, damping, drive,
-    /// integrator, windows): `change` edits a copy of the settings, which
-    /// must pass the scene's rules for them again; the geometry, bodies and
-    /// supports are those already validated.
-    pub fn with_run_settings(
-        &self,
-        change: impl FnOnce(&mut DynamicsSettings),
-    ) -> Result<GearSet, SceneError> {
-        let mut run = self.dynamics;
-        change(&mut run);
+impl RunSettings {
+    /// Checks `values` by the scene's rules for run settings and returns
+    /// them as settings, or every problem at once, each named by its scene
+    /// key (`dynamics.relative_tolerance`, …).
+    pub fn new(values: RunValues) -> Result<RunSettings, SceneError> {
         let mut c = Checker { problems: Vec::new() };
-        let rpm = run.input_speed * 30.0 / PI;
-        if !rpm.is_finite() || rpm.abs() > MAX_INPUT_SPEED_RPM {
-            c.fail("dynamics.input_speed_rpm", rpm, "must be a finite speed below 1e6 rpm in magnitude");
+        check_run_settings(&values, None, &mut c);
+        if c.problems.is_empty() {
+            Ok(RunSettings { values })
+        } else {
+            Err(SceneError::Invalid { problems: c.problems })
         }
-        check_run_settings(&run, &mut c);
-        if !c.problems.is_empty() {
-            return Err(SceneError::Invalid { problems: c.problems });
-        }
-        Ok(GearSet { dynamics: run, ..self.clone() })
+    }
+
+    /// These settings changed by `change` (which edits a copy of the values),
+    /// checked again by [`RunSettings::new`].
+    pub fn with(&self, change: impl FnOnce(&mut RunValues)) -> Result<RunSettings, SceneError> {
+        let mut values = self.values;
+        change(&mut values);
+        RunSettings::new(values)
     }
 }

@@ -1,13 +1,26 @@
-//! The validated gear set in SI units: tooth forms, material, operation.
-//! operation. Only [`crate::scene::Scene::validate`] builds a [`GearSet`], so
-//! every function of the physics can rely on its invariants (positive sizes,
-//! tips outside base circles, contact ratios above one, no interference).
+//! The validated gear set in SI units: tooth forms, material, bodies,
+//! supports, operation and the terms of its equations of motion. Only
+//! [`crate::scene::Scene::validate`] builds a [`GearSet`], so every function
+//! of the physics can rely on its invariants (positive sizes, tips outside
+//! base circles, contact ratios above one, no interference).
+//!
+//! The gear set holds everything the equations of motion are made of: besides
+//! the geometry, bodies and supports, the degrees of freedom kept
+//! ([`Fidelity`]), the mesh damping ratio and how the input is driven (the
+//! [`Drive`] and, for the speed drive, the input shaft's stiffness). Two sets
+//! that differ in any of them are two different dynamic systems, with other
+//! natural modes, and studies that compare them (validation, calibration,
+//! the wear-effect experiments) build each from its scene. How a run of those
+//! equations is integrated and sampled (integrator, tolerances, windows,
+//! samples) and the input speed of a single run are not the system but one
+//! run of it: they are the separate [`crate::model::run::RunSettings`],
+//! changed without touching the set.
 
 use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-pub use crate::scene::{Drive, IntegratorKind, Member};
+pub use crate::scene::{Drive, Fidelity, IntegratorKind, Member};
 
 use crate::model::involute::{inv, pressure_angle_at, radius_at_roll, roll_angle};
 
@@ -387,8 +400,14 @@ pub struct GearSet {
     pub(in crate::model) supports: Supports,
     /// Masses and inertias of the bodies.
     pub(in crate::model) bodies: Bodies,
-    /// Dynamic model and integrator settings.
-    pub(in crate::model) dynamics: DynamicsSettings,
+    /// Degrees of freedom of the dynamic model.
+    pub(in crate::model) fidelity: Fidelity,
+    /// Mesh damping ratio [-].
+    pub(in crate::model) mesh_damping_ratio: f64,
+    /// Drive of the input member.
+    pub(in crate::model) drive: Drive,
+    /// Input shaft torsional stiffness for the speed drive [N·m/rad].
+    pub(in crate::model) shaft_stiffness: f64,
 }
 
 /// Read access to a validated gear set. The fields are visible to the model
@@ -466,9 +485,24 @@ impl GearSet {
         &self.bodies
     }
 
-    /// Dynamic model and integrator settings.
-    pub fn dynamics(&self) -> &DynamicsSettings {
-        &self.dynamics
+    /// Degrees of freedom of the dynamic model.
+    pub fn fidelity(&self) -> Fidelity {
+        self.fidelity
+    }
+
+    /// Viscous mesh damping as a ratio of the mesh mode's critical damping [-].
+    pub fn mesh_damping_ratio(&self) -> f64 {
+        self.mesh_damping_ratio
+    }
+
+    /// How the input member is driven.
+    pub fn drive(&self) -> Drive {
+        self.drive
+    }
+
+    /// Torsional stiffness of the input shaft for the speed drive [N·m/rad].
+    pub fn shaft_stiffness(&self) -> f64 {
+        self.shaft_stiffness
     }
 }
 
@@ -509,38 +543,6 @@ pub struct Bodies {
     pub ring: Body,
     /// Carrier (plates and pins).
     pub carrier: Body,
-}
-
-/// Dynamic model and integrator settings, SI.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct DynamicsSettings {
-    /// Degrees of freedom.
-    pub fidelity: crate::scene::Fidelity,
-    /// Mesh damping ratio [-].
-    pub mesh_damping_ratio: f64,
-    /// Drive of the input member.
-    pub drive: Drive,
-    /// Input member speed of a single run [rad/s].
-    pub input_speed: f64,
-    /// Input shaft torsional stiffness for the speed drive [N·m/rad].
-    pub shaft_stiffness: f64,
-    /// Integrator.
-    pub integrator: IntegratorKind,
-    /// Generalized-α spectral radius at infinity [-].
-    pub rho_infinity: f64,
-    /// Generalized-α steps per mesh cycle.
-    pub steps_per_mesh_cycle: usize,
-    /// Adaptive method's relative tolerance [-].
-    pub relative_tolerance: f64,
-    /// Longest run-in [input revolutions].
-    pub run_in_revolutions: f64,
-    /// The run-in ends early once two successive mesh cycles agree to this
-    /// fraction of the mean tooth force (0: always run the whole run-in).
-    pub steady_tolerance: f64,
-    /// Measured window [input revolutions].
-    pub measured_revolutions: f64,
-    /// Output samples per mesh cycle.
-    pub samples_per_mesh_cycle: usize,
 }
 
 impl Bodies {

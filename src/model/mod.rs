@@ -9,13 +9,17 @@
 //! May import: [`crate::files`], [`crate::scene`].
 //!
 //! - [`build`]: the scene's rules, and the gear set built from a valid scene.
-//! - [`gear`]: tooth forms, bodies, supports, material, run settings, the gear set.
+//! - [`gear`]: tooth forms, bodies, supports, material, the gear set (with
+//!   the terms of its equations of motion: fidelity, damping, drive).
 //! - [`involute`]: the involute function and its inverse relations.
 //! - [`lumped`]: degrees of freedom, fidelity, the lumped (mean-stiffness) set.
 //! - [`mesh`]: the path of contact of one mesh along its line of action.
+//! - [`run`]: the run settings (integrator, tolerances, windows, samples,
+//!   the input speed of a single run), a value apart from the gear set.
 
 pub mod build;
 pub mod gear;
 pub mod involute;
 pub mod lumped;
 pub mod mesh;
+pub mod run;

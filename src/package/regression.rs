@@ -274,8 +274,8 @@ pub fn example_references(
     let mut scene = Scene::example_2004();
     scene.dynamics.integrator = IntegratorKind::Rk45;
     scene.dynamics.relative_tolerance = rtol;
-    let set = scene.validate().map_err(|e| ReferenceError::Setup(e.to_string()))?;
-    let samples = set.dynamics().samples_per_mesh_cycle;
+    let (set, run_settings) = scene.validate_with_run().map_err(|e| ReferenceError::Setup(e.to_string()))?;
+    let samples = run_settings.samples_per_mesh_cycle();
     let allowed_drift = 0.25 * (INTEGRATOR_ERROR + WINDOW_INTERPOLATION_ERROR);
     let computed: Vec<Case> = cases
         .par_iter()
@@ -291,10 +291,11 @@ pub fn example_references(
             let state = WornState::from_json(text, &set).map_err(|e| run_error(e.to_string()))?;
             let mut model =
                 PlanetaryDynamics::new(&set, state.set_model(&set)).map_err(|e| run_error(e.to_string()))?;
-            let omega = rpm * std::f64::consts::PI / 30.0;
+            let omega = crate::scene::units::rpm_to_rad_per_s(rpm);
             let end = RUN_IN_CYCLES + WINDOW_CYCLES;
             let run = order_tracked_windows(
                 &set,
+                &run_settings,
                 &mut model,
                 omega,
                 WINDOW_CYCLES,

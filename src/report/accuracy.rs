@@ -17,6 +17,7 @@ use crate::analysis::accuracy::{
     Method, OperatingPoint, PointResult, SettingResult, StudyPlan,
 };
 use crate::model::lumped::Fidelity;
+use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 use crate::scene::{Scene, SceneError};
 
 /// The accuracy every default setting must reach at every operating point.
@@ -48,8 +49,15 @@ pub enum StudyError {
 }
 
 fn point(name: &str, description: &str, scene: &Scene, speed_rpm: f64) -> Result<OperatingPoint, StudyError> {
-    let set = scene.validate().map_err(|source| StudyError::Scene { point: name.into(), source })?;
-    Ok(OperatingPoint { name: name.into(), description: description.into(), set, speed_rpm })
+    let (set, run) =
+        scene.validate_with_run().map_err(|source| StudyError::Scene { point: name.into(), source })?;
+    Ok(OperatingPoint {
+        name: name.into(),
+        description: description.into(),
+        set,
+        run,
+        speed: rpm_to_rad_per_s(speed_rpm),
+    })
 }
 
 /// The study's operating points of the example (`example-2004`) at one
@@ -244,7 +252,7 @@ pub fn tables_markdown(study: &Study) -> String {
             "| {} | {:?} | {:.0} | {:.0} | {} | {} | {} | {:.3} | {} | {} | {} | {} | {} |",
             p.name,
             p.fidelity,
-            p.speed_rpm,
+            rad_per_s_to_rpm(p.speed),
             p.mesh_frequency,
             sep.join(", "),
             r.measured.work.steps,
@@ -316,7 +324,7 @@ pub fn study_csv(study: &Study) -> String {
                 "{},{:?},{},{},{},{e},{below},{t},{w},{}",
                 p.name,
                 p.fidelity,
-                p.speed_rpm,
+                rad_per_s_to_rpm(p.speed),
                 r.method.family(),
                 r.method.setting(),
                 r.failure.as_deref().unwrap_or("").replace(',', ";")
@@ -360,7 +368,7 @@ pub fn write_point_charts(p: &PointResult, dir: &Path) -> Result<Vec<PathBuf>, P
             if stem == "error_vs_time" { "log₁₀ CPU time [s]" } else { "log₁₀ RHS evaluations" };
         files.extend(write_chart(
             &Chart {
-                title: format!("{}, {:.0} rpm", p.name.replace('_', " "), p.speed_rpm),
+                title: format!("{}, {:.0} rpm", p.name.replace('_', " "), rad_per_s_to_rpm(p.speed)),
                 x_label: unit.into(),
                 y_label: format!("log₁₀ E_h (below {floor:.0e} not shown)"),
                 series,

@@ -13,6 +13,7 @@ use crate::analysis::modes::{Mode, ModeClass};
 use crate::dynamics::response::{Direction, SteadyState, Sweep};
 use crate::dynamics::spectrum::order_spectrum;
 use crate::model::gear::{GearSet, MeshKind};
+use crate::scene::units::rad_per_s_to_rpm;
 
 fn mesh_label(m: MeshKind) -> &'static str {
     match m {
@@ -43,7 +44,7 @@ pub fn sweep_csv(sweep: &Sweep, width_mm: f64) -> String {
         let _ = write!(
             s,
             "{dir},{},{},{},{},{}",
-            pt.input_speed_rpm,
+            rad_per_s_to_rpm(pt.input_speed),
             pt.mesh_frequency,
             pt.stats.steps,
             pt.stats.newton_iterations,
@@ -80,11 +81,10 @@ pub fn write_forced_response(
     let width_mm = set.sun().face_width * 1e3;
     let mut files = Vec::new();
     let Some(first) = sweeps.iter().find(|s| !s.points.is_empty()) else { return Ok(files) };
-    let (lo, hi) = first
-        .points
-        .iter()
-        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), p| (lo.min(p.input_speed_rpm), hi.max(p.input_speed_rpm)));
-    let fm_per_rpm = first.points[0].mesh_frequency / first.points[0].input_speed_rpm;
+    let (lo, hi) = first.points.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), p| {
+        (lo.min(rad_per_s_to_rpm(p.input_speed)), hi.max(rad_per_s_to_rpm(p.input_speed)))
+    });
+    let fm_per_rpm = first.points[0].mesh_frequency / rad_per_s_to_rpm(first.points[0].input_speed);
     let mut vlines = Vec::new();
     for l in 1..=3u32 {
         let family = excited_family(l, set.sun().teeth, set.planet_angles().len());
@@ -107,7 +107,7 @@ pub fn write_forced_response(
                 Direction::Up => "sweep up",
                 Direction::Down => "sweep down",
             };
-            let x: Vec<f64> = sw.points.iter().map(|p| p.input_speed_rpm).collect();
+            let x: Vec<f64> = sw.points.iter().map(|p| rad_per_s_to_rpm(p.input_speed)).collect();
             let y: Vec<f64> =
                 sw.points.iter().map(|p| p.meshes[mesh_index].harmonics.rms / width_mm).collect();
             series.push(Series::new(label, x.clone(), y.clone()));
@@ -115,7 +115,7 @@ pub fn write_forced_response(
                 .points
                 .iter()
                 .filter(|p| p.meshes[mesh_index].separation > 0.0)
-                .map(|p| (p.input_speed_rpm, p.meshes[mesh_index].harmonics.rms / width_mm))
+                .map(|p| (rad_per_s_to_rpm(p.input_speed), p.meshes[mesh_index].harmonics.rms / width_mm))
                 .unzip();
             if !sx.is_empty() {
                 series.push(
@@ -141,7 +141,7 @@ pub fn write_forced_response(
 pub fn write_steady_state(ss: &SteadyState, set: &GearSet, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
     let width_mm = set.sun().face_width * 1e3;
     let mut files = Vec::new();
-    let tag = format!("{:.0}rpm", ss.input_speed_rpm);
+    let tag = format!("{:.0}rpm", rad_per_s_to_rpm(ss.input_speed));
     if ss.time.is_empty() {
         return Ok(files);
     }
@@ -159,7 +159,7 @@ pub fn write_steady_state(ss: &SteadyState, set: &GearSet, dir: &Path) -> Result
     }
     files.extend(write_chart(
         &Chart {
-            title: format!("mesh force at {:.0} rpm", ss.input_speed_rpm),
+            title: format!("mesh force at {:.0} rpm", rad_per_s_to_rpm(ss.input_speed)),
             x_label: "time (mesh cycles)".into(),
             y_label: "mesh force (N/mm)".into(),
             series,
@@ -177,7 +177,7 @@ pub fn write_steady_state(ss: &SteadyState, set: &GearSet, dir: &Path) -> Result
     if !series.is_empty() {
         files.extend(write_chart(
             &Chart {
-                title: format!("order spectrum at {:.0} rpm", ss.input_speed_rpm),
+                title: format!("order spectrum at {:.0} rpm", rad_per_s_to_rpm(ss.input_speed)),
                 x_label: "order of the mesh frequency".into(),
                 y_label: "amplitude (N/mm)".into(),
                 series,

@@ -10,6 +10,7 @@ use super::plot::{write_chart, Chart, PlotError, Series};
 use super::write_atomic;
 use crate::analysis::study::validation::{Row, Validation, Verdict, STUDY_PEAKS};
 use crate::dynamics::response::Direction;
+use crate::scene::units::rad_per_s_to_rpm;
 
 /// A row whose number differs from the previous run's beyond this relative change has moved.
 const MOVED: f64 = 1e-6;
@@ -131,7 +132,7 @@ pub fn write_figures(v: &Validation, dir: &Path, face_width: f64) -> Result<Vec<
                 let dir = if c.direction == Direction::Up { "up" } else { "down" };
                 Series::new(
                     format!("κ = {}, {dir}", c.kappa),
-                    c.points.iter().map(|p| p.speed_rpm).collect(),
+                    c.points.iter().map(|p| rad_per_s_to_rpm(p.speed)).collect(),
                     c.points.iter().map(|p| p.rms[mesh] / per_mm).collect(),
                 )
             })

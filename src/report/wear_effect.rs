@@ -2,6 +2,7 @@
 //! Markdown for the documentation and the terminal, in the field's units.
 
 use crate::analysis::study::wear_effect::VariantResult;
+use crate::scene::units::rad_per_s_to_rpm;
 
 /// The experiments as two Markdown tables: the wear shape and quasi-static
 /// figures, then the dynamic loads of planet 1's meshes per speed.
@@ -40,8 +41,10 @@ pub fn markdown(results: &[VariantResult]) -> String {
         ));
     }
     out.push('\n');
-    let speeds: Vec<f64> =
-        results.first().map(|r| r.loads[0].iter().map(|l| l.speed_rpm).collect()).unwrap_or_default();
+    let speeds: Vec<f64> = results
+        .first()
+        .map(|r| r.loads[0].iter().map(|l| rad_per_s_to_rpm(l.speed)).collect())
+        .unwrap_or_default();
     out.push_str("| variant | mesh |");
     for rpm in &speeds {
         out.push_str(&format!(" {rpm:.0} rpm F^(1) | F^(rms) |"));

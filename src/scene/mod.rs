@@ -5,14 +5,17 @@
 //! and the words the file is written in (members, drives, integrators,
 //! fidelity). `Scene::validate` (in [`crate::model::build`]) checks every
 //! rule at once and returns either the model's `GearSet` (SI inside, proven
-//! valid) or a [`SceneError`] listing one [`Problem`] per broken rule, each
-//! naming the parameter and what is allowed.
+//! valid; with its `RunSettings` through `Scene::validate_with_run`) or a
+//! [`SceneError`] listing one [`Problem`] per broken rule, each naming the
+//! parameter and what is allowed. [`units`] holds the one conversion
+//! between the rpm users write and the rad/s of the core.
 //!
 //! May import: [`crate::files`].
 
 mod example;
 pub mod lumped;
 mod terms;
+pub mod units;
 mod validate;
 
 use serde::{Deserialize, Serialize};

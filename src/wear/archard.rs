@@ -66,6 +66,7 @@
 use crate::contact::hertz::{pressure_at, LineContact};
 use crate::geometry::profile::ProfileEnds;
 use crate::model::gear::{GearSet, MeshKind};
+use crate::scene::units::rad_per_s_to_rpm;
 use crate::wear::flank::{Flank, GearCycles};
 use crate::wear::state::WornStateError;
 use serde::{Deserialize, Serialize};
@@ -178,8 +179,9 @@ pub enum PressureSource {
     /// pair's elastic load as a function of its position, averaged over the
     /// window's mesh cycles ([`crate::wear::dynamic`]).
     Dynamic {
-        /// Input speed \[rpm\].
-        speed_rpm: f64,
+        /// Input speed [rad/s] (written in rpm, as `speed_rpm`).
+        #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]
+        speed: f64,
     },
 }
 impl PressureSource {
@@ -187,10 +189,10 @@ impl PressureSource {
     pub fn validate(&self) -> Result<(), WearError> {
         match *self {
             PressureSource::QuasiStatic => Ok(()),
-            PressureSource::Dynamic { speed_rpm } if speed_rpm.is_finite() && speed_rpm > 0.0 => Ok(()),
-            PressureSource::Dynamic { speed_rpm } => Err(WearError::InvalidSetting {
+            PressureSource::Dynamic { speed } if speed.is_finite() && speed > 0.0 => Ok(()),
+            PressureSource::Dynamic { speed } => Err(WearError::InvalidSetting {
                 name: "source.speed_rpm",
-                value: format!("{speed_rpm} rpm"),
+                value: format!("{} rpm", rad_per_s_to_rpm(speed)),
                 allowed: "a finite positive input speed",
             }),
         }
@@ -200,7 +202,7 @@ impl PressureSource {
     pub fn describe(&self) -> String {
         match self {
             PressureSource::QuasiStatic => "quasi-static".into(),
-            PressureSource::Dynamic { speed_rpm } => format!("dynamic at {speed_rpm} rpm"),
+            PressureSource::Dynamic { speed } => format!("dynamic at {} rpm", rad_per_s_to_rpm(*speed)),
         }
     }
 }
@@ -306,13 +308,16 @@ pub enum WearError {
         flank: &'static str,
     },
     /// The dynamic run of a dynamic pressure source failed.
-    #[error("dynamic tooth loads at {speed_rpm} rpm: {reason}")]
+    #[error("dynamic tooth loads at {} rpm: {reason}", rad_per_s_to_rpm(*.speed))]
     DynamicRun {
-        /// Input speed \[rpm\].
-        speed_rpm: f64,
+        /// Input speed [rad/s].
+        speed: f64,
         /// What failed (the dynamic model's or the integrator's error).
         reason: String,
     },
+    /// A dynamic source asked of a wear model made without run settings.
+    #[error("the dynamic tooth loads need run settings: make the wear model with WearModel::with_run")]
+    NoRunSettings,
     /// The total wear limit is already reached.
     #[error("the deepest wear {depth:e} m already reaches total_depth = {limit:e} m: no further update")]
     TotalWearReached {

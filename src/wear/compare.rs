@@ -59,8 +59,9 @@ pub struct MeshComparison {
 /// one state.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SourceComparison {
-    /// Input speed of the dynamic run \[rpm\].
-    pub speed_rpm: f64,
+    /// Input speed of the dynamic run [rad/s] (written in rpm, as `speed_rpm`).
+    #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]
+    pub speed: f64,
     /// Each wearing flank and slice.
     pub flanks: Vec<FlankComparison>,
     /// Each wearing mesh.
@@ -84,15 +85,15 @@ impl SourceComparison {
     }
 }
 /// The wear per cycle of `state` from the quasi-static loads and from the
-/// dynamic loads at `speed_rpm` \[rpm\]: profiles, maxima and where they sit,
+/// dynamic loads at input speed `speed` [rad/s]: profiles, maxima and where they sit,
 /// their ratio, and the largest pair load of each source.
 pub fn compare_sources(
     wear: &WearModel,
     state: &WornState,
-    speed_rpm: f64,
+    speed: f64,
 ) -> Result<SourceComparison, WearError> {
     let quasi_static = wear.cycle_with(state, PressureSource::QuasiStatic)?;
-    let (dynamic, loads) = dynamic_cycle(wear, state, speed_rpm)?;
+    let (dynamic, loads) = dynamic_cycle(wear, state, speed)?;
     let mut flanks = Vec::new();
     for q in &quasi_static.flanks {
         let Some(d) = dynamic.flank(q.flank, q.slice) else { continue };
@@ -139,5 +140,5 @@ pub fn compare_sources(
             }
         })
         .collect();
-    Ok(SourceComparison { speed_rpm, flanks, meshes, quasi_static, dynamic, loads })
+    Ok(SourceComparison { speed, flanks, meshes, quasi_static, dynamic, loads })
 }

@@ -5,8 +5,8 @@
 //! from the steady state of the nonlinear dynamic model at an input speed:
 //!
 //! 1. The dynamic model is built on the state's worn geometry
-//!    ([`WornState::set_model`](crate::wear::state::WornState::set_model) → [`PlanetaryDynamics::new`]) with the gear
-//!    set's dynamics settings, and run to steady state at the speed
+//!    ([`WornState::set_model`](crate::wear::state::WornState::set_model) → [`PlanetaryDynamics::new`]), and run
+//!    with the wear model's run settings to steady state at the speed
 //!    ([`steady_state_observed`]: run-in, then a window of whole mesh cycles).
 //! 2. At every sample of the window, each mesh's reference position s and
 //!    approach δ give every pair's position s + k·p_b and its elastic load
@@ -29,7 +29,7 @@
 //!    linear interpolation; bands, sliding and Archard wear are computed by
 //!    the same code as for the quasi-static loads.
 //!
-//! S is the scene's samples per mesh cycle, raised to at least R/ε_α (ε_α
+//! S is the run settings' samples per mesh cycle, raised to at least R/ε_α (ε_α
 //! the smaller involute contact ratio of the meshes) so that the passage,
 //! which is longer than ε_α base pitches, holds at least R samples.
 //!
@@ -44,6 +44,7 @@ use crate::dynamics::response::{steady_state_observed, Work};
 use crate::geometry::profile::interpolate;
 use crate::model::gear::{GearSet, MeshKind};
 use crate::model::mesh::PathOfContact;
+use crate::model::run::RunSettings;
 use crate::wear::archard::{PairLoads, PressureSource, WearError};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -99,8 +100,9 @@ impl PairLoadProfile {
 /// The tooth-pair loads of a dynamic steady state, each planet and mesh.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DynamicPairLoads {
-    /// Input speed \[rpm\].
-    pub speed_rpm: f64,
+    /// Input speed [rad/s] (written in rpm, as `speed_rpm`).
+    #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]
+    pub speed: f64,
     /// Mesh frequency \[Hz\].
     pub mesh_frequency: f64,
     /// Mesh cycles in the window, averaged [-].
@@ -165,33 +167,33 @@ struct Accumulator {
     slice_load: Vec<f64>,
     count: usize,
 }
-/// Samples per mesh cycle of a dynamic wear run: the scene's, raised to at
-/// least R/ε_α so that a passage holds at least R samples [-].
-pub fn samples_per_cycle(set: &GearSet, positions: usize) -> usize {
+/// Samples per mesh cycle of a dynamic wear run: the run settings', raised
+/// to at least R/ε_α so that a passage holds at least R samples [-].
+pub fn samples_per_cycle(set: &GearSet, run: &RunSettings, positions: usize) -> usize {
     let ratio = MeshKind::ALL
         .iter()
         .map(|m| PathOfContact::new(set, *m).involute_contact_ratio())
         .fold(f64::INFINITY, f64::min)
         .max(1.0);
-    set.dynamics().samples_per_mesh_cycle.max((positions as f64 / ratio).ceil() as usize)
+    run.samples_per_mesh_cycle().max((positions as f64 / ratio).ceil() as usize)
 }
 /// Runs the dynamic model on `contact` (the contact models of a worn or
-/// unworn set) to steady state at `speed_rpm` \[rpm\] and records each planet's
+/// unworn set) to steady state at input speed `speed` [rad/s] and records each planet's
 /// tooth-pair load per face slice through its passage, at
 /// [`samples_per_cycle`] samples per mesh cycle for `positions` wear
 /// positions. Gives the contact models back for the wear cycle.
 pub fn record_pair_loads(
     set: &GearSet,
+    run: &RunSettings,
     contact: SetModel,
-    speed_rpm: f64,
+    speed: f64,
     positions: usize,
 ) -> Result<(DynamicPairLoads, SetModel), WearError> {
-    PressureSource::Dynamic { speed_rpm }.validate()?;
-    let failed = |reason: String| WearError::DynamicRun { speed_rpm, reason };
-    let samples = samples_per_cycle(set, positions);
-    let run_set =
-        set.with_run_settings(|d| d.samples_per_mesh_cycle = samples).map_err(|e| failed(e.to_string()))?;
-    let mut dynamics = PlanetaryDynamics::new(&run_set, contact).map_err(|e| failed(e.to_string()))?;
+    PressureSource::Dynamic { speed }.validate()?;
+    let failed = |reason: String| WearError::DynamicRun { speed, reason };
+    let samples = samples_per_cycle(set, run, positions);
+    let run = run.with(|d| d.samples_per_mesh_cycle = samples).map_err(|e| failed(e.to_string()))?;
+    let mut dynamics = PlanetaryDynamics::new(set, contact).map_err(|e| failed(e.to_string()))?;
     let n_mesh = dynamics.mesh_count();
     // Per mesh: the reference position of each phase in the first cycle, and
     // the sums per (phase, pair offset from that reference).
@@ -199,8 +201,7 @@ pub fn record_pair_loads(
     let mut sums: Vec<HashMap<(usize, i64), Accumulator>> = vec![HashMap::new(); n_mesh];
     let mut pairs: Vec<PairContact> = Vec::new();
     let mut slice = Vec::new();
-    let omega = speed_rpm * std::f64::consts::PI / 30.0;
-    let ss = steady_state_observed(&mut dynamics, &run_set, omega, None, |k, model| {
+    let ss = steady_state_observed(&mut dynamics, set, &run, speed, None, |k, model| {
         let phase = k % samples;
         for (i, state) in model.meshes.iter().enumerate() {
             let (_, kind) = model.mesh_identity(i);
@@ -251,7 +252,7 @@ pub fn record_pair_loads(
         });
     }
     let loads = DynamicPairLoads {
-        speed_rpm,
+        speed,
         mesh_frequency: ss.mesh_frequency,
         cycles: ss.cycles,
         samples_per_cycle: samples,

@@ -13,6 +13,7 @@ use crate::contact::hertz::{contact_modulus, line_contact};
 use crate::contact::ltca::{loaded_span, Refine, SetEquilibrium, SetModel};
 use crate::geometry::profile::ProfileDeviation;
 use crate::model::gear::{GearKind, GearSet, MeshKind};
+use crate::model::run::RunSettings;
 use crate::wear::archard::{
     passage_wear, Band, CycleWear, FlankWear, Limit, MeshPassage, PairLoads, PressureSource, Stop, WearError,
     WearSettings,
@@ -41,6 +42,7 @@ impl PairLoads for QuasiStaticLoads<'_> {
 #[derive(Clone, Debug)]
 pub struct WearModel {
     set: GearSet,
+    run: Option<RunSettings>,
     settings: WearSettings,
     cycles_per_revolution: GearCycles,
     contact_modulus: f64,
@@ -50,12 +52,31 @@ const ENGAGEMENT_SCAN: usize = 40;
 /// Bisection steps refining the first and last contact.
 const ENGAGEMENT_BISECTIONS: usize = 40;
 impl WearModel {
-    /// The wear model of a validated gear set with checked settings.
+    /// The wear model of a validated gear set with checked settings, for the
+    /// quasi-static tooth-pair loads, which need the gear set alone; a
+    /// dynamic source is refused here (it runs the dynamic model, which
+    /// needs run settings: [`Self::with_run`]).
     pub fn new(set: &GearSet, settings: WearSettings) -> Result<Self, WearError> {
+        settings.validate()?;
+        if let PressureSource::Dynamic { .. } = settings.source {
+            return Err(WearError::NoRunSettings);
+        }
+        Self::build(set, None, settings)
+    }
+
+    /// The wear model of a validated gear set with checked settings and the
+    /// run settings of its dynamic runs (the dynamic source, and
+    /// [`dynamic_cycle`] and the source comparison on any settings).
+    pub fn with_run(set: &GearSet, run: &RunSettings, settings: WearSettings) -> Result<Self, WearError> {
+        Self::build(set, Some(*run), settings)
+    }
+
+    fn build(set: &GearSet, run: Option<RunSettings>, settings: WearSettings) -> Result<Self, WearError> {
         settings.validate()?;
         let m = &set.material();
         Ok(Self {
             set: set.clone(),
+            run,
             settings,
             cycles_per_revolution: cycles_per_input_revolution(set),
             contact_modulus: contact_modulus(
@@ -75,6 +96,12 @@ impl WearModel {
     /// The gear set.
     pub fn set(&self) -> &GearSet {
         &self.set
+    }
+
+    /// The run settings of the dynamic runs, when the model was made with
+    /// them ([`Self::with_run`]).
+    pub fn run_settings(&self) -> Option<&RunSettings> {
+        self.run.as_ref()
     }
 
     /// Tooth cycles per input revolution [-].
@@ -118,8 +145,8 @@ impl WearModel {
                 let loads = QuasiStaticLoads { wear: self, model: &model };
                 Ok(self.cycle_on(state, &model, &loads, source))
             }
-            PressureSource::Dynamic { speed_rpm } => {
-                crate::wear::stepper::dynamic_cycle(self, state, speed_rpm).map(|(cycle, _)| cycle)
+            PressureSource::Dynamic { speed } => {
+                crate::wear::stepper::dynamic_cycle(self, state, speed).map(|(cycle, _)| cycle)
             }
         }
     }
@@ -513,17 +540,18 @@ impl WearModel {
     }
 }
 /// One wear cycle on the state's geometry with the tooth-pair loads of the
-/// dynamic steady state at `speed_rpm` \[rpm\], and those loads.
+/// dynamic steady state at input speed `speed` [rad/s], and those loads.
 pub fn dynamic_cycle(
     wear: &WearModel,
     state: &WornState,
-    speed_rpm: f64,
+    speed: f64,
 ) -> Result<(CycleWear, DynamicPairLoads), WearError> {
-    let source = PressureSource::Dynamic { speed_rpm };
+    let source = PressureSource::Dynamic { speed };
     source.validate()?;
+    let run = wear.run_settings().ok_or(WearError::NoRunSettings)?;
     wear.check(state)?;
     let contact = state.set_model(wear.set());
-    let (loads, contact) = record_pair_loads(wear.set(), contact, speed_rpm, wear.settings().positions)?;
+    let (loads, contact) = record_pair_loads(wear.set(), run, contact, speed, wear.settings().positions)?;
     let cycle = wear.cycle_on(state, &contact, &loads, source);
     Ok((cycle, loads))
 }

@@ -282,9 +282,11 @@ impl<'a> Evaluator<'a> {
                 Measure::Frequency { fidelity, class, order } => {
                     let fkey = format!("{fidelity:?}");
                     if !lumped.contains_key(&fkey) {
-                        let s = set
-                            .with_run_settings(|d| d.fidelity = *fidelity)
-                            .map_err(|e| fail(e.to_string()))?;
+                        // The fidelity is a term of the equations, so of the
+                        // gear set: this fidelity's set from the scene.
+                        let mut at = scene.clone();
+                        at.dynamics.fidelity = *fidelity;
+                        let s = at.validate().map_err(|e| fail(e.to_string()))?;
                         let model =
                             PlanetaryDynamics::new(&s, contact.clone()).map_err(|e| fail(e.to_string()))?;
                         lumped.insert(fkey.clone(), natural_modes(&model.lumped));

@@ -30,8 +30,9 @@ pub struct Peak {
     pub direction: Direction,
     /// The mesh (of planet 0) whose curve peaks.
     pub mesh: MeshKind,
-    /// Input speed of the peak \[rpm\].
-    pub speed_rpm: f64,
+    /// Input speed of the peak [rad/s] (written in rpm, as `speed_rpm`).
+    #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]
+    pub speed: f64,
     /// Mesh frequency there \[Hz\].
     pub mesh_frequency: f64,
     /// F^(rms) at the peak [N/mm].
@@ -73,7 +74,7 @@ pub fn find_peaks(
                     best = Some(Peak {
                         direction: sweep.direction,
                         mesh: pts[i].meshes[mesh_index].mesh,
-                        speed_rpm: pts[i].input_speed_rpm,
+                        speed: pts[i].input_speed,
                         mesh_frequency: fm,
                         rms_n_per_mm: y[i],
                         harmonic: l,

@@ -33,6 +33,8 @@ use crate::dynamics::spectrum::mesh_phases;
 use crate::model::gear::{GearSet, IntegratorKind, MeshKind};
 use crate::model::lumped::Fidelity;
 use crate::model::mesh::PathOfContact;
+use crate::model::run::RunSettings;
+use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 use crate::scene::Scene;
 use crate::wear::archard::{passage_wear, Band, WearSettings};
 use crate::wear::flank::Flank;
@@ -161,8 +163,9 @@ pub struct Row {
 /// One point of a forced-response curve.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CurvePoint {
-    /// Input speed \[rpm\].
-    pub speed_rpm: f64,
+    /// Input speed [rad/s] (written in rpm, as `speed_rpm`).
+    #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]
+    pub speed: f64,
     /// F^(rms) of planet 1's sun–planet and ring–planet mesh \[N\].
     pub rms: [f64; 2],
     /// Separation fraction of both meshes [-].
@@ -221,8 +224,8 @@ impl Validation {
     }
 }
 
-fn integrator_words(set: &GearSet) -> String {
-    let d = &set.dynamics();
+fn integrator_words(run: &RunSettings) -> String {
+    let d = run.values();
     match d.integrator {
         IntegratorKind::Rk45 => format!(
             "RK 5(4) at relative tolerance {:e}; run-in ≤ {} input revolution, window {} revolutions, {} samples per mesh cycle",
@@ -282,13 +285,13 @@ fn curve(s: &Sweep, kappa: u32) -> Curve {
             let m = |k: MeshKind| p.meshes.iter().find(|m| m.planet == 0 && m.mesh == k);
             let (a, b) = (m(MeshKind::SunPlanet), m(MeshKind::RingPlanet));
             CurvePoint {
-                speed_rpm: p.input_speed_rpm,
+                speed: p.input_speed,
                 rms: [a.map_or(0.0, |m| m.harmonics.rms), b.map_or(0.0, |m| m.harmonics.rms)],
                 separation: [a.map_or(0.0, |m| m.separation), b.map_or(0.0, |m| m.separation)],
             }
         })
         .collect();
-    points.sort_by(|a, b| a.speed_rpm.total_cmp(&b.speed_rpm));
+    points.sort_by(|a, b| a.speed.total_cmp(&b.speed));
     Curve { kappa, direction: s.direction, points }
 }
 
@@ -339,17 +342,20 @@ impl Rows {
 /// Runs the validation of `scene` (the built-in example) under `plan`.
 pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, String> {
     let started = Instant::now();
-    let set = scene.validate().map_err(|e| e.to_string())?;
+    let (set, run) = scene.validate_with_run().map_err(|e| e.to_string())?;
     let width = set.sun().face_width;
     let per_mm = |f: f64| f / (width * 1e3);
     let mut rows = Rows { rows: Vec::new() };
-    let integrator = integrator_words(&set);
+    let integrator = integrator_words(&run);
 
     // Natural modes of both fidelities.
     let t = Instant::now();
     let contact = SetModel::new(&set);
     let dynamics_of = |fidelity: Fidelity| -> Result<PlanetaryDynamics, String> {
-        let s = set.with_run_settings(|d| d.fidelity = fidelity).map_err(|e| e.to_string())?;
+        // The fidelity is a term of the equations, so of the gear set.
+        let mut at = scene.clone();
+        at.dynamics.fidelity = fidelity;
+        let s = at.validate().map_err(|e| e.to_string())?;
         PlanetaryDynamics::new(&s, contact.clone()).map_err(|e| e.to_string())
     };
     // The torsional model also serves the closed-form planet-mode check.
@@ -649,20 +655,20 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
 
     // Dynamics: sweeps at κ = 0 and κ, up and down, in parallel.
     let t = Instant::now();
-    let speeds = plan.speeds();
+    let speeds: Vec<f64> = plan.speeds().into_iter().map(rpm_to_rad_per_s).collect();
     let model0 = PlanetaryDynamics::new(&set, unworn.set_model(&set)).map_err(|e| e.to_string())?;
     let model6 = PlanetaryDynamics::new(&set, worn.set_model(&set)).map_err(|e| e.to_string())?;
-    let run = |model: &PlanetaryDynamics, d: Direction| -> Result<Sweep, String> {
+    let run_sweep = |model: &PlanetaryDynamics, d: Direction| -> Result<Sweep, String> {
         let mut m = model.clone();
         let mut grid = speeds.clone();
         if d == Direction::Down {
             grid.reverse();
         }
-        sweep(&set, &mut m, d, &grid, &[], |_| {}).map_err(|e| e.to_string())
+        sweep(&set, &run, &mut m, d, &grid, &[], |_| {}).map_err(|e| e.to_string())
     };
     let ((a, b), (c, d)) = rayon::join(
-        || rayon::join(|| run(&model0, Direction::Up), || run(&model0, Direction::Down)),
-        || rayon::join(|| run(&model6, Direction::Up), || run(&model6, Direction::Down)),
+        || rayon::join(|| run_sweep(&model0, Direction::Up), || run_sweep(&model0, Direction::Down)),
+        || rayon::join(|| run_sweep(&model6, Direction::Up), || run_sweep(&model6, Direction::Down)),
     );
     let (up0, down0, up6, down6) = (a?, b?, c?, d?);
     let t_sweeps = t.elapsed().as_secs_f64();
@@ -675,7 +681,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
         speeds.len()
     );
     let sec = "Forced response (κ = 0)";
-    let xs: Vec<f64> = curves[0].points.iter().map(|p| p.speed_rpm).collect();
+    let xs: Vec<f64> = curves[0].points.iter().map(|p| rad_per_s_to_rpm(p.speed)).collect();
     let ys = |c: &Curve| c.points.iter().map(|p| p.rms[0]).collect::<Vec<f64>>();
     // A peak counts where either direction has one.
     let mut peaks0 = prominent_peaks(&xs, &ys(&curves[0]), 0.1);
@@ -740,10 +746,12 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
             .iter()
             .zip(&down.points)
             .filter(|(u, d)| {
-                let r = 2.0 * fm_per_rpm * u.speed_rpm / f_rot1;
+                let r = 2.0 * fm_per_rpm * rad_per_s_to_rpm(u.speed) / f_rot1;
                 (0.7..=1.1).contains(&r) && (u.rms[0] - d.rms[0]).abs() > 0.1 * u.rms[0].max(d.rms[0])
             })
-            .map(|(u, d)| (u.speed_rpm, u.rms[0], d.rms[0], d.separation[0].max(u.separation[0])))
+            .map(|(u, d)| {
+                (rad_per_s_to_rpm(u.speed), u.rms[0], d.rms[0], d.separation[0].max(u.separation[0]))
+            })
             .collect()
     };
     let band = branches(&curves[0], &curves[1]);
@@ -798,7 +806,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     let (sep_all, sep_rpm) = curves[..2]
         .iter()
         .flat_map(|c| c.points.iter())
-        .map(|p| (p.separation[0], p.speed_rpm))
+        .map(|p| (p.separation[0], rad_per_s_to_rpm(p.speed)))
         .fold((0.0, 0.0), |m, p| if p.0 > m.0 { p } else { m });
     rows.push(
         "separation-large-peak",
@@ -814,28 +822,28 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
         "> 0 on the branch of the jump",
         sep > 0.0,
         &sweep_method,
-        format!("samples of {} per mesh cycle: 1/{} of the cycle", set.dynamics().samples_per_mesh_cycle, set.dynamics().samples_per_mesh_cycle),
+        format!("samples of {} per mesh cycle: 1/{} of the cycle", run.samples_per_mesh_cycle(), run.samples_per_mesh_cycle()),
         t_sweeps,
     );
 
     // Off-resonance loads at κ = 0 and κ, with a reference at a tight tolerance.
     let t = Instant::now();
-    let tight = set
-        .with_run_settings(|d| {
+    let tight = run
+        .with(|d| {
             d.integrator = IntegratorKind::Rk45;
             d.relative_tolerance = plan.reference_tolerance;
         })
         .map_err(|e| e.to_string())?;
     let mut figures = Vec::new();
     for rpm in OFF_RESONANCE {
-        let omega = rpm * std::f64::consts::PI / 30.0;
-        let at = |s: &GearSet, m: &PlanetaryDynamics| -> Result<(f64, f64), String> {
+        let omega = rpm_to_rad_per_s(rpm);
+        let at = |r: &RunSettings, m: &PlanetaryDynamics| -> Result<(f64, f64), String> {
             let mut m = m.clone();
-            steady_state(&mut m, s, omega, None)
+            steady_state(&mut m, &set, r, omega, None)
                 .map(|ss| sun_planet(&ss))
                 .map_err(|e| format!("{rpm} rpm: {e}"))
         };
-        let (a0, a6) = (at(&set, &model0)?, at(&set, &model6)?);
+        let (a0, a6) = (at(&run, &model0)?, at(&run, &model6)?);
         let (r0, r6) = (at(&tight, &model0)?, at(&tight, &model6)?);
         figures.push((rpm, a0, a6, r0, r6));
     }
@@ -883,7 +891,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
         "as the rows above".into(),
         t_off,
     );
-    let xs6: Vec<f64> = curves[2].points.iter().map(|p| p.speed_rpm).collect();
+    let xs6: Vec<f64> = curves[2].points.iter().map(|p| rad_per_s_to_rpm(p.speed)).collect();
     let mut peaks6 = prominent_peaks(&xs6, &ys(&curves[2]), 0.1);
     peaks6.extend(prominent_peaks(&xs6, &ys(&curves[3]), 0.1));
     peaks6.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -915,8 +923,7 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     // Mesh phasing from the steady state at 3000 rpm.
     let t = Instant::now();
     let mut m = model0.clone();
-    let ss =
-        steady_state(&mut m, &set, 3000.0 * std::f64::consts::PI / 30.0, None).map_err(|e| e.to_string())?;
+    let ss = steady_state(&mut m, &set, &run, rpm_to_rad_per_s(3000.0), None).map_err(|e| e.to_string())?;
     let n = set.planet_angles().len();
     let phases: Vec<Vec<f64>> = (0..n)
         .map(|p| mesh_phases(&ss.mesh_force[2 * p], ss.cycles, 6).map_err(|e| e.to_string()))

@@ -20,6 +20,8 @@ use crate::dynamics::response::steady_state;
 use crate::geometry::profile::ProfileEnds;
 use crate::model::gear::{Drive, GearSet, MeshKind};
 use crate::model::lumped::Fidelity;
+use crate::model::run::RunSettings;
+use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 use crate::scene::{ChamferSpec, Scene};
 use crate::wear::archard::{PressureSource, WearSettings, WearingFlanks};
 use crate::wear::flank::Flank;
@@ -101,7 +103,7 @@ pub fn variants(base: &Scene) -> Vec<Variant> {
         key: "dynamic-loads".into(),
         description: "wear driven by the dynamic tooth loads of the steady state at 3000 rpm".into(),
         scene: base.clone(),
-        wear: |w| w.source = PressureSource::Dynamic { speed_rpm: 3000.0 },
+        wear: |w| w.source = PressureSource::Dynamic { speed: rpm_to_rad_per_s(3000.0) },
     });
     v.push(Variant {
         key: "sun-only".into(),
@@ -252,8 +254,9 @@ impl StaticFigures {
 /// Dynamic figures of planet 1's meshes at one speed \[N\].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MeshLoads {
-    /// Input speed \[rpm\].
-    pub speed_rpm: f64,
+    /// Input speed [rad/s] (written in rpm, as `speed_rpm`).
+    #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]
+    pub speed: f64,
     /// F^(1) of the sun–planet and ring–planet mesh \[N\].
     pub first_harmonic: [f64; 2],
     /// F^(rms) of the sun–planet and ring–planet mesh \[N\].
@@ -262,14 +265,19 @@ pub struct MeshLoads {
     pub separation: [f64; 2],
 }
 
-/// The steady-state loads of `state` on `set` at each of `speeds_rpm`.
-pub fn mesh_loads(set: &GearSet, state: &WornState, speeds_rpm: &[f64]) -> Result<Vec<MeshLoads>, String> {
+/// The steady-state loads of `state` on `set` at each input speed of `speeds` [rad/s].
+pub fn mesh_loads(
+    set: &GearSet,
+    run: &RunSettings,
+    state: &WornState,
+    speeds: &[f64],
+) -> Result<Vec<MeshLoads>, String> {
     let mut model = PlanetaryDynamics::new(set, state.set_model(set)).map_err(|e| e.to_string())?;
-    speeds_rpm
+    speeds
         .iter()
-        .map(|rpm| {
-            let ss = steady_state(&mut model, set, rpm * std::f64::consts::PI / 30.0, None)
-                .map_err(|e| format!("{rpm} rpm: {e}"))?;
+        .map(|omega| {
+            let ss = steady_state(&mut model, set, run, *omega, None)
+                .map_err(|e| format!("{} rpm: {e}", rad_per_s_to_rpm(*omega)))?;
             let m = |k: MeshKind| {
                 ss.meshes
                     .iter()
@@ -278,7 +286,7 @@ pub fn mesh_loads(set: &GearSet, state: &WornState, speeds_rpm: &[f64]) -> Resul
             };
             let (s, r) = (m(MeshKind::SunPlanet)?, m(MeshKind::RingPlanet)?);
             Ok(MeshLoads {
-                speed_rpm: *rpm,
+                speed: *omega,
                 first_harmonic: [s.harmonics.amplitude[0], r.harmonics.amplitude[0]],
                 rms: [s.harmonics.rms, r.harmonics.rms],
                 separation: [s.separation, r.separation],
@@ -319,17 +327,17 @@ impl VariantResult {
 }
 
 /// Runs one variant: the wear model to `kappa`, then the figures at κ = 0 and κ.
-pub fn run_variant(v: &Variant, kappa: u32, speeds_rpm: &[f64]) -> Result<VariantResult, String> {
+pub fn run_variant(v: &Variant, kappa: u32, speeds: &[f64]) -> Result<VariantResult, String> {
     let started = std::time::Instant::now();
-    let set = v.scene.validate().map_err(|e| format!("{}: {e}", v.key))?;
+    let (set, run) = v.scene.validate_with_run().map_err(|e| format!("{}: {e}", v.key))?;
     let mut settings = WearSettings::for_set(&set);
     (v.wear)(&mut settings);
-    let model = WearModel::new(&set, settings).map_err(|e| format!("{}: {e}", v.key))?;
+    let model = WearModel::with_run(&set, &run, settings).map_err(|e| format!("{}: {e}", v.key))?;
     let unworn = model.unworn();
     let worn = model.run_to_kappa(&unworn, kappa).map_err(|e| format!("{}: {e}", v.key))?;
     let samples = set.analysis().positions_per_mesh_cycle;
     let statics = [StaticFigures::of(&unworn, &set, samples), StaticFigures::of(&worn, &set, samples)];
-    let loads = [mesh_loads(&set, &unworn, speeds_rpm)?, mesh_loads(&set, &worn, speeds_rpm)?];
+    let loads = [mesh_loads(&set, &run, &unworn, speeds)?, mesh_loads(&set, &run, &worn, speeds)?];
     Ok(VariantResult {
         key: v.key.clone(),
         description: v.description.clone(),
@@ -344,6 +352,6 @@ pub fn run_variant(v: &Variant, kappa: u32, speeds_rpm: &[f64]) -> Result<Varian
 }
 
 /// Runs every variant (in parallel) and returns their results in order.
-pub fn run_all(variants: &[Variant], kappa: u32, speeds_rpm: &[f64]) -> Vec<Result<VariantResult, String>> {
-    variants.par_iter().map(|v| run_variant(v, kappa, speeds_rpm)).collect()
+pub fn run_all(variants: &[Variant], kappa: u32, speeds: &[f64]) -> Vec<Result<VariantResult, String>> {
+    variants.par_iter().map(|v| run_variant(v, kappa, speeds)).collect()
 }
