@@ -280,6 +280,38 @@ fn enum_source(table: &Table, r: &mut String) {
         "        }\n    }\n\n    /// Its row of [`VARIABLES`].\n    pub fn info(self) -> &'static VariableInfo {\n        \
          &VARIABLES[self as usize]\n    }\n}\n",
     );
+    settable_source(table, r);
+}
+
+/// `enum Settable`: the variables an importer sets (parameters and
+/// inputs), one variant each, so that the code that turns them into a
+/// scene is a `match` the compiler checks for every one of them.
+fn settable_source(table: &Table, r: &mut String) {
+    let settable: Vec<(&Var, String)> = table
+        .variable
+        .iter()
+        .filter(|v| v.causality == "parameter" || v.causality == "input")
+        .map(|v| (v, variant_name(&v.name)))
+        .collect();
+    r.push_str(
+        "\n/// Every variable the importer sets (parameters and inputs), one variant\n\
+         /// each, in modelDescription.xml order.\n\
+         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]\npub enum Settable {\n",
+    );
+    for (v, variant) in &settable {
+        let _ = writeln!(r, "    /// `{}` ({}).\n    {variant},", v.name, v.causality);
+    }
+    r.push_str("}\n\nimpl Settable {\n    /// Every settable variable, in modelDescription.xml order.\n    pub const ALL: &'static [Settable] = &[\n");
+    for (_, variant) in &settable {
+        let _ = writeln!(r, "        Settable::{variant},");
+    }
+    r.push_str(
+        "    ];\n\n    /// The variable.\n    pub fn variable(self) -> Variable {\n        match self {\n",
+    );
+    for (_, variant) in &settable {
+        let _ = writeln!(r, "            Settable::{variant} => Variable::{variant},");
+    }
+    r.push_str("        }\n    }\n}\n");
 }
 
 fn main() {

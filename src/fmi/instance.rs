@@ -7,15 +7,15 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
-use super::variables::{vr, Causality, Kind, Start, Variable, GUID, VARIABLES};
+use super::parameters;
+use super::variables::{vr, Causality, Kind, Settable, Start, Variable, GUID, VARIABLES};
 use crate::contact::ltca::SetModel;
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::simulation::{Bearing, Simulation, Snapshot};
 use crate::dynamics::spectrum::Harmonics;
 use crate::dynamics::state_format;
-use crate::model::gear::{Drive, IntegratorKind, Member, MeshKind};
-use crate::model::lumped::Fidelity;
-use crate::scene::{ChamferSpec, Scene};
+use crate::model::gear::{Member, MeshKind};
+use crate::scene::Scene;
 
 /// FMI status of a refused or partial call.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -109,15 +109,6 @@ pub struct Instance {
     pub last_successful_time: f64,
 }
 
-fn member(code: i32, name: &str) -> Result<Member, Refusal> {
-    match code {
-        0 => Ok(Member::Sun),
-        1 => Ok(Member::Ring),
-        2 => Ok(Member::Carrier),
-        other => Err(Refusal::error(format!("{name} = {other}: allowed are 0 (sun), 1 (ring), 2 (carrier)"))),
-    }
-}
-
 impl Instance {
     /// A new instance with every variable at its start value.
     pub fn new(name: &str, resources: Option<PathBuf>) -> Self {
@@ -203,6 +194,18 @@ impl Instance {
         self.integers.get(&v).copied().unwrap_or(0)
     }
 
+    /// The values the importer holds, for [`parameters`].
+    fn values(&self) -> parameters::Values<'_> {
+        parameters::Values { reals: &self.reals, integers: &self.integers }
+    }
+
+    /// Whether a settable variable acts on the scene: every one for the
+    /// built-in example, only those the importer set for a scene file.
+    fn applies(&self, p: Settable) -> bool {
+        self.strings.get(&vr::SCENE_FILE).is_none_or(|f| f.is_empty())
+            || self.explicitly_set.contains(&p.variable().value_reference())
+    }
+
     /// The scene the parameters describe: the scene file (or the built-in
     /// example) with every parameter applied — all of them for the built-in
     /// example, only those set by the importer for a scene file.
@@ -225,160 +228,13 @@ impl Instance {
             })?;
             Scene::from_toml(&text).map_err(|e| Refusal::error(format!("sceneFile = {file}: {e}")))?
         };
-        let all = file.is_empty();
-        let use_it = |v: u32| all || self.explicitly_set.contains(&v);
-        let r = |v: u32| self.real(v);
-        let mm = |v: u32| self.real(v) * 1e3;
-        macro_rules! apply {
-            ($v:expr, $body:expr) => {
-                if use_it($v) {
-                    $body;
-                }
-            };
+        let values = self.values();
+        for p in Settable::ALL.iter().copied().filter(|p| self.applies(*p)) {
+            parameters::apply(p, &values, &mut scene).map_err(Refusal::error)?;
         }
-        apply!(vr::FIDELITY, {
-            scene.dynamics.fidelity = match self.int(vr::FIDELITY) {
-                0 => Fidelity::Torsional,
-                1 => Fidelity::TransverseTorsional,
-                x => {
-                    return Err(Refusal::error(format!(
-                        "fidelity = {x}: allowed are 0 (torsional), 1 (transverse-torsional)"
-                    )))
-                }
-            }
-        });
-        apply!(vr::HELD_MEMBER, scene.operation.held = member(self.int(vr::HELD_MEMBER), "heldMember")?);
-        apply!(vr::INPUT_MEMBER, scene.operation.input = member(self.int(vr::INPUT_MEMBER), "inputMember")?);
-        apply!(vr::DRIVE_MODE, {
-            scene.dynamics.drive = match self.int(vr::DRIVE_MODE) {
-                0 => Drive::Torque,
-                1 => Drive::Speed,
-                2 => Drive::SpeedSteps,
-                x => {
-                    return Err(Refusal::error(format!(
-                        "driveMode = {x}: allowed are 0 (torque), 1 (speed through the input shaft), \
-                         2 (torque, with speed steps to each new inputSpeedReference)"
-                    )))
-                }
-            }
-        });
-        apply!(vr::INTEGRATOR, {
-            scene.dynamics.integrator = match self.int(vr::INTEGRATOR) {
-                0 => IntegratorKind::GeneralizedAlpha,
-                1 => IntegratorKind::Rk45,
-                x => {
-                    return Err(Refusal::error(format!(
-                        "integrator = {x}: allowed are 0 (generalized-alpha), 1 (Runge-Kutta 5(4))"
-                    )))
-                }
-            }
-        });
-        let count = |v: u32, name: &str| -> Result<u32, Refusal> {
-            u32::try_from(self.int(v))
-                .map_err(|_| Refusal::error(format!("{name} = {}: must not be negative", self.int(v))))
-        };
-        apply!(
-            vr::STEPS_PER_MESH_CYCLE,
-            scene.dynamics.steps_per_mesh_cycle = count(vr::STEPS_PER_MESH_CYCLE, "stepsPerMeshCycle")?
-        );
-        apply!(vr::RHO_INFINITY, scene.dynamics.rho_infinity = r(vr::RHO_INFINITY));
-        apply!(vr::RELATIVE_TOLERANCE, scene.dynamics.relative_tolerance = r(vr::RELATIVE_TOLERANCE));
-        apply!(
-            vr::SAMPLES_PER_MESH_CYCLE,
-            scene.dynamics.samples_per_mesh_cycle = count(vr::SAMPLES_PER_MESH_CYCLE, "samplesPerMeshCycle")?
-        );
-        apply!(
-            vr::PLANETS,
-            scene.planets =
-                crate::scene::PlanetLayoutSpec { count: count(vr::PLANETS, "planets")?, angles_deg: None }
-        );
-        apply!(vr::SUN_TEETH, scene.sun.teeth = count(vr::SUN_TEETH, "sun.teeth")?);
-        apply!(vr::PLANET_TEETH, scene.planet.teeth = count(vr::PLANET_TEETH, "planet.teeth")?);
-        apply!(vr::RING_TEETH, scene.ring.teeth = count(vr::RING_TEETH, "ring.teeth")?);
-        apply!(vr::MODULE, {
-            scene.sun.module_mm = mm(vr::MODULE);
-            scene.planet.module_mm = mm(vr::MODULE);
-            scene.ring.module_mm = mm(vr::MODULE);
-        });
-        apply!(vr::PRESSURE_ANGLE, {
-            let d = r(vr::PRESSURE_ANGLE).to_degrees();
-            scene.sun.pressure_angle_deg = d;
-            scene.planet.pressure_angle_deg = d;
-            scene.ring.pressure_angle_deg = d;
-        });
-        apply!(vr::FACE_WIDTH, {
-            scene.sun.face_width_mm = mm(vr::FACE_WIDTH);
-            scene.planet.face_width_mm = mm(vr::FACE_WIDTH);
-            scene.ring.face_width_mm = mm(vr::FACE_WIDTH);
-        });
-        apply!(vr::CENTRE_DISTANCE, scene.centre_distance_mm = mm(vr::CENTRE_DISTANCE));
-        apply!(vr::SUN_TOOTH_THICKNESS, scene.sun.tooth_thickness_mm = mm(vr::SUN_TOOTH_THICKNESS));
-        apply!(vr::PLANET_TOOTH_THICKNESS, scene.planet.tooth_thickness_mm = mm(vr::PLANET_TOOTH_THICKNESS));
-        apply!(vr::RING_TOOTH_THICKNESS, scene.ring.tooth_thickness_mm = mm(vr::RING_TOOTH_THICKNESS));
-        apply!(vr::SUN_TIP_RADIUS, scene.sun.tip_radius_mm = mm(vr::SUN_TIP_RADIUS));
-        apply!(vr::SUN_ROOT_RADIUS, scene.sun.root_radius_mm = mm(vr::SUN_ROOT_RADIUS));
-        apply!(vr::SUN_BORE_RADIUS, scene.sun.bore_radius_mm = mm(vr::SUN_BORE_RADIUS));
-        apply!(vr::PLANET_TIP_RADIUS, scene.planet.tip_radius_mm = mm(vr::PLANET_TIP_RADIUS));
-        apply!(vr::PLANET_ROOT_RADIUS, scene.planet.root_radius_mm = mm(vr::PLANET_ROOT_RADIUS));
-        apply!(vr::PLANET_BORE_RADIUS, scene.planet.bore_radius_mm = mm(vr::PLANET_BORE_RADIUS));
-        apply!(vr::RING_MINOR_RADIUS, scene.ring.minor_radius_mm = mm(vr::RING_MINOR_RADIUS));
-        apply!(vr::RING_ROOT_RADIUS, scene.ring.root_radius_mm = mm(vr::RING_ROOT_RADIUS));
-        apply!(vr::RING_RIM_RADIUS, scene.ring.rim_radius_mm = mm(vr::RING_RIM_RADIUS));
-        apply!(vr::HOB_TIP_RADIUS, {
-            scene.sun.hob_tip_radius_mm = mm(vr::HOB_TIP_RADIUS);
-            scene.planet.hob_tip_radius_mm = mm(vr::HOB_TIP_RADIUS);
-        });
-        apply!(vr::RING_FILLET_RADIUS, scene.ring.fillet_radius_mm = mm(vr::RING_FILLET_RADIUS));
-        if use_it(vr::TIP_CHAMFER_HEIGHT) || use_it(vr::TIP_CHAMFER_ANGLE) {
-            let (h, a) = (mm(vr::TIP_CHAMFER_HEIGHT), r(vr::TIP_CHAMFER_ANGLE).to_degrees());
-            // The edge's reading (whether it carries load, its rounding)
-            // stays the scene's.
-            let set = |c: Option<ChamferSpec>| {
-                Some(ChamferSpec { height_mm: h, angle_deg: a, ..c.unwrap_or(ChamferSpec::new(h, a)) })
-            };
-            scene.sun.tip_chamfer = set(scene.sun.tip_chamfer);
-            scene.planet.tip_chamfer = set(scene.planet.tip_chamfer);
-        }
-        apply!(vr::YOUNGS_MODULUS, scene.material.youngs_modulus_gpa = r(vr::YOUNGS_MODULUS) * 1e-9);
-        apply!(vr::POISSON_RATIO, scene.material.poisson_ratio = r(vr::POISSON_RATIO));
-        apply!(vr::DENSITY, scene.material.density_kg_per_m3 = r(vr::DENSITY));
-        let opt = |v: u32| (self.real(v) != 0.0).then(|| self.real(v));
-        apply!(vr::SUN_INERTIA, scene.inertia.sun_inertia_kg_m2 = opt(vr::SUN_INERTIA));
-        apply!(vr::PLANET_INERTIA, scene.inertia.planet_inertia_kg_m2 = opt(vr::PLANET_INERTIA));
-        apply!(vr::RING_INERTIA, scene.inertia.ring_inertia_kg_m2 = opt(vr::RING_INERTIA));
-        apply!(vr::CARRIER_INERTIA, scene.inertia.carrier_inertia_kg_m2 = opt(vr::CARRIER_INERTIA));
-        apply!(vr::SUN_MASS, scene.inertia.sun_mass_kg = opt(vr::SUN_MASS));
-        apply!(vr::PLANET_MASS, scene.inertia.planet_mass_kg = opt(vr::PLANET_MASS));
-        apply!(vr::RING_MASS, scene.inertia.ring_mass_kg = opt(vr::RING_MASS));
-        apply!(vr::CARRIER_MASS, scene.inertia.carrier_mass_kg = opt(vr::CARRIER_MASS));
-        apply!(vr::SUN_BEARING_STIFFNESS, scene.supports.sun_radial_n_per_m = r(vr::SUN_BEARING_STIFFNESS));
-        apply!(
-            vr::RING_BEARING_STIFFNESS,
-            scene.supports.ring_radial_n_per_m = r(vr::RING_BEARING_STIFFNESS)
-        );
-        apply!(
-            vr::CARRIER_BEARING_STIFFNESS,
-            scene.supports.carrier_radial_n_per_m = r(vr::CARRIER_BEARING_STIFFNESS)
-        );
-        apply!(
-            vr::PLANET_BEARING_STIFFNESS,
-            scene.supports.planet_bearing_n_per_m = r(vr::PLANET_BEARING_STIFFNESS)
-        );
-        apply!(
-            vr::BEARING_DAMPING_RATIO,
-            scene.supports.bearing_damping_ratio = r(vr::BEARING_DAMPING_RATIO)
-        );
-        apply!(vr::MESH_DAMPING_RATIO, scene.dynamics.mesh_damping_ratio = r(vr::MESH_DAMPING_RATIO));
-        apply!(vr::SHAFT_STIFFNESS, scene.dynamics.shaft_stiffness_nm_per_rad = r(vr::SHAFT_STIFFNESS));
-        // The input torque sets the operating load of the mean-stiffness
-        // linearisation and static TE; the inputs drive the simulation.
-        let torque_vr = match scene.operation.input {
-            Member::Sun => vr::SUN_TORQUE,
-            Member::Ring => vr::RING_TORQUE,
-            Member::Carrier => vr::CARRIER_TORQUE,
-        };
-        if all || self.explicitly_set.contains(&torque_vr) {
-            scene.operation.input_torque_nm = self.real(torque_vr);
+        let torque = parameters::input_torque(scene.operation.input);
+        if self.applies(torque) {
+            scene.operation.input_torque_nm = self.real(torque.variable().value_reference());
         }
         Ok(scene)
     }
@@ -402,12 +258,33 @@ impl Instance {
         Ok(state.set_model(set))
     }
 
+    /// A refused scene said in the importer's terms: each problem named by
+    /// the variable that set it, with its value in the variable's unit, or
+    /// by the scene file it came from.
+    fn scene_refusal(&self, e: crate::scene::SceneError) -> Refusal {
+        match e {
+            crate::scene::SceneError::Invalid { problems } => {
+                let file = self.strings.get(&vr::SCENE_FILE).cloned().unwrap_or_default();
+                let values = self.values();
+                let lines: Vec<String> = problems
+                    .iter()
+                    .map(|p| {
+                        format!(
+                            "  - {}",
+                            parameters::describe_problem(p, &values, |s| self.applies(s), &file)
+                        )
+                    })
+                    .collect();
+                Refusal::error(format!("the parameters describe an invalid gear set:\n{}", lines.join("\n")))
+            }
+            other => Refusal::error(format!("the parameters describe an invalid gear set: {other}")),
+        }
+    }
+
     /// Builds the simulation from the parameters.
     fn build(&mut self) -> Result<(), Refusal> {
         let scene = self.scene()?;
-        let (set, run) = scene
-            .validate_with_run()
-            .map_err(|e| Refusal::error(format!("the parameters describe an invalid gear set: {e}")))?;
+        let (set, run) = scene.validate_with_run().map_err(|e| self.scene_refusal(e))?;
         if set.planet_angles().len() > 8 {
             return Err(Refusal::error(format!(
                 "planets = {}: this FMU has outputs for at most 8 planets",
@@ -1045,6 +922,56 @@ mod tests {
         let width = j.real(vr::FACE_WIDTH);
         j.set_real(vr::FACE_WIDTH, width).unwrap();
         assert_ne!(j.build_key(), unset);
+    }
+
+    /// A validation problem reaches the importer named by the variable it
+    /// set, with the value in the variable's unit, and every problem at once.
+    #[test]
+    fn a_refused_gear_set_names_the_variables_the_importer_set() {
+        let mut i = Instance::new("names", None);
+        i.enter_initialization();
+        i.set_real(vr::SUN_TIP_RADIUS, -0.02).unwrap();
+        i.set_real(vr::MODULE, 0.0).unwrap();
+        let e = i.exit_initialization().unwrap_err();
+        let m = e.message;
+        assert!(m.contains("  - sun.tipRadius = -0.02 m: must be a finite number greater than zero"), "{m}");
+        assert!(m.contains("(the scene's sun.tip_radius_mm = -20)"), "{m}");
+        assert!(m.contains("  - module = 0 m: must be a finite number greater than zero"), "{m}");
+        assert!(!m.contains("  - sun.tip_radius_mm"), "{m}");
+    }
+
+    /// The scene keys of every settable variable are keys of the scene: a
+    /// key that no problem could ever carry would leave a refusal named by
+    /// the scene instead of the variable.
+    #[test]
+    fn every_scene_key_of_a_variable_is_a_key_of_the_scene_file() {
+        // The example with its derived defaults written out (chamfers, masses).
+        let text = Scene::example_2004().explicit().unwrap().to_toml();
+        let doc: toml::Table = toml::from_str(&text).unwrap();
+        let has = |key: &str| {
+            let mut t = &doc;
+            let parts: Vec<&str> = key.split('.').collect();
+            for (n, part) in parts.iter().enumerate() {
+                match t.get(*part) {
+                    Some(toml::Value::Table(inner)) if n + 1 < parts.len() => t = inner,
+                    Some(_) if n + 1 == parts.len() => return true,
+                    _ => return false,
+                }
+            }
+            false
+        };
+        // Keys that are optional in a scene file: the planets' own angles
+        // and bearing stiffnesses (the example spaces them equally, alike).
+        let optional = ["planets.angles_deg", "supports.planet_bearings_n_per_m"];
+        for p in Settable::ALL {
+            for key in parameters::scene_keys(*p) {
+                assert!(
+                    has(key) || optional.contains(key),
+                    "{}: scene key {key} is not in the scene file",
+                    p.variable().name()
+                );
+            }
+        }
     }
 
     #[test]

@@ -8,4 +8,5 @@ pub mod core;
 pub mod export;
 pub mod guid;
 pub mod instance;
+mod parameters;
 pub mod variables;
