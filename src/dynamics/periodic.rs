@@ -290,6 +290,7 @@ pub fn excitation_period(model: &mut PlanetaryDynamics, omega: f64) -> Result<us
     }
     let mesh_period = 1.0 / fm;
     let n = model.dim();
+    model.set_drive_speed(omega);
     let s = static_state(model, omega);
     let rigid = model.rigid_velocity_at(omega);
     let mut frame = Relative { model, rigid, q: vec![0.0; n], v: vec![0.0; n] };
