@@ -299,7 +299,7 @@ pub fn continue_branch(
                 converged = Some(iteration - 1);
                 break;
             }
-            if !(norm < previous_norm) && iteration > 2 {
+            if (norm >= previous_norm || norm.is_nan()) && iteration > 2 {
                 break;
             }
             previous_norm = norm;

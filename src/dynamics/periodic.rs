@@ -225,6 +225,10 @@ pub struct Linearization {
     pub residual: Vec<f64>,
 }
 
+/// What [`PeriodicProblem::steady_state`] does at each sample: time, and the
+/// model evaluated there.
+type Observer<'a> = dyn FnMut(f64, &PlanetaryDynamics) + 'a;
+
 /// The model in coordinates relative to the rigid-body motion at a speed:
 /// q = q_e + r ω t, v = v_e + r ω.
 struct Relative<'a> {
@@ -392,11 +396,9 @@ impl PeriodicProblem {
         let (mut q, mut v) = (vec![0.0; n], vec![0.0; n]);
         match self.eliminated {
             Some(k) => {
-                let mut j = 0;
-                for i in (0..n).filter(|i| *i != k) {
+                for (j, i) in (0..n).filter(|i| *i != k).enumerate() {
                     q[i] = z[j] * self.q_scale;
                     v[i] = z[n - 1 + j] * self.v_scale;
-                    j += 1;
                 }
                 let w = &self.weights;
                 q[k] = -(0..n).filter(|i| *i != k).map(|i| w[i] * q[i]).sum::<f64>() / w[k];
@@ -442,7 +444,7 @@ impl PeriodicProblem {
         omega: f64,
         z: &[f64],
         work: &mut Work,
-        mut sample: Option<(usize, &mut dyn FnMut(f64, &PlanetaryDynamics))>,
+        mut sample: Option<(usize, &mut Observer<'_>)>,
     ) -> Result<Vec<f64>, PeriodicError> {
         let period = self.period(omega);
         let err = |source| PeriodicError::Integration { speed: omega, source };
