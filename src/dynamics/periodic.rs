@@ -180,7 +180,7 @@ impl Multiplier {
 pub struct PeriodicOrbit {
     /// Input speed [rad/s].
     pub speed: f64,
-    /// Period [s] (a whole number of mesh cycles).
+    /// Period \[s\] (a whole number of mesh cycles).
     pub period: f64,
     /// Mesh cycles in the period.
     pub cycles: usize,
@@ -385,7 +385,7 @@ impl PeriodicProblem {
         }
     }
 
-    /// Period [s] at speed `omega` [rad/s].
+    /// Period \[s\] at speed `omega` [rad/s].
     pub fn period(&self, omega: f64) -> f64 {
         self.cycles as f64 / (self.model.mesh_frequency_per_input_speed * omega.abs())
     }
