@@ -27,7 +27,7 @@ use planetwear::wear::flank::Flank;
 use planetwear::wear::stepper::WearModel;
 
 mod cli;
-use cli::{dynamics::*, fmu::*, study::*, wear::*};
+use cli::{continuation::*, dynamics::*, fmu::*, study::*, wear::*};
 
 #[derive(Parser)]
 #[command(name = "planetwear", version, about = "Planetary gear dynamics with tooth wear")]
@@ -191,6 +191,12 @@ struct SweepArgs {
     /// Print the summary (peaks, figures) as JSON.
     #[arg(long)]
     json: bool,
+    /// march (time marching at every speed of the grid, up and down) or
+    /// continuation (periodic states by shooting, followed by pseudo-arclength
+    /// continuation from --from to --to through folds, with stability;
+    /// --direction does not apply, --step is the nominal step).
+    #[arg(long, default_value = "march")]
+    method: String,
 }
 
 /// Work-precision study of the integrators: E_h of the mesh-force harmonics against CPU time

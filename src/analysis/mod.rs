@@ -6,12 +6,15 @@
 //! May import: every earlier stage ([`crate::files`] to [`crate::wear`]).
 //!
 //! - [`accuracy`]: work-precision of the integrators.
+//! - [`continuation`]: pseudo-arclength continuation of periodic steady
+//!   states in speed, with stability, folds and period doublings.
 //! - [`modes`]: natural frequencies and mode shapes, with mode classes.
 //! - [`order_tracking`]: order spectra of a run-up or time history.
 //! - [`study`]: the published example's study: calibration, resonance
 //!   peaks, validation against the study's claims, and the wear effect.
 
 pub mod accuracy;
+pub mod continuation;
 pub mod modes;
 pub mod order_tracking;
 pub mod study;

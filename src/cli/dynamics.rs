@@ -47,9 +47,13 @@ pub(crate) fn run_command(RunArgs { scene, wear_state, speed, json, plots }: Run
     Ok(())
 }
 
-pub(crate) fn sweep_command(
-    SweepArgs { scene, wear_state, from, to, step, direction, out, histories, json }: SweepArgs,
-) -> Result<()> {
+pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
+    match args.method.as_str() {
+        "march" => {}
+        "continuation" => return sweep_continuation(args),
+        other => bail!("--method {other}: allowed are march, continuation"),
+    }
+    let SweepArgs { scene, wear_state, from, to, step, direction, out, histories, json, .. } = args;
     let (set, run_settings) = validated_with_run(&load_scene(&scene)?)?;
     let speeds = speed_grid(from, to, step)?;
     let dirs: Vec<Direction> = match direction.as_str() {

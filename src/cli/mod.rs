@@ -2,6 +2,7 @@
 //! holds the grammar (clap), the loading of scenes shared by all commands,
 //! and the dispatch.
 
+pub(crate) mod continuation;
 pub(crate) mod dynamics;
 pub(crate) mod fmu;
 pub(crate) mod study;

@@ -14,10 +14,12 @@
 //! - [`solver`]: generalized-α and RK45 integrators behind one trait.
 //! - [`simulation`]: the time-domain run from given initial conditions.
 //! - [`response`]: the steady state at one speed and its measures.
+//! - [`periodic`]: periodic steady states by shooting, Floquet multipliers.
 //! - [`spectrum`]: mesh-force harmonics and separation share.
 //! - [`state_format`]: the serialized simulation state (FMU states).
 
 pub mod equations;
+pub mod periodic;
 pub mod response;
 pub mod simulation;
 pub mod solver;

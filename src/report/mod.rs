@@ -3,6 +3,7 @@
 //! person reads (plots), and writes every file atomically.
 
 pub mod accuracy;
+pub mod continuation;
 pub mod ltca;
 pub mod plot;
 pub mod sweep;

@@ -51,6 +51,11 @@ pub enum SeriesStyle {
     Points,
     /// The points are joined by line segments and each one also gets a marker.
     LineAndPoints,
+    /// The points are joined by dashed line segments; a NaN y value breaks
+    /// the line (one series may hold several dashed pieces).
+    Dashed,
+    /// As [`SeriesStyle::Line`], but a NaN y value breaks the line.
+    Broken,
 }
 
 /// One line (or set of markers) in a chart.
@@ -204,7 +209,10 @@ fn validate(chart: &Chart) -> Result<(), PlotError> {
             });
         }
         for (axis, values) in [("x", &s.x), ("y", &s.y)] {
-            if let Some((index, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            // A dashed series breaks its line at NaN y values (and only there).
+            let breaks = matches!(s.style, SeriesStyle::Dashed | SeriesStyle::Broken);
+            let allowed = |v: f64| v.is_finite() || (breaks && axis == "y" && v.is_nan());
+            if let Some((index, &value)) = values.iter().enumerate().find(|(_, v)| !allowed(**v)) {
                 return Err(PlotError::NonFinite { series: s.label.clone(), axis, index, value });
             }
         }
@@ -399,6 +407,28 @@ fn draw<DB: DrawingBackend>(
         let has_line = matches!(style, SeriesStyle::Line | SeriesStyle::LineAndPoints);
         let has_points = matches!(style, SeriesStyle::Points | SeriesStyle::LineAndPoints);
 
+        if matches!(style, SeriesStyle::Dashed | SeriesStyle::Broken) {
+            let xy: Vec<(f64, f64)> = points.clone().collect();
+            let mut labelled = false;
+            for piece in xy.split(|(_, y)| y.is_nan()).filter(|p| !p.is_empty()) {
+                let it = piece.iter().copied();
+                let anno = if style == SeriesStyle::Dashed {
+                    ctx.draw_series(DashedLineSeries::new(it, 8, 5, line_style)).map_err(backend_err)?
+                } else {
+                    ctx.draw_series(LineSeries::new(it, line_style)).map_err(backend_err)?
+                };
+                if !labelled {
+                    let dashed = style == SeriesStyle::Dashed;
+                    anno.label(s.label.clone()).legend(move |(x, y)| {
+                        let gap = if dashed { 6 } else { 0 };
+                        EmptyElement::at((x, y))
+                            + PathElement::new(vec![(0, 0), (8, 0)], line_style)
+                            + PathElement::new(vec![(8 + gap, 0), (24, 0)], line_style)
+                    });
+                    labelled = true;
+                }
+            }
+        }
         if has_line {
             let anno = ctx.draw_series(LineSeries::new(points.clone(), line_style)).map_err(backend_err)?;
             anno.label(label);

@@ -1,0 +1,717 @@
+//! Periodic steady states by shooting, with their Floquet multipliers
+//! (docs/PERIODIC.md).
+//!
+//! The tooth-by-tooth model is autonomous under the torque drive and
+//! periodic in time under the speed drive; in both cases the equations of
+//! motion, written in coordinates relative to the rigid-body motion
+//! q = q_e + r ω t (r the rigid velocity pattern per rad/s of input speed),
+//! repeat after the excitation period T: every mesh's force law is a
+//! function of its pair position, which advances by one base pitch per mesh
+//! cycle on every mesh alike, so T is one mesh cycle whatever the planet
+//! spacing ([`excitation_period`] confirms it on the model itself and takes
+//! the least multiple of the mesh cycle for which the equations repeat).
+//!
+//! A periodic steady state is a zero of G(x) = φ_T(x) − x, with x the
+//! relative state (q_e, v_e) at t = 0 and φ_T the flow over one period,
+//! computed by the adaptive Runge–Kutta 5(4) method with located contact
+//! events in the relative frame. Under the torque drive the rigid-body
+//! rotation is free: its momentum rᵀM v is conserved (the external torques
+//! balance, the meshes and bearings do no work along r), so the rigid
+//! angle advances exactly at ω and the relative state is restricted to the
+//! M-orthogonal complement of r (rᵀM q_e = 0, which also fixes the phase of
+//! the orbit to the mesh, and rᵀM v_e = 0); the input member's coordinate is
+//! the one eliminated. Under the speed drive the shaft ties the input to the
+//! source and all coordinates take part.
+//!
+//! Newton's method with a backtracking line search solves G = 0; its
+//! Jacobian is M − I with M the monodromy matrix, whose columns are forward
+//! differences of the flow (the contact force is piecewise smooth: the
+//! integrator locates every contact switch, so the flow is differentiable
+//! between switches and the differences follow the switching times; the jump
+//! of the mesh damping force when a mesh separates is carried the same way,
+//! with no saltation matrix to derive). The eigenvalues of M (faer's
+//! non-symmetric eigensolver) are the Floquet multipliers; the orbit is
+//! stable when all lie inside the unit circle.
+
+use faer::linalg::solvers::Solve;
+use serde::{Deserialize, Serialize};
+
+use crate::dynamics::equations::PlanetaryDynamics;
+use crate::dynamics::response::{static_state, MeshResponse, State, SteadyState, Work};
+use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError};
+use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, SpectrumError};
+
+/// Settings of the shooting method.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShootingSettings {
+    /// Relative tolerance of the Runge–Kutta 5(4) flow in the relative frame
+    /// (absolute tolerances: this fraction of the state scales).
+    pub relative_tolerance: f64,
+    /// Newton stops when the largest component of G, in units of the state
+    /// scales (static mesh deflection, and that deflection times the mesh
+    /// angular frequency at the reference speed), is at most this.
+    pub newton_tolerance: f64,
+    /// Largest number of Newton iterations at one speed.
+    pub max_newton_iterations: usize,
+    /// Forward-difference step of the monodromy columns, in state-scale units.
+    pub difference_step: f64,
+    /// Samples per mesh cycle of the orbit's recorded mesh forces.
+    pub samples_per_mesh_cycle: usize,
+    /// Periods run from the static state before Newton starts (a cold start).
+    pub run_in_periods: usize,
+}
+
+impl Default for ShootingSettings {
+    fn default() -> Self {
+        Self {
+            relative_tolerance: 1e-7,
+            newton_tolerance: 1e-5,
+            max_newton_iterations: 20,
+            difference_step: 1e-3,
+            samples_per_mesh_cycle: 64,
+            run_in_periods: 4,
+        }
+    }
+}
+
+impl ShootingSettings {
+    /// Refuses settings that cannot work, naming the setting and the range.
+    pub fn check(&self) -> Result<(), PeriodicError> {
+        let bad = |name: &str, value: f64, reason: &str| {
+            Err(PeriodicError::InvalidRequest {
+                name: name.into(),
+                value: value.to_string(),
+                reason: reason.into(),
+            })
+        };
+        let t = self.relative_tolerance;
+        if !(t.is_finite() && (1e-13..=1e-3).contains(&t)) {
+            return bad("shooting relative tolerance", t, "must lie in 1e-13 ..= 1e-3");
+        }
+        if !(self.newton_tolerance.is_finite() && self.newton_tolerance > 0.0) {
+            return bad("shooting Newton tolerance", self.newton_tolerance, "must be positive and finite");
+        }
+        if self.max_newton_iterations == 0 {
+            return bad("shooting Newton iterations", 0.0, "must be at least 1");
+        }
+        if !(self.difference_step.is_finite() && self.difference_step > 0.0 && self.difference_step < 1.0) {
+            return bad("shooting difference step", self.difference_step, "must lie in (0, 1)");
+        }
+        if self.samples_per_mesh_cycle < 16 {
+            return bad("samples per mesh cycle", self.samples_per_mesh_cycle as f64, "must be at least 16");
+        }
+        Ok(())
+    }
+}
+
+/// Errors of the periodic-steady-state solver.
+#[derive(Debug, thiserror::Error)]
+pub enum PeriodicError {
+    /// The integrator failed.
+    #[error("integration failed at {speed} rad/s: {source}")]
+    Integration {
+        /// Input speed [rad/s].
+        speed: f64,
+        /// The integrator's error.
+        source: SolverError,
+    },
+    /// Newton's method did not reach the tolerance.
+    #[error("no periodic state found at {speed} rad/s: residual {residual:.3e} after {iterations} Newton iterations")]
+    NotConverged {
+        /// Input speed [rad/s].
+        speed: f64,
+        /// Newton iterations made.
+        iterations: usize,
+        /// Largest scaled residual component left.
+        residual: f64,
+    },
+    /// The equations do not repeat after any tried multiple of the mesh cycle.
+    #[error("the equations of motion do not repeat within {cycles} mesh cycles (largest force change {change:.3e} of the largest force)")]
+    NotPeriodic {
+        /// Mesh cycles tried.
+        cycles: usize,
+        /// Relative change of the forces after that many cycles.
+        change: f64,
+    },
+    /// The mesh-force spectrum could not be formed.
+    #[error("spectrum at {speed} rad/s: {source}")]
+    Spectrum {
+        /// Input speed [rad/s].
+        speed: f64,
+        /// Cause.
+        source: SpectrumError,
+    },
+    /// A request that cannot be met.
+    #[error("{name} = {value}: {reason}")]
+    InvalidRequest {
+        /// Name.
+        name: String,
+        /// Value.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+}
+
+/// A Floquet multiplier (real and imaginary part).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Multiplier {
+    /// Real part.
+    pub re: f64,
+    /// Imaginary part.
+    pub im: f64,
+}
+
+impl Multiplier {
+    /// Modulus |μ|.
+    pub fn modulus(&self) -> f64 {
+        self.re.hypot(self.im)
+    }
+
+    /// Whether μ is real (imaginary part below 1e-8 of the modulus, or 1e-10).
+    pub fn is_real(&self) -> bool {
+        self.im.abs() <= 1e-8 * self.modulus().max(1e-2)
+    }
+}
+
+/// A periodic steady state: its initial relative state, its Floquet
+/// multipliers and the work spent on it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PeriodicOrbit {
+    /// Input speed [rad/s].
+    pub speed: f64,
+    /// Period \[s\] (a whole number of mesh cycles).
+    pub period: f64,
+    /// Mesh cycles in the period.
+    pub cycles: usize,
+    /// The unknowns at t = 0 (scaled relative state, see [`PeriodicProblem::expand`]).
+    pub z: Vec<f64>,
+    /// Largest scaled residual component at the solution.
+    pub residual: f64,
+    /// Newton iterations.
+    pub newton_iterations: usize,
+    /// Floquet multipliers, largest modulus first (empty when not computed).
+    pub multipliers: Vec<Multiplier>,
+    /// Flows over one period integrated for this orbit (residuals, line
+    /// search, monodromy columns).
+    pub flows: usize,
+    /// Integrator work for this orbit.
+    pub work: Work,
+}
+
+impl PeriodicOrbit {
+    /// Largest |μ| (0 when the multipliers were not computed).
+    pub fn largest_multiplier(&self) -> f64 {
+        self.multipliers.first().map_or(0.0, Multiplier::modulus)
+    }
+
+    /// All multipliers inside the unit circle.
+    pub fn is_stable(&self) -> bool {
+        self.largest_multiplier() < 1.0
+    }
+}
+
+/// The monodromy matrix and the derivative of G with respect to the speed at
+/// a state (both in scaled units; column-major dense matrix of size m × m).
+#[derive(Clone, Debug)]
+pub struct Linearization {
+    /// Number of unknowns m.
+    pub dim: usize,
+    /// Monodromy matrix ∂φ_T/∂z, `monodromy[i + m j]`.
+    pub monodromy: Vec<f64>,
+    /// ∂G/∂ω (per rad/s).
+    pub speed_derivative: Vec<f64>,
+    /// G at the state.
+    pub residual: Vec<f64>,
+}
+
+/// What [`PeriodicProblem::steady_state`] does at each sample: time, and the
+/// model evaluated there.
+type Observer<'a> = dyn FnMut(f64, &PlanetaryDynamics) + 'a;
+
+/// The model in coordinates relative to the rigid-body motion at a speed:
+/// q = q_e + r ω t, v = v_e + r ω.
+struct Relative<'a> {
+    model: &'a mut PlanetaryDynamics,
+    rigid: Vec<f64>,
+    q: Vec<f64>,
+    v: Vec<f64>,
+}
+
+impl Relative<'_> {
+    fn absolute(&mut self, t: f64, qe: &[f64], ve: &[f64]) {
+        for i in 0..qe.len() {
+            self.q[i] = qe[i] + self.rigid[i] * t;
+            self.v[i] = ve[i] + self.rigid[i];
+        }
+    }
+}
+
+impl SecondOrderSystem for Relative<'_> {
+    fn dim(&self) -> usize {
+        self.model.dim()
+    }
+
+    fn mass(&self) -> &[f64] {
+        self.model.mass()
+    }
+
+    fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
+        self.absolute(t, q, v);
+        self.model.force(t, &self.q, &self.v, f);
+    }
+
+    fn jacobian(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        k: &mut nalgebra::DMatrix<f64>,
+        c: &mut nalgebra::DMatrix<f64>,
+    ) {
+        self.absolute(t, q, v);
+        self.model.jacobian(t, &self.q, &self.v, k, c);
+    }
+
+    fn events(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
+        self.absolute(t, q, v);
+        self.model.events(t, &self.q, &self.v, out);
+    }
+}
+
+/// Mesh cycles (1, 2, …, up to 12) after which the equations of motion in
+/// the relative frame repeat at speed `omega` [rad/s]: the least common
+/// period of all meshes' excitation. Checked on the model's forces at three
+/// states and times; an error when none of the tried multiples repeats.
+pub fn excitation_period(model: &mut PlanetaryDynamics, omega: f64) -> Result<usize, PeriodicError> {
+    let fm = model.mesh_frequency_per_input_speed * omega.abs();
+    if !(fm.is_finite() && fm > 0.0) {
+        return Err(PeriodicError::InvalidRequest {
+            name: "input speed".into(),
+            value: format!("{omega} rad/s"),
+            reason: "must be non-zero and finite: the period is a whole number of mesh cycles".into(),
+        });
+    }
+    let mesh_period = 1.0 / fm;
+    let n = model.dim();
+    model.set_drive_speed(omega);
+    let s = static_state(model, omega);
+    let rigid = model.rigid_velocity_at(omega);
+    let mut frame = Relative { model, rigid, q: vec![0.0; n], v: vec![0.0; n] };
+    let ve = vec![0.0; n];
+    let mut worst = f64::INFINITY;
+    for cycles in 1..=12usize {
+        let period = cycles as f64 * mesh_period;
+        let mut change: f64 = 0.0;
+        for (k, t) in [0.0, 0.37, 0.81].iter().enumerate() {
+            let t = t * mesh_period;
+            // Three distinct elastic states: the static one and two scaled copies.
+            let qe: Vec<f64> = s.q.iter().map(|x| x * (1.0 + 0.3 * k as f64)).collect();
+            let (mut f0, mut f1) = (vec![0.0; n], vec![0.0; n]);
+            frame.force(t, &qe, &ve, &mut f0);
+            frame.force(t + period, &qe, &ve, &mut f1);
+            let scale = f0.iter().fold(0.0_f64, |a, x| a.max(x.abs())).max(f64::MIN_POSITIVE);
+            let d = f0.iter().zip(&f1).fold(0.0_f64, |a, (x, y)| a.max((x - y).abs()));
+            change = change.max(d / scale);
+        }
+        if change <= 1e-9 {
+            return Ok(cycles);
+        }
+        worst = worst.min(change);
+    }
+    Err(PeriodicError::NotPeriodic { cycles: 12, change: worst })
+}
+
+/// The periodic-steady-state problem of one model: the unknowns, their
+/// scales, the flow and its derivatives, Newton's method and the orbit's
+/// measures.
+#[derive(Clone, Debug)]
+pub struct PeriodicProblem {
+    model: PlanetaryDynamics,
+    settings: ShootingSettings,
+    /// The coordinate eliminated by rᵀM q_e = 0 (torque drive), if any.
+    eliminated: Option<usize>,
+    /// M r.
+    weights: Vec<f64>,
+    q_scale: f64,
+    v_scale: f64,
+    cycles: usize,
+}
+
+impl PeriodicProblem {
+    /// The problem of `model`, with state scales taken at the reference speed
+    /// `reference_speed` [rad/s] (the static mesh deflection, and that times
+    /// the mesh angular frequency for velocities).
+    pub fn new(
+        mut model: PlanetaryDynamics,
+        settings: ShootingSettings,
+        reference_speed: f64,
+    ) -> Result<Self, PeriodicError> {
+        settings.check()?;
+        let cycles = excitation_period(&mut model, reference_speed)?;
+        let n = model.dim();
+        let s = static_state(&model, reference_speed);
+        // The speed drive's source is placed once, at the static state.
+        model.rebase_drive(&s.q);
+        let free = model.drive_state().is_empty();
+        let weights: Vec<f64> = model.mass().iter().zip(&model.rigid_velocity).map(|(m, r)| m * r).collect();
+        let eliminated = free.then_some(model.input_index);
+        let mut f = vec![0.0; n];
+        model.force(0.0, &s.q, &model.rigid_velocity_at(reference_speed), &mut f);
+        let deflection = model.meshes.iter().fold(0.0_f64, |a, m| a.max(m.approach.abs()));
+        let q_scale = if deflection > 0.0 { deflection } else { 1e-6 };
+        let fm = model.mesh_frequency_per_input_speed * reference_speed.abs();
+        let v_scale = q_scale * 2.0 * std::f64::consts::PI * fm;
+        Ok(Self { model, settings, eliminated, weights, q_scale, v_scale, cycles })
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &ShootingSettings {
+        &self.settings
+    }
+
+    /// The model.
+    pub fn model(&self) -> &PlanetaryDynamics {
+        &self.model
+    }
+
+    /// Number of unknowns: 2(n − 1) under the torque drive, 2n under the speed drive.
+    pub fn unknowns(&self) -> usize {
+        let n = self.model.dim();
+        if self.eliminated.is_some() {
+            2 * (n - 1)
+        } else {
+            2 * n
+        }
+    }
+
+    /// Period \[s\] at speed `omega` [rad/s].
+    pub fn period(&self, omega: f64) -> f64 {
+        self.cycles as f64 / (self.model.mesh_frequency_per_input_speed * omega.abs())
+    }
+
+    /// Relative coordinates and velocities (q_e, v_e) of the unknowns z.
+    pub fn expand(&self, z: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let n = self.model.dim();
+        let (mut q, mut v) = (vec![0.0; n], vec![0.0; n]);
+        match self.eliminated {
+            Some(k) => {
+                for (j, i) in (0..n).filter(|i| *i != k).enumerate() {
+                    q[i] = z[j] * self.q_scale;
+                    v[i] = z[n - 1 + j] * self.v_scale;
+                }
+                let w = &self.weights;
+                q[k] = -(0..n).filter(|i| *i != k).map(|i| w[i] * q[i]).sum::<f64>() / w[k];
+                v[k] = -(0..n).filter(|i| *i != k).map(|i| w[i] * v[i]).sum::<f64>() / w[k];
+            }
+            None => {
+                for i in 0..n {
+                    q[i] = z[i] * self.q_scale;
+                    v[i] = z[n + i] * self.v_scale;
+                }
+            }
+        }
+        (q, v)
+    }
+
+    /// The unknowns of a relative state (the inverse of [`Self::expand`] on
+    /// the complement; the eliminated coordinate is dropped).
+    pub fn reduce(&self, q: &[f64], v: &[f64]) -> Vec<f64> {
+        let n = self.model.dim();
+        let keep: Vec<usize> = (0..n).filter(|i| Some(*i) != self.eliminated).collect();
+        let mut z: Vec<f64> = keep.iter().map(|i| q[*i] / self.q_scale).collect();
+        z.extend(keep.iter().map(|i| v[*i] / self.v_scale));
+        z
+    }
+
+    fn integrator(&self, period: f64) -> Result<Rk45, SolverError> {
+        let rtol = self.settings.relative_tolerance;
+        Rk45::new(Rk45Settings {
+            rtol,
+            atol_q: rtol * self.q_scale,
+            atol_v: rtol * self.v_scale,
+            max_step: period / 16.0,
+            ..Rk45Settings::default()
+        })
+    }
+
+    /// The flow over one period from unknowns `z` at speed `omega`: the
+    /// unknowns at t = T; adds the integrator's work to `work`. `sample`
+    /// receives (t, absolute q, absolute v, model) at `samples` equally spaced
+    /// times t_k = kT/samples, k = 0 .. samples − 1, when given.
+    fn flow(
+        &mut self,
+        omega: f64,
+        z: &[f64],
+        work: &mut Work,
+        mut sample: Option<(usize, &mut Observer<'_>)>,
+    ) -> Result<Vec<f64>, PeriodicError> {
+        let period = self.period(omega);
+        let err = |source| PeriodicError::Integration { speed: omega, source };
+        let (qe, ve) = self.expand(z);
+        let n = qe.len();
+        let mut rk = self.integrator(period).map_err(err)?;
+        self.model.set_drive_speed(omega);
+        let rigid = self.model.rigid_velocity_at(omega);
+        let mut frame = Relative { model: &mut self.model, rigid, q: vec![0.0; n], v: vec![0.0; n] };
+        rk.init(&mut frame, 0.0, &qe, &ve).map_err(err)?;
+        match &mut sample {
+            Some((samples, observe)) => {
+                let (mut q, mut v, mut f) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+                for k in 0..*samples {
+                    let t = period * k as f64 / *samples as f64;
+                    while rk.time() < t {
+                        rk.step(&mut frame, period).map_err(err)?;
+                    }
+                    rk.dense_at(t, &mut q, &mut v).map_err(err)?;
+                    frame.force(t, &q, &v, &mut f);
+                    if let Some(i) = f.iter().position(|x| !x.is_finite()) {
+                        return Err(err(SolverError::NonFiniteState { t, index: i }));
+                    }
+                    observe(t, frame.model);
+                }
+                rk.advance_to(&mut frame, period).map_err(err)?;
+            }
+            None => rk.advance_to(&mut frame, period).map_err(err)?,
+        }
+        let s = Work::from(*rk.stats());
+        work.steps += s.steps;
+        work.rejected_steps += s.rejected_steps;
+        work.rhs_evaluations += s.rhs_evaluations;
+        work.events_located += s.events_located;
+        Ok(self.reduce(rk.q(), rk.v()))
+    }
+
+    /// G(z) = φ_T(z) − z at speed `omega`.
+    pub fn residual(&mut self, omega: f64, z: &[f64], work: &mut Work) -> Result<Vec<f64>, PeriodicError> {
+        let end = self.flow(omega, z, work, None)?;
+        Ok(end.iter().zip(z).map(|(a, b)| a - b).collect())
+    }
+
+    /// The monodromy matrix (forward differences of the flow, one column per
+    /// unknown) and ∂G/∂ω (a forward difference in speed) at `z`.
+    pub fn linearize(
+        &mut self,
+        omega: f64,
+        z: &[f64],
+        work: &mut Work,
+    ) -> Result<Linearization, PeriodicError> {
+        let m = z.len();
+        let h = self.settings.difference_step;
+        let base = self.flow(omega, z, work, None)?;
+        let mut monodromy = vec![0.0; m * m];
+        let mut zp = z.to_vec();
+        for j in 0..m {
+            zp[j] = z[j] + h;
+            let end = self.flow(omega, &zp, work, None)?;
+            zp[j] = z[j];
+            for i in 0..m {
+                monodromy[i + m * j] = (end[i] - base[i]) / h;
+            }
+        }
+        let dw = omega.abs() * h.sqrt().max(1e-6) * 1e-2;
+        let end = self.flow(omega + dw, z, work, None)?;
+        let speed_derivative = end.iter().zip(&base).map(|(a, b)| (a - b) / dw).collect();
+        let residual = base.iter().zip(z).map(|(a, b)| a - b).collect();
+        Ok(Linearization { dim: m, monodromy, speed_derivative, residual })
+    }
+
+    /// The unknowns of a cold start at `omega`: the static deflection of the
+    /// mean-stiffness model, run for the settings' run-in periods.
+    pub fn cold_start(&mut self, omega: f64, work: &mut Work) -> Result<Vec<f64>, PeriodicError> {
+        let s = static_state(&self.model, omega);
+        let n = s.q.len();
+        // Project onto the unknowns' space: drop the rigid part of q.
+        let mut z = self.reduce(&s.q, &vec![0.0; n]);
+        for _ in 0..self.settings.run_in_periods {
+            z = self.flow(omega, &z, work, None)?;
+        }
+        Ok(z)
+    }
+
+    /// The periodic state at `omega` [rad/s] by Newton's method with a
+    /// backtracking line search from `guess` (a cold start when `None`),
+    /// with its Floquet multipliers.
+    pub fn solve(&mut self, omega: f64, guess: Option<&[f64]>) -> Result<PeriodicOrbit, PeriodicError> {
+        self.solve_linearized(omega, guess).map(|(orbit, _)| orbit)
+    }
+
+    /// [`Self::solve`], also returning the linearization at the solution
+    /// (monodromy, ∂G/∂ω), which continuation needs for its tangent.
+    pub fn solve_linearized(
+        &mut self,
+        omega: f64,
+        guess: Option<&[f64]>,
+    ) -> Result<(PeriodicOrbit, Linearization), PeriodicError> {
+        let mut work = Work::default();
+        let mut flows = 0usize;
+        let mut z = match guess {
+            Some(g) => g.to_vec(),
+            None => {
+                flows += self.settings.run_in_periods;
+                self.cold_start(omega, &mut work)?
+            }
+        };
+        let m = z.len();
+        let tol = self.settings.newton_tolerance;
+        let mut lin = self.linearize(omega, &z, &mut work)?;
+        flows += m + 2;
+        let mut lin_at = z.clone();
+        let mut r = lin.residual.clone();
+        let mut iterations = 0;
+        loop {
+            let norm = max_abs(&r);
+            if norm <= tol * max_abs(&z).max(1.0) {
+                break;
+            }
+            if iterations >= self.settings.max_newton_iterations {
+                return Err(PeriodicError::NotConverged { speed: omega, iterations, residual: norm });
+            }
+            iterations += 1;
+            let step = newton_step(&lin.monodromy, m, &r);
+            let mut alpha = 1.0;
+            let (mut z_new, mut r_new);
+            loop {
+                z_new = z.iter().zip(&step).map(|(a, d)| a + alpha * d).collect::<Vec<f64>>();
+                r_new = self.residual(omega, &z_new, &mut work)?;
+                flows += 1;
+                if max_abs(&r_new) < (1.0 - 1e-4 * alpha) * norm || alpha < 1.0 / 64.0 {
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            let contraction = max_abs(&r_new) / norm;
+            z = z_new;
+            r = r_new;
+            // Chord iterations while they contract well; a fresh monodromy otherwise.
+            if contraction > 0.25 && max_abs(&r) > tol * max_abs(&z).max(1.0) {
+                lin = self.linearize(omega, &z, &mut work)?;
+                flows += m + 2;
+                lin_at = z.clone();
+                r = lin.residual.clone();
+            }
+        }
+        // The multipliers at the solution: the last monodromy unless Newton moved far from it.
+        let moved = lin_at.iter().zip(&z).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        if moved > 1e-3 {
+            lin = self.linearize(omega, &z, &mut work)?;
+            flows += m + 2;
+        }
+        let multipliers = floquet_multipliers(&lin.monodromy, m);
+        let orbit = PeriodicOrbit {
+            speed: omega,
+            period: self.period(omega),
+            cycles: self.cycles,
+            z,
+            residual: max_abs(&r),
+            newton_iterations: iterations,
+            multipliers,
+            flows,
+            work,
+        };
+        Ok((orbit, lin))
+    }
+
+    /// Mesh cycles in one period of the excitation.
+    pub fn cycles(&self) -> usize {
+        self.cycles
+    }
+
+    /// The orbit's mesh forces over one period and their measures, as a
+    /// [`SteadyState`] (one window of `cycles` mesh cycles; the end state is
+    /// the absolute state at t = T).
+    pub fn steady_state(&mut self, orbit: &PeriodicOrbit) -> Result<SteadyState, PeriodicError> {
+        let omega = orbit.speed;
+        let samples = self.settings.samples_per_mesh_cycle * orbit.cycles;
+        let n_mesh = self.model.mesh_count();
+        let mut time = Vec::with_capacity(samples);
+        let mut force = vec![Vec::with_capacity(samples); n_mesh];
+        let mut work = orbit.work;
+        let mut observe = |t: f64, m: &PlanetaryDynamics| {
+            time.push(t);
+            for (i, s) in m.meshes.iter().enumerate() {
+                force[i].push(s.force);
+            }
+        };
+        let end = self.flow(omega, &orbit.z, &mut work, Some((samples, &mut observe)))?;
+        let (qe, ve) = self.expand(&end);
+        let rigid = self.model.rigid_velocity_at(omega);
+        let q = qe.iter().zip(&rigid).map(|(q, r)| q + r * orbit.period).collect();
+        let v = ve.iter().zip(&rigid).map(|(v, r)| v + r).collect();
+        let mut meshes = Vec::with_capacity(n_mesh);
+        for (i, f) in force.iter().enumerate() {
+            let (planet, mesh) = self.model.mesh_identity(i);
+            let harmonics = mesh_harmonics(f, orbit.cycles, 6)
+                .map_err(|source| PeriodicError::Spectrum { speed: omega, source })?;
+            meshes.push(MeshResponse {
+                planet,
+                mesh,
+                harmonics,
+                separation: separation_fraction(f),
+                max_force: f.iter().cloned().fold(0.0, f64::max),
+            });
+        }
+        Ok(SteadyState {
+            input_speed: omega,
+            mesh_frequency: self.model.mesh_frequency_per_input_speed * omega.abs(),
+            mean_input_speed: omega,
+            cycles: orbit.cycles,
+            time,
+            mesh_force: force,
+            meshes,
+            stats: work,
+            end: State { input_speed: omega, q, v },
+        })
+    }
+}
+
+fn max_abs(x: &[f64]) -> f64 {
+    x.iter().fold(0.0, |a, b| a.max(b.abs()))
+}
+
+/// The Newton step of G: solves (M − I) d = −r with faer's partial-pivoting LU.
+fn newton_step(monodromy: &[f64], m: usize, r: &[f64]) -> Vec<f64> {
+    let a = faer::Mat::<f64>::from_fn(m, m, |i, j| monodromy[i + m * j] - if i == j { 1.0 } else { 0.0 });
+    let b = faer::Mat::<f64>::from_fn(m, 1, |i, _| -r[i]);
+    let x = a.partial_piv_lu().solve(&b);
+    (0..m).map(|i| x[(i, 0)]).collect()
+}
+
+/// Solves the square system `a x = b` (column-major `a`, size m) with
+/// faer's partial-pivoting LU.
+pub fn solve_dense(a: &[f64], m: usize, b: &[f64]) -> Vec<f64> {
+    let fa = faer::Mat::<f64>::from_fn(m, m, |i, j| a[i + m * j]);
+    let fb = faer::Mat::<f64>::from_fn(m, 1, |i, _| b[i]);
+    let x = fa.partial_piv_lu().solve(&fb);
+    (0..m).map(|i| x[(i, 0)]).collect()
+}
+
+/// The eigenvalues of the monodromy matrix (faer's non-symmetric
+/// eigensolver), largest modulus first; empty when the solver fails.
+pub fn floquet_multipliers(monodromy: &[f64], m: usize) -> Vec<Multiplier> {
+    let a = faer::Mat::<f64>::from_fn(m, m, |i, j| monodromy[i + m * j]);
+    let mut mu: Vec<Multiplier> = match a.eigenvalues() {
+        Ok(values) => values.iter().map(|c| Multiplier { re: c.re, im: c.im }).collect(),
+        Err(_) => Vec::new(),
+    };
+    mu.sort_by(|a, b| b.modulus().total_cmp(&a.modulus()));
+    mu
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn multipliers_of_a_known_matrix() {
+        // A rotation by 0.3 rad scaled by 0.9, and a real 1.2: |μ| = 1.2, 0.9, 0.9.
+        let (c, s) = (0.9 * 0.3f64.cos(), 0.9 * 0.3f64.sin());
+        let a = [c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.2];
+        let mu = floquet_multipliers(&a, 3);
+        assert!((mu[0].re - 1.2).abs() < 1e-12 && mu[0].is_real());
+        assert!((mu[1].modulus() - 0.9).abs() < 1e-12 && !mu[1].is_real());
+        assert!((mu[1].im.abs() - s).abs() < 1e-12);
+        let x = solve_dense(&a, 3, &[1.0, 0.0, 2.4]);
+        assert!((x[2] - 2.0).abs() < 1e-12);
+    }
+}

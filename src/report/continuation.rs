@@ -1,0 +1,114 @@
+//! Reports of a continuation sweep: the sweep CSV's columns plus each
+//! point's stability, branch segment and Floquet multipliers, and the
+//! forced-response charts with the unstable parts dashed and the folds and
+//! period doublings marked.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::plot::{write_chart, Chart, PlotError, Series, SeriesStyle};
+use super::sweep::sweep_csv;
+use crate::analysis::continuation::{BifurcationKind, Branch};
+use crate::dynamics::response::{Direction, SteadyState, Sweep};
+use crate::model::gear::GearSet;
+use crate::scene::units::rad_per_s_to_rpm;
+
+/// The CSV of a continuation: the columns of [`sweep_csv`] (the direction
+/// column says where the branch runs: `up` towards higher speed, `down`
+/// back), then `stable` (1 or 0), `branch` (the segment between folds, 0
+/// first), `max_abs_multiplier`, and the real and imaginary parts of the
+/// largest multiplier. `states` holds each branch point's measures in order.
+pub fn continuation_csv(branch: &Branch, states: &[SteadyState], width_mm: f64) -> String {
+    let rows = Sweep { direction: Direction::Up, points: states.to_vec() };
+    let base = sweep_csv(&rows, width_mm);
+    let mut out = String::new();
+    for (i, line) in base.lines().enumerate() {
+        if i == 0 {
+            let _ = writeln!(out, "{line},stable,branch,max_abs_multiplier,multiplier_1_re,multiplier_1_im");
+            continue;
+        }
+        let Some(p) = branch.points.get(i - 1) else { continue };
+        let direction = if p.speed_slope >= 0.0 { "up" } else { "down" };
+        let rest = line.split_once(',').map_or("", |(_, r)| r);
+        let mu = p.orbit.multipliers.first().map_or((f64::NAN, f64::NAN), |m| (m.re, m.im));
+        let _ = writeln!(
+            out,
+            "{direction},{rest},{},{},{},{},{}",
+            u8::from(p.stable),
+            p.segment,
+            p.orbit.largest_multiplier(),
+            mu.0,
+            mu.1
+        );
+    }
+    out
+}
+
+/// Forced-response charts (F^(rms) of planet 0's sun–planet and ring–planet
+/// mesh against speed) of a branch: stable points a solid line, unstable
+/// ones dashed, folds and period doublings as markers.
+pub fn write_continuation_response(
+    branch: &Branch,
+    states: &[SteadyState],
+    set: &GearSet,
+    dir: &Path,
+) -> Result<Vec<PathBuf>, PlotError> {
+    let width_mm = set.sun().face_width * 1e3;
+    let mut files = Vec::new();
+    if states.is_empty() {
+        return Ok(files);
+    }
+    let rpm: Vec<f64> = states.iter().map(|s| rad_per_s_to_rpm(s.input_speed)).collect();
+    for (mesh_index, name) in [(0usize, "sun_planet"), (1usize, "ring_planet")] {
+        let y: Vec<f64> = states.iter().map(|s| s.meshes[mesh_index].harmonics.rms / width_mm).collect();
+        // A stable piece ends at the first unstable point after it, so solid
+        // and dashed parts join.
+        let piece = |want: bool| -> Vec<f64> {
+            (0..y.len())
+                .map(|i| {
+                    let is = |j: usize| branch.points.get(j).is_some_and(|p| p.stable == want);
+                    if is(i) || (i > 0 && is(i - 1)) {
+                        y[i]
+                    } else {
+                        f64::NAN
+                    }
+                })
+                .collect()
+        };
+        let mut series = Vec::new();
+        if branch.points.iter().any(|p| p.stable) {
+            series.push(Series::new("stable", rpm.clone(), piece(true)).with_style(SeriesStyle::Broken));
+        }
+        if branch.points.iter().any(|p| !p.stable) {
+            series.push(Series::new("unstable", rpm.clone(), piece(false)).with_style(SeriesStyle::Dashed));
+        }
+        for (kind, label) in
+            [(BifurcationKind::Fold, "fold"), (BifurcationKind::PeriodDoubling, "period doubling")]
+        {
+            let (bx, by): (Vec<f64>, Vec<f64>) = branch
+                .bifurcations
+                .iter()
+                .filter(|b| b.kind == kind)
+                .filter_map(|b| {
+                    let (i, j) = b.between;
+                    let (a, c) = (y.get(i)?, y.get(j)?);
+                    Some((b.speed * 30.0 / std::f64::consts::PI, 0.5 * (a + c)))
+                })
+                .unzip();
+            if !bx.is_empty() {
+                series.push(Series::new(label, bx, by).with_style(SeriesStyle::Points));
+            }
+        }
+        files.extend(write_chart(
+            &Chart {
+                title: format!("{name} F(rms), planet 0, continuation (unstable dashed)"),
+                x_label: "input speed (rpm)".into(),
+                y_label: "F(rms) of mesh harmonics 1-6 (N/mm)".into(),
+                series,
+                vlines: vec![],
+            },
+            &dir.join(format!("forced_response_{name}_continuation")),
+        )?);
+    }
+    Ok(files)
+}

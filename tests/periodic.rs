@@ -1,0 +1,200 @@
+//! Periodic steady states by shooting and their continuation in speed
+//! (docs/PERIODIC.md): agreement with long time marching (E_h of
+//! docs/ACCURACY.md), the folds against the marching sweep's jump, the
+//! period and the removal of the free rotation, and the command line.
+
+use planetwear::analysis::accuracy::harmonic_error;
+use planetwear::analysis::continuation::{continue_branch, BifurcationKind, ContinuationSettings};
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::periodic::{excitation_period, PeriodicProblem, ShootingSettings};
+use planetwear::dynamics::response::{steady_state, sweep, Direction};
+use planetwear::dynamics::solver::SecondOrderSystem;
+use planetwear::model::gear::GearSet;
+use planetwear::model::run::RunSettings;
+use planetwear::scene::{Drive, Fidelity, Scene};
+
+const RPM: f64 = std::f64::consts::PI / 30.0;
+
+fn build(scene: &Scene) -> (GearSet, RunSettings, PlanetaryDynamics) {
+    let (set, run) = scene.validate_with_run().unwrap_or_else(|e| panic!("{e}"));
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+    (set, run, model)
+}
+
+/// The torsional example with light mesh damping (as tests/dynamics.rs):
+/// its forced response folds over between 9 000 and 10 000 rpm.
+fn separating() -> Scene {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = Fidelity::Torsional;
+    s.dynamics.mesh_damping_ratio = 0.02;
+    s
+}
+
+fn torsional() -> Scene {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = Fidelity::Torsional;
+    s
+}
+
+/// E_h of the shooting solution at `rpm` against time marching at relative
+/// tolerance 1e-10 from the static state, run in until two successive mesh
+/// cycles agree to 1e-10 of the mean tooth force (at most 12 revolutions).
+fn shooting_error(scene: &Scene, rpm: f64) -> (f64, f64, bool) {
+    let (set, run, model) = build(scene);
+    let omega = rpm * RPM;
+    let mut problem = PeriodicProblem::new(model.clone(), ShootingSettings::default(), omega).unwrap();
+    let orbit = problem.solve(omega, None).unwrap();
+    let shot = problem.steady_state(&orbit).unwrap();
+    let long = run
+        .with(|d| {
+            d.relative_tolerance = 1e-10;
+            d.run_in_revolutions = 12.0;
+            d.steady_tolerance = 1e-10;
+            d.measured_revolutions = 0.5;
+            d.samples_per_mesh_cycle = 64;
+        })
+        .unwrap();
+    let mut m = model;
+    let marched = steady_state(&mut m, &set, &long, omega, None).unwrap();
+    let pick = |s: &planetwear::dynamics::response::SteadyState| {
+        vec![s.meshes[0].harmonics.clone(), s.meshes[1].harmonics.clone()]
+    };
+    let e = harmonic_error(&pick(&shot), &pick(&marched));
+    eprintln!(
+        "{rpm} rpm: E_h {e:.3e}, |mu| {:.4}, separation {:.4}, {} flows, {} Newton iterations",
+        orbit.largest_multiplier(),
+        shot.meshes[0].separation,
+        orbit.flows,
+        orbit.newton_iterations
+    );
+    (e, shot.meshes[0].separation, orbit.is_stable())
+}
+
+#[test]
+fn shooting_agrees_with_long_marching_off_resonance() {
+    let (e, separation, stable) = shooting_error(&torsional(), 3000.0);
+    assert!(e <= 1e-3, "E_h {e:.3e}");
+    assert!(stable && separation == 0.0);
+}
+
+#[test]
+fn shooting_agrees_with_long_marching_near_resonance() {
+    // The low branch 270 rpm below its fold: F(rms) twice its value at 8000 rpm.
+    let (e, _, stable) = shooting_error(&separating(), 9300.0);
+    assert!(e <= 1e-3, "E_h {e:.3e}");
+    assert!(stable);
+}
+
+#[test]
+fn shooting_agrees_with_long_marching_where_the_teeth_separate() {
+    let (e, separation, stable) = shooting_error(&separating(), 10200.0);
+    assert!(separation > 0.01, "the teeth separate: {separation}");
+    assert!(e <= 1e-3, "E_h {e:.3e}");
+    assert!(stable);
+}
+
+#[test]
+fn the_fold_lies_where_the_marching_sweep_jumps() {
+    let (set, run, model) = build(&separating());
+    let step = 50.0;
+    let (from, to) = (9000.0, 10000.0);
+    let mut problem = PeriodicProblem::new(model.clone(), ShootingSettings::default(), from * RPM).unwrap();
+    let branch =
+        continue_branch(&mut problem, &ContinuationSettings::new(from * RPM, to * RPM, step * RPM), |_| {})
+            .unwrap();
+    assert_eq!(branch.ended, "reached the last speed");
+    for b in &branch.bifurcations {
+        eprintln!("{:?} at {:.1} rpm, multipliers {:?}", b.kind, b.speed / RPM, b.multipliers);
+    }
+    let folds: Vec<_> = branch.bifurcations.iter().filter(|b| b.kind == BifurcationKind::Fold).collect();
+    assert_eq!(folds.len(), 2, "{:?}", branch.bifurcations);
+    // The branch turns back at the first fold and forward again at the second.
+    let (upper, lower) = (folds[0].speed / RPM, folds[1].speed / RPM);
+    assert!(lower < upper, "folds at {upper} and {lower} rpm");
+    // A real multiplier passes +1 at each fold.
+    for f in &folds {
+        let (a, b) = f.multipliers;
+        assert!((a - 1.0) * (b - 1.0) < 0.0, "multipliers {a} and {b} either side of {:?}", f.speed / RPM);
+    }
+    // The low branch up to the first fold is stable, the middle one between the folds unstable.
+    for p in &branch.points {
+        let rpm = p.orbit.speed / RPM;
+        if p.segment == 0 && rpm < upper - step {
+            assert!(p.stable, "low branch at {rpm} rpm: |mu| {}", p.orbit.largest_multiplier());
+        }
+        if p.segment == 1 {
+            assert!(!p.stable, "middle branch at {rpm} rpm: |mu| {}", p.orbit.largest_multiplier());
+        }
+    }
+    // Time marching upwards jumps within one speed step of the first fold.
+    let speeds: Vec<f64> = (0..).map(|i| from + step * f64::from(i)).take_while(|s| *s <= to).collect();
+    let mut m = model;
+    let omegas: Vec<f64> = speeds.iter().map(|rpm| rpm * RPM).collect();
+    let up = sweep(&set, &run, &mut m, Direction::Up, &omegas, &[], |_| {}).unwrap();
+    let rms: Vec<f64> = up.points.iter().map(|p| p.meshes[0].harmonics.rms).collect();
+    let jump =
+        (1..rms.len()).max_by(|a, b| (rms[*a] / rms[a - 1]).total_cmp(&(rms[*b] / rms[b - 1]))).unwrap();
+    assert!(rms[jump] / rms[jump - 1] > 1.2, "the marching sweep jumps: {rms:?}");
+    let (lo, hi) = (speeds[jump - 1], speeds[jump]);
+    eprintln!("marching up-sweep jumps between {lo} and {hi} rpm");
+    assert!(
+        upper >= lo - step && upper <= hi,
+        "fold at {upper} rpm, marching jump between {lo} and {hi} rpm"
+    );
+}
+
+#[test]
+fn the_period_is_one_mesh_cycle_and_the_free_rotation_is_removed() {
+    let (_, _, mut model) = build(&Scene::example_2004());
+    assert_eq!(excitation_period(&mut model, 3000.0 * RPM).unwrap(), 1);
+    let n = model.dim();
+    let p = PeriodicProblem::new(model, ShootingSettings::default(), 3000.0 * RPM).unwrap();
+    // Torque drive: the rigid rotation is free; the unknowns are the
+    // M-orthogonal complement of it in coordinates and velocities.
+    assert_eq!(p.unknowns(), 2 * (n - 1));
+    let z: Vec<f64> = (0..p.unknowns()).map(|i| (i as f64 * 0.37).sin()).collect();
+    let (q, v) = p.expand(&z);
+    let r = &p.model().rigid_velocity;
+    let m = p.model().mass();
+    let (mq, mv) = (0..n).fold((0.0, 0.0), |(a, b), i| (a + m[i] * r[i] * q[i], b + m[i] * r[i] * v[i]));
+    assert!(
+        mq.abs() < 1e-12 * q.iter().map(|x| x.abs()).sum::<f64>()
+            && mv.abs() < 1e-12 * v.iter().map(|x| x.abs()).sum::<f64>()
+    );
+    let back = p.reduce(&q, &v);
+    assert!(back.iter().zip(&z).all(|(a, b)| (a - b).abs() < 1e-12));
+    // Speed drive: the shaft holds the input, every coordinate takes part.
+    let mut s = torsional();
+    s.dynamics.drive = Drive::Speed;
+    let (_, _, model) = build(&s);
+    let n = model.dim();
+    let p = PeriodicProblem::new(model, ShootingSettings::default(), 3000.0 * RPM).unwrap();
+    assert_eq!(p.unknowns(), 2 * n);
+}
+
+#[test]
+fn the_sweep_command_refuses_an_unknown_method() {
+    let out = std::env::temp_dir().join(format!("planetwear-periodic-{}", std::process::id()));
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_planetwear"))
+        .args([
+            "sweep",
+            "--scene",
+            "example-2004",
+            "--from",
+            "3000",
+            "--to",
+            "3100",
+            "--step",
+            "50",
+            "--method",
+        ])
+        .arg("shooting")
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!run.status.success());
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(err.contains("--method shooting") && err.contains("march, continuation"), "{err}");
+}
