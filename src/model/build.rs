@@ -661,6 +661,7 @@ fn validate(scene: &Scene) -> Result<GearSet, SceneError> {
         }
     }
 
+    c.problems.extend(crate::model::cost::problems(scene));
     if c.problems.is_empty() {
         Ok(set)
     } else {

@@ -9,12 +9,15 @@
 //! May import: [`crate::files`], [`crate::scene`].
 //!
 //! - [`build`]: the scene's rules, and the gear set built from a valid scene.
+//! - [`cost`]: what a scene's runs will cost (memory, internal steps) and
+//!   the budgets `build` holds them to.
 //! - [`gear`]: tooth forms, bodies, supports, material, run settings, the gear set.
 //! - [`involute`]: the involute function and its inverse relations.
 //! - [`lumped`]: degrees of freedom, fidelity, the lumped (mean-stiffness) set.
 //! - [`mesh`]: the path of contact of one mesh along its line of action.
 
 pub mod build;
+pub mod cost;
 pub mod gear;
 pub mod involute;
 pub mod lumped;
