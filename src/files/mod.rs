@@ -1,7 +1,11 @@
 //! Stage 0, files: the one way the library touches the file system, and the
 //! one hash. Every input file (scene, worn-profile state, resources of the
-//! FMU) is read whole through [`read_input`], which bounds its size and
-//! refuses what is not a regular file; every output file (states, reports,
+//! FMU) is read whole through [`read_input`], which refuses what is not a
+//! regular file without blocking and bounds its size by its kind
+//! ([`InputKind`]: one limit shared by the writer and the reader); an output
+//! path is checked before a command computes ([`prepare_output_file`],
+//! [`prepare_output_dir`]: no device, pipe, socket or directory is replaced,
+//! symbolic links are followed, [`output_target`]); every output file (states, reports,
 //! plots, the FMU archive) is written through [`write_durable`] or
 //! [`write_durable_with`]: a temporary file in the same directory, flushed to
 //! disk and renamed over the target, so a reader sees the old file or the new
