@@ -144,6 +144,7 @@ pub fn problems(scene: &Scene) -> Vec<Problem> {
     let d = &scene.dynamics;
     let mut out = Vec::new();
     // `!(x <= budget)` also refuses a NaN figure.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(c.window_bytes <= MEMORY_BUDGET_BYTES) {
         out.push(Problem {
             name: "dynamics.measured_revolutions".into(),
