@@ -104,11 +104,33 @@ def remove_stale_temps(directory):
     return removed
 
 
+def output_target(path):
+    """The file an output path names, with the Rust crate's policy
+    (docs/LIMITS.md): a symbolic link is followed (its target is written, the
+    link stays; a link to nothing is refused) and an existing path that is
+    not a regular file (a directory, a device, a named pipe, a socket) is
+    refused with `InputError`."""
+    path = Path(path)
+    if path.is_symlink():
+        try:
+            path = path.resolve(strict=True)
+        except (FileNotFoundError, RuntimeError):
+            raise InputError(f"'{path}': is a symbolic link to {os.readlink(path)}, which does not exist: "
+                             "give the file's own path") from None
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        return path
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(f"'{path}': is {_what(st.st_mode)}: an output file may only replace a regular file")
+    return path
+
+
 def write_atomic(path, data):
     """Writes bytes to `path` through a temporary file in the same directory
     (`TEMP_PREFIX`; fsync, rename, directory fsync): a reader sees the old
-    file or the new one, never a part."""
-    path = Path(path)
+    file or the new one, never a part. What `path` may be: `output_target`."""
+    path = output_target(path)
     tmp = path.with_name(f"{TEMP_PREFIX}{os.getpid()}.{next(_counter)}.{path.name}")
     with open(tmp, "wb") as f:
         f.write(data)

@@ -96,6 +96,24 @@ def test_temporary_files_carry_the_pattern_and_stale_ones_are_removed(tmp_path):
     assert not stale.exists() and live.exists() and other.exists()
 
 
+def test_outputs_follow_symbolic_links_and_never_replace_what_is_not_a_regular_file(tmp_path):
+    real = tmp_path / "real.json"
+    real.write_bytes(b"old")
+    link = tmp_path / "link.json"
+    link.symlink_to(real)
+    write_atomic(link, b"new")
+    assert link.is_symlink() and real.read_bytes() == b"new"
+    dangling = tmp_path / "dangling.json"
+    dangling.symlink_to(tmp_path / "nowhere")
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    for path, what in [(dangling, "does not exist"), (fifo, "named pipe"), (tmp_path, "a directory")]:
+        with pytest.raises(InputError, match=what):
+            write_atomic(path, b"x")
+    assert dangling.is_symlink() and fifo.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(TEMP_PREFIX)]
+
+
 # -- the FMU's numerical guards ----------------------------------------------------------
 
 
