@@ -10,6 +10,7 @@ use planetwear::analysis::modes::{natural_modes, ModeClass};
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::response::{steady_state, sweep, Direction, SteadyState};
+use planetwear::files::InputKind;
 use planetwear::model::gear::GearSet;
 use planetwear::model::lumped::LumpedSet;
 use planetwear::model::run::RunSettings;
@@ -422,7 +423,7 @@ fn load_any(arg: &str) -> Result<AnyScene> {
         return Ok(AnyScene::Lumped(Box::new(LumpedScene::lumped_benchmark())));
     }
     if Scene::builtin(arg).is_none() && Path::new(arg).exists() {
-        let text = std::fs::read_to_string(arg).with_context(|| format!("reading scene file {arg}"))?;
+        let text = read_text(Path::new(arg), InputKind::Scene, "scene")?;
         let is_lumped =
             toml::from_str::<toml::Table>(&text).map(|t| t.contains_key("lumped")).unwrap_or(false);
         if is_lumped {
@@ -444,9 +445,16 @@ fn load_scene(arg: &str) -> Result<Scene> {
             Scene::BUILTIN.join(", ")
         );
     }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading scene file {}", path.display()))?;
+    let text = read_text(path, InputKind::Scene, "scene")?;
     Scene::from_toml(&text).with_context(|| format!("in scene file {}", path.display()))
+}
+
+/// A text input file through the one reader (`files::read_input`: regular
+/// files only, the kind's size limit); `what` names the option in messages.
+fn read_text(path: &Path, kind: InputKind, what: &str) -> Result<String> {
+    let bytes = planetwear::files::read_input(path, kind).map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
+    String::from_utf8(bytes)
+        .map_err(|_| anyhow::anyhow!("{what}: {} '{}' is not UTF-8 text", kind.name(), path.display()))
 }
 
 fn validated(scene: &Scene) -> Result<GearSet> {
@@ -470,7 +478,48 @@ fn contact_model(set: &GearSet, wear_state: Option<&Path>) -> Result<SetModel> {
     }
 }
 
+/// Every output path of a command checked before any computation
+/// (`files::prepare_output_file`/`prepare_output_dir`: an existing path
+/// that is not a regular file, or not a directory, is refused; symbolic
+/// links are followed; temporary files a killed run left are removed).
+fn check_outputs(command: &Command) -> Result<()> {
+    let file = |flag: &str, p: &Path| {
+        planetwear::files::prepare_output_file(p).with_context(|| format!("{flag} {}", p.display()))
+    };
+    let dir = |flag: &str, p: &Path| {
+        planetwear::files::prepare_output_dir(p).with_context(|| format!("{flag} {}", p.display()))
+    };
+    match command {
+        Command::Run(a) => a.plots.iter().try_for_each(|p| dir("--plots", p)),
+        Command::Sweep(a) => dir("--out", &a.out),
+        Command::Ltca(a) => {
+            a.out.iter().try_for_each(|p| file("--out", p))?;
+            a.plots.iter().try_for_each(|p| dir("--plots", p))
+        }
+        Command::Wear { action: WearAction::Step(a) } => file("--out", &a.out),
+        Command::Wear { action: WearAction::Run(a) } => {
+            dir("--out", &a.out)?;
+            dir("--out", &a.out.join("plots"))
+        }
+        Command::Wear { action: WearAction::Effect(a) } => dir("--out", &a.out),
+        Command::WorkPrecision(a) => dir("--out", &a.out),
+        Command::Validate(a) => {
+            dir("--out", &a.out)?;
+            dir("--out", &a.out.join("validation"))
+        }
+        Command::Calibrate(a) => a.out.iter().try_for_each(|p| file("--out", p)),
+        Command::Fmu { action: FmuAction::Pack(a) } => file("--out", &a.out),
+        Command::Fmu { action: FmuAction::References(a) } => file("--out", &a.out),
+        Command::Fmu { action: FmuAction::Xml(a) } => a.out.iter().try_for_each(|p| file("--out", p)),
+        Command::Scene { .. }
+        | Command::Simulate(_)
+        | Command::Modes(_)
+        | Command::Wear { action: WearAction::Compare(_) } => Ok(()),
+    }
+}
+
 fn run(cli: Cli) -> Result<()> {
+    check_outputs(&cli.command)?;
     match cli.command {
         Command::Scene { action: SceneAction::Show(SceneShowArgs { scene }) } => match load_any(&scene)? {
             AnyScene::Gear(s) => print!("{}", s.to_toml()),
@@ -480,6 +529,17 @@ fn run(cli: Cli) -> Result<()> {
             AnyScene::Gear(s) => {
                 let set = validated(&s)?;
                 println!("scene '{}' is valid: {} planets", set.name(), set.planet_angles().len());
+                // The estimate every run is held to (docs/LIMITS.md), and what
+                // a command refuses beyond the scene's rules.
+                println!("  cost: {}", planetwear::model::cost::estimate(&s).summary());
+                for w in planetwear::model::cost::warnings(&s) {
+                    println!("  warning: {w}");
+                }
+                if let Err(p) =
+                    planetwear::model::cost::ltca_torque(set.input_torque(), "operation.input_torque_nm")
+                {
+                    println!("  warning: `ltca` will refuse it: {p}");
+                }
             }
             AnyScene::Lumped(s) => {
                 let set = s.validate()?;
@@ -512,7 +572,13 @@ fn speed_grid(from: f64, to: f64, step: f64) -> Result<Vec<f64>> {
     if !(step.is_finite() && step > 0.0) {
         bail!("--step: must be a finite positive speed step (got {step} rpm)");
     }
-    let (lo, hi) = (from.min(to), from.max(to));
+    if from > to {
+        bail!(
+            "--from {from} rpm is above --to {to} rpm: give the lower speed as --from; \
+             --direction (up, down, both) sets which way the sweep runs"
+        );
+    }
+    let (lo, hi) = (from, to);
     let n = ((hi - lo) / step + 1e-9).floor() as usize + 1;
     if n > 100_000 {
         bail!("--step: {n} speeds is more than 100000; use a larger step");

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree
 
-from .files import sha256_file
+from .files import InputError, read_input, sha256_file
 
 # Keys allowed in each table, in the order the documentation gives them.
 TOP_KEYS = ("fmu", "scene", "output_dir", "planetwear_bin", "wear", "speeds", "load", "timing", "integrator",
@@ -294,8 +294,8 @@ def _scene_text(spec, base, fmu_path, bin_value):
     p = Path(spec)
     if not p.is_absolute():
         p = base / p
-    if p.is_file():
-        return p.read_text(), str(p), str(p)
+    if p.exists():
+        return read_input(p, "scene").decode(), str(p), str(p)
     if spec in BUILT_IN_SCENES or not spec.endswith(".toml"):
         exe = find_planetwear_bin(bin_value, base)
         if exe:
@@ -338,8 +338,8 @@ def _resolve_state(entry, base, fmu_path, fmu_names):
     p = Path(entry)
     if not p.is_absolute():
         p = base / p
-    if p.is_file():
-        return p, str(p), p.read_bytes()
+    if p.exists():
+        return p, str(p), read_input(p, "worn_state")
     name = f"resources/{entry}"
     if name in fmu_names:
         with zipfile.ZipFile(fmu_path) as z:
@@ -360,9 +360,11 @@ def load(path, output_dir=None, *, probe):
     `fmu_check.load_campaign` is this function with `fmu_check.check`."""
     path = Path(path).resolve()
     try:
-        raw = tomllib.loads(path.read_text())
+        raw = tomllib.loads(read_input(path, "campaign").decode())
     except FileNotFoundError:
         raise CampaignError(path, [Problem("(file)", str(path), "no such campaign file")]) from None
+    except InputError as e:
+        raise CampaignError(path, [Problem("(file)", str(path), str(e))]) from None
     except tomllib.TOMLDecodeError as e:
         raise CampaignError(path, [Problem("(file)", str(path), f"not valid TOML: {e}")]) from None
     return from_dict(raw, path, output_dir=output_dir, probe=probe)

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from . import campaign_file
 from .campaign_file import CampaignError, Problem, check_state_document, find_planetwear_bin, max_wear_depth
-from .files import sha256_file, write_atomic
+from .files import read_input, sha256_file, write_atomic
 from .fmu_check import load_campaign
 from .runner import consolidate, dask_client, print_summary, run_campaign, task_specs
 
@@ -41,7 +41,7 @@ class LoopError(RuntimeError):
 
 
 def _state_record(path):
-    data = Path(path).read_bytes()
+    data = read_input(path, "worn_state")
     content, reason = check_state_document(data.decode("utf-8", errors="replace"))
     if reason:
         raise RuntimeError(f"{path}: {reason}")
@@ -165,7 +165,7 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
         # wear step that made its output state (not repeated).
         old = {}
         if (stage_dir / "manifest.json").is_file():
-            old = json.loads((stage_dir / "manifest.json").read_text())
+            old = json.loads(read_input(stage_dir / "manifest.json", "record"))
         if step is not None and step["wall_s"] is None and old.get("wear_step"):
             if (old["wear_step"].get("state_out") or {}).get("sha256") == step["state_out"]["sha256"]:
                 step = old["wear_step"]

@@ -25,7 +25,7 @@ outputs and hands them to ``compare`` (or the pytest fixture
 ``planetwear_reference``, planetwear_fmu.pytest_plugin).
 
 Layer 2 (FMU access): this module owns the references' format, running a
-case through fmpy and the comparison. It imports no module of the package
+case through fmpy and the comparison. Of the package it imports only `files`
 (it stands apart from the campaigns); `pytest_plugin` imports it.
 """
 
@@ -37,6 +37,8 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
+
+from .files import read_input
 
 FORMAT = "planetwear-regression/1"
 RESOURCE = "resources/regression/example-2004.json"
@@ -128,7 +130,7 @@ def _read_json_text(source: Path) -> tuple[str, str]:
         if not path.is_file():
             raise FileNotFoundError(f"{source} is not an unpacked planetwear FMU with references: "
                                     f"{RESOURCE} is missing")
-        return path.read_text(), str(path)
+        return read_input(path, "record").decode(), str(path)
     if not source.is_file():
         raise FileNotFoundError(f"reference source {source} does not exist (give a .fmu file, an unpacked "
                                 f"FMU directory or the reference .json)")
@@ -140,7 +142,7 @@ def _read_json_text(source: Path) -> tuple[str, str]:
                 raise IncompatibleReferences(
                     f"{source} holds no {RESOURCE}: an FMU packed before the regression references "
                     f"existed, or not a planetwear FMU") from None
-    return source.read_text(), str(source)
+    return read_input(source, "record").decode(), str(source)
 
 
 def load_references(source) -> References:

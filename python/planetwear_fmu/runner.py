@@ -34,7 +34,7 @@ from pathlib import Path
 
 from .campaign_file import CampaignError, Problem
 from .extras import require
-from .files import write_atomic
+from .files import read_input, remove_stale_temps, write_atomic
 from .fmu_check import task_parameters
 from .plots import plot_results
 from .sweep import PointStore, run_task, table_bytes, task_directory, task_fingerprint
@@ -127,7 +127,7 @@ def claim_task_directories(campaign, specs):
         d = Path(spec["dir"])
         meta = d / "task.json"
         if meta.is_file():
-            old = json.loads(meta.read_text())
+            old = json.loads(read_input(meta, "record"))
             new = _fingerprint(spec)
             if old != new:
                 diff = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
@@ -142,8 +142,7 @@ def claim_task_directories(campaign, specs):
     for spec in specs:
         d = Path(spec["dir"])
         d.mkdir(parents=True, exist_ok=True)
-        for tmp in d.glob(".*.tmp"):
-            tmp.unlink()
+        remove_stale_temps(d)
         if not (d / "task.json").is_file():
             write_atomic(d / "task.json", json.dumps(_fingerprint(spec), indent=1).encode())
 

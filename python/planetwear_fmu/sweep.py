@@ -34,7 +34,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from .files import write_atomic
+from .files import read_input, write_atomic
 
 STATE_SUFFIX = ".fmustate"
 
@@ -100,7 +100,7 @@ class PointStore:
         return pq.read_table(self.result_path(i)).to_pylist()[0]
 
     def state(self, i):
-        return self.state_path(i).read_bytes()
+        return read_input(self.state_path(i), "record")
 
     def write(self, i, table, state):
         # The state first: a result on disk always has its state beside it.
@@ -172,7 +172,7 @@ def run_task(spec, on_point=None):
                 raise RuntimeError(f"{spec['key']}: point {k - 1} has a result but its FMU state {path} is missing; "
                                    f"remove {store.result_path(k - 1)} (and the points after it) to recompute it")
             try:
-                saved = slave.deserializeFMUState(path.read_bytes())
+                saved = slave.deserializeFMUState(read_input(path, "record"))
                 slave.setFMUState(saved)
                 slave.freeFMUState(saved)
             except FMICallException as e:

@@ -8,6 +8,13 @@ pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: S
     if !(step.is_finite() && step > 0.0 && stop.is_finite() && stop > 0.0) {
         bail!("--stop and --step must be finite and positive (got {stop} and {step})");
     }
+    if stop / step > MAX_COMMUNICATION_POINTS {
+        bail!(
+            "--stop {stop} / --step {step}: {:.3e} communication points, more than the {MAX_COMMUNICATION_POINTS:e} \
+             one run may print (docs/LIMITS.md); use a larger --step",
+            stop / step
+        );
+    }
     let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
     let mut sim =
         planetwear::dynamics::simulation::Simulation::new(&set, &run, model, 0.0, run.input_speed())?;
@@ -29,6 +36,9 @@ pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: S
     }
     Ok(())
 }
+
+/// Most communication points `simulate` runs and prints.
+const MAX_COMMUNICATION_POINTS: f64 = 1e7;
 
 pub(crate) fn run_command(RunArgs { scene, wear_state, speed, json, plots }: RunArgs) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
@@ -63,6 +73,7 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         other => bail!("--direction {other}: allowed are up, down, both"),
     };
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    remove_marker(&out.join("sweep.json"))?;
     let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
     let modes = natural_modes(&model.lumped);
     let bar = progress_bar((speeds.len() * dirs.len()) as u64);
@@ -174,9 +185,9 @@ pub(crate) fn ltca_command(
         scene.analysis.positions_per_mesh_cycle = n as u32;
     }
     let set = validated(&scene)?;
-    if set.input_torque() <= 0.0 {
-        bail!("--torque: the LTCA needs a positive input torque (got {} N·m)", set.input_torque());
-    }
+    // The same check `scene check` reports, naming where the torque was written.
+    let key = if torque.is_some() { "--torque" } else { "operation.input_torque_nm" };
+    planetwear::model::cost::ltca_torque(set.input_torque(), key).map_err(|p| anyhow::anyhow!("{p}"))?;
     let state = match &wear_state {
         Some(path) => Some(
             planetwear::wear::state::read_worn_state(path, &set)

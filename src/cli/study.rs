@@ -49,7 +49,7 @@ pub(crate) fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: b
             if !path.is_file() {
                 bail!("--plan {plan}: neither a built-in scene with a calibration (example-2004) nor a plan file");
             }
-            let text = std::fs::read_to_string(path).with_context(|| format!("reading plan file {plan}"))?;
+            let text = read_text(path, planetwear::files::InputKind::Plan, "--plan")?;
             (text, path.parent().map(Path::to_path_buf).unwrap_or_default())
         }
     };

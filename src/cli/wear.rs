@@ -1,6 +1,7 @@
 //! The wear commands: `wear run`, `wear step`, `wear compare` and `wear effect`.
 
 use crate::*;
+use planetwear::wear::flank::UpdateEnd;
 
 pub(crate) fn wear_model(
     set: &GearSet,
@@ -28,6 +29,16 @@ pub(crate) fn wear_model(
     })
 }
 
+/// Removes a directory's completion marker left by an earlier run.
+pub(crate) fn remove_marker(path: &Path) -> Result<()> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(e).with_context(|| format!("removing the earlier run's {}", path.display()))
+        }
+        _ => Ok(()),
+    }
+}
+
 pub(crate) fn wear_run(
     scene: &str,
     to_kappa: u32,
@@ -39,6 +50,9 @@ pub(crate) fn wear_run(
     let (set, run) = validated_with_run(&load_scene(scene)?)?;
     let model = wear_model(&set, &run, ring, None, dynamic)?;
     std::fs::create_dir_all(out.join("plots")).with_context(|| format!("creating {}", out.display()))?;
+    // The completion marker of an earlier run goes first: until this run
+    // writes it again, the directory holds no finished run.
+    remove_marker(&out.join("summary.json"))?;
     let mut state = model.unworn();
     let mut states = vec![state.clone()];
     let mut seconds = vec![0.0];
@@ -62,8 +76,9 @@ pub(crate) fn wear_run(
     }
     bar.finish_and_clear();
     let doc = planetwear::report::wear::summary(&set, &states, &seconds);
-    write_atomic(&out.join("summary.json"), serde_json::to_string_pretty(&doc)?.as_bytes())?;
     let files = planetwear::report::wear::write_plots(&set, &states, &out.join("plots"))?;
+    // Written last: its presence says the run finished (docs/LIMITS.md).
+    write_atomic(&out.join("summary.json"), serde_json::to_string_pretty(&doc)?.as_bytes())?;
     if json {
         println!("{}", serde_json::to_string_pretty(&doc)?);
         return Ok(());
@@ -224,6 +239,22 @@ pub(crate) fn wear_step_command(
         None => Limit::Update,
     };
     let after = model.step(&before, limit)?;
+    if let (Some(n), Some(update)) = (revolutions, after.history.last()) {
+        if update.ended_by != UpdateEnd::Revolutions {
+            let why = match update.ended_by {
+                UpdateEnd::TotalDepth => "the deepest wear reaches the total wear limit".to_string(),
+                _ => format!(
+                    "the largest new wear reaches the update depth {} µm (--threshold)",
+                    model.settings().update_depth * 1e6
+                ),
+            };
+            bail!(
+                "--revolutions {n:e}: cannot be met in one update: it ends after {:.4e} input revolutions, \
+                 when {why}; nothing written. Ask for at most that many, or step again from each new state",
+                update.revolutions
+            );
+        }
+    }
     planetwear::wear::state::write_worn_state(&out, &after)?;
     let deepest = |s: &planetwear::wear::state::WornState, f| s.deepest_on(f);
     let (sun, planet) = (Flank::SunDrive, Flank::PlanetSunSide);

@@ -730,4 +730,10 @@ impl Simulation {
     pub fn run_settings(&self) -> &RunSettings {
         &self.run
     }
+
+    /// Internal steps a communication step of `h` seconds takes (refused
+    /// by [`Self::do_step`] above [`MAX_INTERNAL_STEPS`]).
+    pub fn internal_steps(&self, h: f64) -> f64 {
+        ((h / self.nominal_step) - 1e-9).ceil().max(1.0)
+    }
 }

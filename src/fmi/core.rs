@@ -9,7 +9,7 @@
 // bindgen's constant names (fmi2Status_fmi2OK, ...) are used as they are.
 #![allow(non_upper_case_globals)]
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::ffi::{CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
@@ -94,6 +94,12 @@ pub struct Component {
     /// The strings of the last fmi2GetString, valid until the next one.
     strings: Vec<CString>,
     serialized: Vec<u8>,
+    /// The FMU states this instance handed out, by the address the
+    /// importer's fmi2FMUstate holds: the instance owns them, so a state is
+    /// looked up here (never dereferenced from the importer's pointer), a
+    /// freed or foreign pointer is refused, and fmi2FreeInstance frees every
+    /// state still held.
+    states: BTreeMap<usize, Box<SavedState>>,
 }
 
 fn category_of(status: Status) -> &'static str {
@@ -125,11 +131,6 @@ pub fn null_array(what: &str, n: usize) -> Refusal {
 
 fn unsupported(what: &str) -> Result<(), Refusal> {
     Err(error(format!("{what} is not supported by this FMU (see modelDescription.xml capabilities)")))
-}
-
-/// The state a non-NULL FMUstate handle holds.
-fn saved(state: Option<&SavedState>) -> Result<&SavedState, Refusal> {
-    state.ok_or_else(|| error("FMUstate is NULL".into()))
 }
 
 /// Writes `v` to an out-argument, refusing a NULL one.
@@ -165,6 +166,7 @@ pub fn instantiate(
                 .unwrap_or_default(),
             strings: Vec::new(),
             serialized: Vec::new(),
+            states: BTreeMap::new(),
         });
         let refuse = |comp: &Component, why: String| {
             comp.log(fmi2Status_fmi2Error, "logStatusError", &format!("fmi2Instantiate: {why}"));
@@ -199,7 +201,9 @@ pub fn instantiate(
     .flatten()
 }
 
-/// fmi2FreeInstance: drops the component (a panic in doing so is caught).
+/// fmi2FreeInstance: drops the component with every FMU state it still
+/// holds (FMI 2.0: the instance frees all it allocated; a panic in doing so
+/// is caught).
 pub fn free_instance(comp: Option<Box<Component>>) {
     if let Some(comp) = comp {
         let _ = catch_unwind(AssertUnwindSafe(|| drop(comp)));
@@ -214,15 +218,6 @@ pub fn types_platform() -> &'static CStr {
 /// fmi2GetVersion.
 pub fn version() -> &'static CStr {
     c"2.0"
-}
-
-/// fmi2FreeFMUstate: frees the state a handle holds and empties the handle;
-/// a NULL handle, or an empty one, is no error.
-pub fn free_fmu_state(handle: Option<&mut Option<Box<SavedState>>>) -> Result<(), Refusal> {
-    if let Some(handle) = handle {
-        *handle = None;
-    }
-    Ok(())
 }
 
 impl Component {
@@ -523,31 +518,91 @@ impl Component {
         })
     }
 
+    /// The address an FMUstate pointer holds (what the instance's table is
+    /// keyed by).
+    fn key(state: fmi2FMUstate) -> usize {
+        state as usize
+    }
+
+    /// The state behind a pointer the importer holds: one this instance
+    /// handed out and has not freed; NULL, a freed state or another
+    /// instance's is refused.
+    fn held(&self, state: fmi2FMUstate) -> Result<&SavedState, Refusal> {
+        if state.is_null() {
+            return Err(error("FMUstate is NULL".into()));
+        }
+        self.states.get(&Self::key(state)).map(|b| &**b).ok_or_else(|| {
+            error(format!(
+                "FMUstate {state:p} is not a state of this instance (freed, or from another instance); \
+                 it holds {} states",
+                self.states.len()
+            ))
+        })
+    }
+
+    /// Stores `saved` in the importer's handle: in place when the handle
+    /// holds a state of this instance (the importer's pointer stays the
+    /// same), else as a new state the instance keeps until it is freed.
+    fn store(&mut self, handle: &mut fmi2FMUstate, saved: SavedState) -> Result<(), Refusal> {
+        if handle.is_null() {
+            let boxed = Box::new(saved);
+            let key = &*boxed as *const SavedState as usize;
+            self.states.insert(key, boxed);
+            *handle = key as fmi2FMUstate;
+            return Ok(());
+        }
+        let held = handle.to_owned();
+        match self.states.get_mut(&Self::key(held)) {
+            Some(b) => {
+                **b = saved;
+                Ok(())
+            }
+            None => Err(error(format!(
+                "FMUstate {held:p} is not a state of this instance (freed, or from another instance): \
+                 pass a handle holding NULL for a new state"
+            ))),
+        }
+    }
+
+    /// The number of FMU states the instance holds (handed out, not freed).
+    pub fn held_states(&self) -> usize {
+        self.states.len()
+    }
+
     /// fmi2GetFMUstate: the current state into the handle, overwriting in
     /// place the state an occupied handle holds; a NULL handle is refused.
-    pub fn get_fmu_state(&mut self, handle: Option<&mut Option<Box<SavedState>>>) -> Result<(), Refusal> {
+    pub fn get_fmu_state(&mut self, handle: Option<&mut fmi2FMUstate>) -> Result<(), Refusal> {
         let handle = handle.ok_or_else(|| error("FMUstate is NULL".into()))?;
         let saved = self.instance.save();
-        match handle {
-            Some(held) => **held = saved,
-            None => *handle = Some(Box::new(saved)),
-        }
-        Ok(())
+        self.store(handle, saved)
     }
 
     /// fmi2SetFMUstate.
-    pub fn set_fmu_state(&mut self, state: Option<&SavedState>) -> Result<(), Refusal> {
-        let s = saved(state)?.clone();
+    pub fn set_fmu_state(&mut self, state: fmi2FMUstate) -> Result<(), Refusal> {
+        let s = self.held(state)?.clone();
         self.instance.restore(&s)
+    }
+
+    /// fmi2FreeFMUstate: frees the state a handle holds and sets the handle
+    /// to NULL; a NULL handle, or one holding NULL, is no error.
+    pub fn free_fmu_state(&mut self, handle: Option<&mut fmi2FMUstate>) -> Result<(), Refusal> {
+        let Some(handle) = handle else { return Ok(()) };
+        if handle.is_null() {
+            return Ok(());
+        }
+        self.held(*handle)?;
+        self.states.remove(&Self::key(*handle));
+        *handle = std::ptr::null_mut();
+        Ok(())
     }
 
     /// fmi2SerializedFMUstateSize: the size of the state's bytes.
     pub fn serialized_fmu_state_size(
         &mut self,
-        state: Option<&SavedState>,
+        state: fmi2FMUstate,
         size: Option<&mut usize>,
     ) -> Result<(), Refusal> {
-        let bytes = self.instance.serialize(saved(state)?)?;
+        let bytes = self.instance.serialize(self.held(state)?)?;
         write_out(size, bytes.len(), "size")?;
         self.serialized = bytes;
         Ok(())
@@ -557,11 +612,11 @@ impl Component {
     /// of `size` bytes (`buffer` is `None` for a NULL pointer).
     pub fn serialize_fmu_state(
         &mut self,
-        state: Option<&SavedState>,
+        state: fmi2FMUstate,
         size: usize,
         buffer: Option<&mut [u8]>,
     ) -> Result<(), Refusal> {
-        let data = self.instance.serialize(saved(state)?)?;
+        let data = self.instance.serialize(self.held(state)?)?;
         if size < data.len() {
             return Err(error(format!("size {size} is smaller than the state's {} bytes", data.len())));
         }
@@ -581,15 +636,11 @@ impl Component {
     pub fn deserialize_fmu_state(
         &mut self,
         bytes: Result<&[u8], Refusal>,
-        handle: Option<&mut Option<Box<SavedState>>>,
+        handle: Option<&mut fmi2FMUstate>,
     ) -> Result<(), Refusal> {
         let handle = handle.ok_or_else(|| error("FMUstate is NULL".into()))?;
         let s = self.instance.deserialize(bytes?)?;
-        match handle {
-            Some(held) => **held = s,
-            None => *handle = Some(Box::new(s)),
-        }
-        Ok(())
+        self.store(handle, s)
     }
 }
 

@@ -26,10 +26,8 @@ use std::ffi::{c_char, CStr};
 
 use fmi_sys::fmi2::*;
 
-use super::core::{
-    free_fmu_state, free_instance, instantiate, null_array, types_platform, version, Call, Component, Logger,
-};
-use super::instance::{Refusal, SavedState};
+use super::core::{free_instance, instantiate, null_array, types_platform, version, Call, Component, Logger};
+use super::instance::Refusal;
 
 /// The component behind an fmi2Component, `None` for NULL.
 ///
@@ -173,33 +171,17 @@ unsafe fn out<'a, T>(p: *mut T) -> Option<&'a mut T> {
     unsafe { p.as_mut() }
 }
 
-/// The state behind an FMUstate, `None` for NULL.
-///
-/// # Safety
-///
-/// `s` is NULL or a state from this FMU's fmi2GetFMUstate or
-/// fmi2DeSerializeFMUstate, not yet freed and not freed during `'a`.
-unsafe fn saved_state<'a>(s: fmi2FMUstate) -> Option<&'a SavedState> {
-    // SAFETY: a non-null FMUstate of this FMU is a Box<SavedState> it leaked
-    // into the importer's handle, still live (the contract above).
-    unsafe { s.cast::<SavedState>().as_ref() }
-}
-
-/// The importer's FMUstate handle as the state it holds: `None` for a NULL
-/// handle, `Some(None)` for a handle holding NULL. Storing a state in it
-/// hands the state to the importer; storing `None` frees the one it held.
+/// The importer's FMUstate handle, `None` for a NULL pointer. The state it
+/// holds is only an address to the instance, which looks it up among the
+/// states it handed out (`Component`'s table) and never dereferences it.
 ///
 /// # Safety
 ///
 /// `handle` is NULL or points to the importer's fmi2FMUstate, writable and
-/// not otherwise accessed during `'a`, holding NULL or a state of this FMU
-/// (as for [`saved_state`]).
-unsafe fn state_handle<'a>(handle: *mut fmi2FMUstate) -> Option<&'a mut Option<Box<SavedState>>> {
-    // SAFETY: the handle holds NULL or a Box<SavedState> this FMU leaked
-    // (the contract above), and Option<Box<SavedState>> has the layout of a
-    // nullable pointer, NULL being None; so the handle reads and writes as
-    // that Option.
-    unsafe { handle.cast::<Option<Box<SavedState>>>().as_mut() }
+/// not otherwise accessed during `'a`.
+unsafe fn state_handle<'a>(handle: *mut fmi2FMUstate) -> Option<&'a mut fmi2FMUstate> {
+    // SAFETY: NULL or valid and unaliased (the contract above).
+    unsafe { handle.as_mut() }
 }
 
 /// The importer's logger with its component environment, as a Rust
@@ -630,7 +612,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
     // SAFETY: the instance and the state as this function's contract states.
-    unsafe { guard(c, Call::FmuState, "fmi2SetFMUstate", |comp| comp.set_fmu_state(saved_state(state))) }
+    unsafe { guard(c, Call::FmuState, "fmi2SetFMUstate", |comp| comp.set_fmu_state(state)) }
 }
 
 /// fmi2FreeFMUstate: frees the held state and sets the handle to NULL.
@@ -644,7 +626,7 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     // SAFETY: the instance and the state handle as this function's contract states.
-    unsafe { guard(c, Call::FmuState, "fmi2FreeFMUstate", |_| free_fmu_state(state_handle(state))) }
+    unsafe { guard(c, Call::FmuState, "fmi2FreeFMUstate", |comp| comp.free_fmu_state(state_handle(state))) }
 }
 
 /// fmi2SerializedFMUstateSize.
@@ -663,7 +645,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     // SAFETY: the instance, the state and the out-argument as this function's contract states.
     unsafe {
         guard(c, Call::FmuState, "fmi2SerializedFMUstateSize", |comp| {
-            comp.serialized_fmu_state_size(saved_state(state), out(size))
+            comp.serialized_fmu_state_size(state, out(size))
         })
     }
 }
@@ -686,7 +668,7 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     // SAFETY: the instance, the state and the buffer as this function's contract states.
     unsafe {
         guard(c, Call::FmuState, "fmi2SerializeFMUstate", |comp| {
-            comp.serialize_fmu_state(saved_state(state), size, buffer(bytes.cast::<u8>(), size))
+            comp.serialize_fmu_state(state, size, buffer(bytes.cast::<u8>(), size))
         })
     }
 }

@@ -220,9 +220,8 @@ impl Instance {
                     path = r.join(&file);
                 }
             }
-            let bytes = crate::files::read_input(&path).map_err(|e| {
-                Refusal::error(format!("sceneFile = {file}: cannot read {} ({e})", path.display()))
-            })?;
+            let bytes = crate::files::read_input(&path, crate::files::InputKind::Scene)
+                .map_err(|e| Refusal::error(format!("sceneFile = {file}: cannot read {e}")))?;
             let text = String::from_utf8(bytes).map_err(|_| {
                 Refusal::error(format!("sceneFile = {file}: {} is not UTF-8 text", path.display()))
             })?;
@@ -781,11 +780,31 @@ impl Instance {
                 )));
             }
         }
+        let torques = [self.real(vr::SUN_TORQUE), self.real(vr::RING_TORQUE), self.real(vr::CARRIER_TORQUE)];
         let sim = self
             .sim
             .as_mut()
             .ok_or_else(|| Refusal::error("no simulation: exit initialization mode first"))?;
-        match sim.do_step(t, h) {
+        // The numerical guards (fmi/guard.rs): a step that would overflow is
+        // discarded at once, an overflowed state is never fmi2OK.
+        let guarded =
+            super::guard::before_step(sim, torques, h).map(|()| sim.do_step(t, h)).and_then(|r| match r {
+                Ok(()) => super::guard::after_step(sim).map(|()| Ok(())),
+                Err(e) => Ok(Err(e)),
+            });
+        let stepped = match guarded {
+            Ok(r) => r,
+            Err(why) => {
+                self.last_successful_time = t;
+                self.terminated = true;
+                self.phase = Phase::StepFailed;
+                return Err(Refusal {
+                    status: Status::Discard,
+                    message: format!("the step was discarded: {why}"),
+                });
+            }
+        };
+        match stepped {
             Ok(()) => {
                 self.last_successful_time = sim.time();
                 Ok(())

@@ -668,6 +668,7 @@ fn validate(scene: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
         }
     }
 
+    c.problems.extend(crate::model::cost::problems(scene));
     if c.problems.is_empty() {
         Ok((set, RunSettings { values: run }))
     } else {

@@ -9,6 +9,8 @@
 //! May import: [`crate::files`], [`crate::scene`].
 //!
 //! - [`build`]: the scene's rules, and the gear set built from a valid scene.
+//! - [`cost`]: what a scene's runs will cost (memory, internal steps) and
+//!   the budgets `build` holds them to.
 //! - [`gear`]: tooth forms, bodies, supports, material, the gear set (with
 //!   the terms of its equations of motion: fidelity, damping, drive).
 //! - [`involute`]: the involute function and its inverse relations.
@@ -18,6 +20,7 @@
 //!   the input speed of a single run), a value apart from the gear set.
 
 pub mod build;
+pub mod cost;
 pub mod gear;
 pub mod involute;
 pub mod lumped;

@@ -96,7 +96,7 @@ pub fn example_wear_states() -> Result<Vec<WornState>, PackError> {
 
 impl From<crate::files::FileError> for PackError {
     fn from(e: crate::files::FileError) -> Self {
-        PackError::Io { path: e.path.display().to_string(), source: e.source }
+        PackError::Io { path: e.path.display().to_string(), source: e.error }
     }
 }
 
@@ -109,7 +109,8 @@ pub fn pack(library: &Path, out: &Path) -> Result<(), PackError> {
     if !library.is_file() {
         return Err(PackError::MissingLibrary { path: library.display().to_string() });
     }
-    let so = std::fs::read(library).map_err(io(library))?;
+    let so = crate::files::read_input(library, crate::files::InputKind::Library)
+        .map_err(|e| PackError::Io { path: library.display().to_string(), source: e.error })?;
     let dir = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir).map_err(io(dir))?;
     // Written durably: on any failure (here or while packing) the temporary

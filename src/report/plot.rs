@@ -480,7 +480,7 @@ fn write_png_atomic(
 
 impl From<crate::files::FileError> for PlotError {
     fn from(e: crate::files::FileError) -> Self {
-        PlotError::Io { path: e.path, source: e.source }
+        PlotError::Io { path: e.path, source: e.error }
     }
 }
 

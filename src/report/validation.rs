@@ -188,8 +188,9 @@ pub fn write_report(
     let figures = out.join("validation");
     std::fs::create_dir_all(&figures).map_err(|source| PlotError::Io { path: figures.clone(), source })?;
     let json_path = figures.join("validation.json");
-    let previous: Option<Validation> =
-        std::fs::read_to_string(&json_path).ok().and_then(|t| serde_json::from_str(&t).ok());
+    let previous: Option<Validation> = crate::files::read_input(&json_path, crate::files::InputKind::Record)
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok());
     let mut files = write_figures(v, &figures, face_width)?;
     let md = markdown(v, previous.as_ref(), "validation", command);
     let json = serde_json::to_string_pretty(v).map_err(|e| PlotError::Backend(e.to_string()))?;

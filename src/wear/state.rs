@@ -45,6 +45,14 @@ use crate::geometry::profile::{ProfileDeviation, ProfileEnds};
 use crate::model::gear::{GearSet, RootForm, ToothForm};
 use crate::wear::flank::{active_profile, Flank, GearCycles, UpdateEnd};
 
+/// Largest plausible wear depth of a flank as a fraction of its gear's
+/// tooth thickness on the reference circle or of its tooth height (tip to
+/// root radius), whichever is smaller: wear of a quarter of a tooth has long
+/// ended the gear's life (the wear model stops at its total wear limit,
+/// 15 µm by default). A state with a deeper point is refused when read for
+/// a gear set.
+pub const MAX_DEPTH_FRACTION: f64 = 0.25;
+
 /// The `format` name of the document.
 pub const FORMAT: &str = "planetwear-worn-profile";
 /// The version of the document this build writes and reads.
@@ -110,6 +118,24 @@ pub enum WornStateError {
         field: String,
         /// Value.
         value: f64,
+    },
+    /// A depth no flank of the gear set can have worn: beyond
+    /// [`MAX_DEPTH_FRACTION`] of the gear's tooth thickness or tooth height.
+    #[error(
+        "{field} = {depth:e} m is deeper than the {limit:e} m a flank of the {gear} can wear \
+             ({MAX_DEPTH_FRACTION} of its {basis}): not a plausible worn state"
+    )]
+    Implausible {
+        /// Where, e.g. `flanks.sun_drive[0].depth[3]`.
+        field: String,
+        /// The depth \[m\].
+        depth: f64,
+        /// The largest plausible depth \[m\].
+        limit: f64,
+        /// The gear (`sun`, `planet`, `ring`).
+        gear: &'static str,
+        /// What the limit is a fraction of, with its size.
+        basis: String,
     },
     /// A deviation grid of the wrong shape.
     #[error("{field}: {reason}")]
@@ -620,7 +646,47 @@ impl WornState {
     pub fn from_json(text: &str, set: &GearSet) -> Result<Self, WornStateError> {
         let state = Self::from_json_any_set(text)?;
         state.check_gear_set(set)?;
+        state.check_plausible(set)?;
         Ok(state)
+    }
+
+    /// The largest plausible depth on a flank of `gear` of `set` \[m\]
+    /// ([`MAX_DEPTH_FRACTION`]) and what it is a fraction of.
+    pub fn plausible_depth(set: &GearSet, gear: crate::wear::flank::Gear) -> (f64, String) {
+        use crate::wear::flank::Gear;
+        let form = match gear {
+            Gear::Sun => set.sun(),
+            Gear::Planet => set.planet(),
+            Gear::Ring => set.ring(),
+        };
+        let height = (form.tip_radius - form.root_radius).abs();
+        let (size, basis) = if form.tooth_thickness <= height {
+            (form.tooth_thickness, "tooth thickness")
+        } else {
+            (height, "tooth height")
+        };
+        (MAX_DEPTH_FRACTION * size, format!("{basis} {:.4} mm", size * 1e3))
+    }
+
+    /// Refuses a depth deeper than any flank of `set` can wear
+    /// ([`Self::plausible_depth`]), naming the point and the figure.
+    pub fn check_plausible(&self, set: &GearSet) -> Result<(), WornStateError> {
+        for flank in Flank::ALL {
+            let gear = flank.gear();
+            let (limit, basis) = Self::plausible_depth(set, gear);
+            for (j, dev) in self.flanks.get(flank).iter().enumerate() {
+                if let Some((i, d)) = dev.depth.iter().enumerate().find(|(_, d)| **d > limit) {
+                    return Err(WornStateError::Implausible {
+                        field: format!("flanks.{}[{j}].depth[{i}]", flank.name()),
+                        depth: *d,
+                        limit,
+                        gear: gear.name(),
+                        basis,
+                    });
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Reads a JSON document with every check but the gear set's.
@@ -697,7 +763,7 @@ fn first_null(v: &Value, path: String) -> Option<String> {
 pub enum StateFileError {
     /// The file system refused.
     #[error("worn-profile state file {0}")]
-    Io(#[from] crate::files::FileError),
+    Io(crate::files::FileError),
     /// The file was read but its content was refused.
     #[error("worn-profile state file '{}': {source}", path.display())]
     State {
@@ -709,6 +775,12 @@ pub enum StateFileError {
     },
 }
 
+impl From<crate::files::FileError> for StateFileError {
+    fn from(e: crate::files::FileError) -> Self {
+        StateFileError::Io(e)
+    }
+}
+
 /// Writes a worn-profile state to `path` (atomically). A state with a
 /// non-finite or negative value or a malformed grid is refused and nothing
 /// is written.
@@ -716,14 +788,14 @@ pub fn write_worn_state(path: &std::path::Path, state: &WornState) -> Result<(),
     let text = state
         .to_json()
         .map_err(|source| StateFileError::State { path: path.to_path_buf(), source: Box::new(source) })?;
+    crate::files::check_output_size(path, crate::files::InputKind::WornState, text.len())?;
     Ok(crate::files::write_durable(path, text.as_bytes())?)
 }
 
 /// Reads the worn-profile state at `path` for the gear set `set`, with every
 /// check of [`WornState::from_json`] (through [`crate::files::read_input`]).
 pub fn read_worn_state(path: &std::path::Path, set: &GearSet) -> Result<WornState, StateFileError> {
-    let bytes = crate::files::read_input(path)
-        .map_err(|source| crate::files::FileError { path: path.to_path_buf(), source })?;
+    let bytes = crate::files::read_input(path, crate::files::InputKind::WornState)?;
     let text = String::from_utf8_lossy(&bytes);
     WornState::from_json(&text, set)
         .map_err(|source| StateFileError::State { path: path.to_path_buf(), source: Box::new(source) })
