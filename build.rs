@@ -465,8 +465,12 @@ fn main() {
     if std::env::var("CARGO_CFG_TARGET_OS").as_deref() == Ok("linux") {
         println!("cargo:rustc-cdylib-link-arg=-Wl,--version-script={}", map.display());
         // fmi-sys links an importer-side C logger (callback_log) from a static
-        // archive: keep every archive's symbols local.
-        println!("cargo:rustc-cdylib-link-arg=-Wl,--exclude-libs,ALL");
+        // archive: keep every archive's symbols local. Zig's linker (the
+        // portable FMU library, scripts/fmu.sh) has no --exclude-libs.
+        let linker = std::env::var("RUSTC_LINKER").unwrap_or_default();
+        if !linker.contains("zigcc") {
+            println!("cargo:rustc-cdylib-link-arg=-Wl,--exclude-libs,ALL");
+        }
     }
     std::fs::write(out.join("modelDescription.xml"), x).unwrap_or_else(|e| fail(format!("writing XML: {e}")));
     std::fs::write(out.join("fmi_variables.rs"), r).unwrap_or_else(|e| fail(format!("writing table: {e}")));

@@ -10,7 +10,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 cargo build --release --quiet
-cargo build --profile fmu --lib --quiet
+bash scripts/fmu.sh
 mkdir -p out/plots
 bin=target/release/planetwear
 timings=out/timings.json.tmp
@@ -39,7 +39,8 @@ stage "wear model to κ = 6" "$bin" wear run --scene example-2004 --to-kappa 6 -
 echo "== validation against the study, full grid (docs/VALIDATION.md, docs/validation/)"
 stage "validation" "$bin" validate --out docs
 echo "== FMU: pack fmu/planetwear.fmu (with the example's worn states)"
-stage "FMU pack" "$bin" fmu pack --out fmu/planetwear.fmu --library target/fmu/libplanetwear.so
+stage "FMU pack" "$bin" fmu pack --out fmu/planetwear.fmu --library target/x86_64-unknown-linux-gnu/fmu/libplanetwear.so
+bash scripts/check_glibc.sh fmu/planetwear.fmu 2.17
 echo "== sweeps through the FMU at kappa = 0, 2, 4, 6 (out/study/)"
 echo '  "_": 0}' >> "$timings"
 mv "$timings" out/timings.json

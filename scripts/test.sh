@@ -13,10 +13,19 @@ RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --document-private-items --quiet
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --quiet
 echo "== cargo test"
 cargo test --release
-echo "== build and pack the FMU (fmu/planetwear.fmu; its library from the stripped, LTO profile fmu)"
+echo "== build and pack the FMU (fmu/planetwear.fmu; its library from the stripped, LTO profile fmu, linked by zig for glibc 2.17)"
 cargo build --release --quiet
-cargo build --profile fmu --lib --quiet
-target/release/planetwear fmu pack --out fmu/planetwear.fmu --library target/fmu/libplanetwear.so
+bash scripts/fmu.sh
+target/release/planetwear fmu pack --out fmu/planetwear.fmu --library target/x86_64-unknown-linux-gnu/fmu/libplanetwear.so
+echo "== the packed library needs no glibc newer than 2.17: its highest GLIBC symbol version (objdump -T)"
+bash scripts/check_glibc.sh fmu/planetwear.fmu 2.17
+# The check can fail: the natively linked release library needs this
+# machine's newer glibc (pthread_key_create@GLIBC_2.34 since glibc 2.34).
+if [ "$(printf '%s\n' 2.34 "$(getconf GNU_LIBC_VERSION | cut -d' ' -f2)" | sort -V | head -1)" = 2.34 ] &&
+    bash scripts/check_glibc.sh target/release/libplanetwear.so 2.17 >/dev/null 2>&1; then
+    echo "scripts/check_glibc.sh passed target/release/libplanetwear.so, linked against glibc $(getconf GNU_LIBC_VERSION)" >&2
+    exit 1
+fi
 echo "== cargo test: the packed FMU under the fmi crate"
 cargo test --release --test fmu_import -- --include-ignored
 echo "== fuzz under valgrind: the packed FMU's C interface, memcheck and leak check (docs/FUZZING.md)"
