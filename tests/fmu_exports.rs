@@ -279,7 +279,8 @@ fn a_communication_step_of_more_internal_steps_than_the_bound_is_refused_at_once
         });
         let status =
             rx.recv_timeout(std::time::Duration::from_secs(60)).expect("fmi2DoStep(h = 1e20) returns");
-        assert_eq!(status, fmi2Status_fmi2Error);
+        // Discarded (the step is too long, not the call wrong), before any work.
+        assert_eq!(status, fmi2Status_fmi2Discard);
     }
 }
 

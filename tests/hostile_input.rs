@@ -446,6 +446,8 @@ fn an_overflowing_torque_is_discarded_at_once_with_the_figure() {
     let e = i.do_step(1e-4, 1e6).unwrap_err();
     assert!(started.elapsed() < Duration::from_millis(200));
     assert!(e.message.contains("internal steps"), "{}", e.message);
+    assert!(e.message.contains("take steps of at most"), "{}", e.message);
+    assert_eq!(e.status, planetwear::fmi::instance::Status::Discard, "{}", e.message);
 }
 
 // -- plausibility of wear states -------------------------------------------------------

@@ -1,5 +1,6 @@
 //! The numerical guards of fmi2DoStep (docs/LIMITS.md): before a step, a
-//! torque that would drive a member past the speed limit within the step is
+//! step that would take more internal steps than one step may, or a
+//! torque that would drive a member past the speed limit within the step, is
 //! refused at once with the figure (instead of the integrator shrinking its
 //! steps for seconds); after a step, a state that is not finite or has a
 //! member past the speed limit is refused rather than reported as fmi2OK.
@@ -18,11 +19,21 @@ const MEMBERS: [(Member, &str, usize); 3] =
 /// member's speed by more than [`MAX_MEMBER_SPEED`]: |T| h / J with J the
 /// member's own inertia (`torques` on sun, ring, carrier \[N·m\]).
 pub fn before_step(sim: &Simulation, torques: [f64; 3], h: f64) -> Result<(), String> {
-    // A step size the simulation refuses as it is (not finite, or more
-    // internal steps than one step may take) gets that refusal instead.
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    if !(h.is_finite() && h > 0.0 && sim.internal_steps(h) <= MAX_INTERNAL_STEPS as f64) {
+    // A step size that is not a number of seconds is the simulation's to
+    // refuse (fmi2Error: the call is wrong, not the step too hard).
+    if !(h.is_finite() && h > 0.0) {
         return Ok(());
+    }
+    // A step longer than the work one step may take is discarded at once
+    // with the figure and the longest step that would be taken.
+    let steps = sim.internal_steps(h);
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(steps <= MAX_INTERNAL_STEPS as f64) {
+        return Err(format!(
+            "communicationStepSize = {h:e} s needs {steps:.3e} internal steps, more than the {MAX_INTERNAL_STEPS} \
+             one communication step may take: take steps of at most {:.3e} s",
+            h * MAX_INTERNAL_STEPS as f64 / steps
+        ));
     }
     let set = sim.gear_set();
     let b = set.bodies();
