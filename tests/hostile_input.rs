@@ -544,3 +544,25 @@ fn wear_step_says_a_revolutions_request_cannot_be_met_and_writes_nothing() {
     );
     assert!(!out.exists());
 }
+
+/// The wear model's total-depth limit keeps every state it writes readable:
+/// a limit deeper than a quarter of the wearing gear's tooth is refused
+/// with the figure, one inside it is accepted.
+#[test]
+fn a_total_wear_limit_deeper_than_plausible_is_refused() {
+    use planetwear::wear::archard::{WearError, WearSettings};
+    use planetwear::wear::stepper::WearModel;
+    let set = Scene::example_2004().validate().unwrap();
+    let (sun_limit, _) = WornState::plausible_depth(&set, planetwear::wear::flank::Gear::Sun);
+    let too_deep = WearSettings { total_depth: 0.9e-3, ..WearSettings::default() };
+    match WearModel::new(&set, too_deep) {
+        Err(e @ WearError::TotalDepthImplausible { .. }) => {
+            let m = e.to_string();
+            assert!(m.contains("total_depth = 9e-4 m") && m.contains("sun"), "{m}");
+            assert!(m.contains(&format!("{sun_limit:e} m")), "{m}");
+        }
+        other => panic!("expected the refusal, got {:?}", other.map(|_| ())),
+    }
+    let inside = WearSettings { total_depth: 0.9 * sun_limit, ..WearSettings::default() };
+    assert!(WearModel::new(&set, inside).is_ok());
+}

@@ -315,6 +315,21 @@ pub enum WearError {
         /// What failed (the dynamic model's or the integrator's error).
         reason: String,
     },
+    /// The total wear limit lies deeper than a state of this gear set may
+    /// be (the reader would refuse the states it leads to).
+    #[error(
+        "total_depth = {total:e} m is deeper than the {gear}'s flanks may wear: at most {limit:e} m, a quarter of its {basis}"
+    )]
+    TotalDepthImplausible {
+        /// The setting \[m\].
+        total: f64,
+        /// The largest plausible depth of the wearing gear \[m\].
+        limit: f64,
+        /// The gear that sets the limit.
+        gear: &'static str,
+        /// What the limit is a fraction of.
+        basis: String,
+    },
     /// A dynamic source asked of a wear model made without run settings.
     #[error("the dynamic tooth loads need run settings: make the wear model with WearModel::with_run")]
     NoRunSettings,

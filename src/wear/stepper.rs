@@ -73,6 +73,24 @@ impl WearModel {
 
     fn build(set: &GearSet, run: Option<RunSettings>, settings: WearSettings) -> Result<Self, WearError> {
         settings.validate()?;
+        // The total wear limit must keep every state it leads to readable:
+        // no deeper than the shallowest plausible depth of a wearing gear.
+        let shallowest = settings
+            .wearing
+            .flanks()
+            .iter()
+            .map(|f| (f.gear(), WornState::plausible_depth(set, f.gear())))
+            .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0));
+        if let Some((gear, (limit, basis))) = shallowest {
+            if settings.total_depth > limit {
+                return Err(WearError::TotalDepthImplausible {
+                    total: settings.total_depth,
+                    limit,
+                    gear: gear.name(),
+                    basis,
+                });
+            }
+        }
         let m = &set.material();
         Ok(Self {
             set: set.clone(),
