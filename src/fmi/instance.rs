@@ -821,6 +821,11 @@ impl Instance {
         }
     }
 
+    /// The simulation, once built (for the plausibility warnings).
+    pub fn simulation(&self) -> Option<&Simulation> {
+        self.sim.as_ref()
+    }
+
     /// fmi2Terminate.
     pub fn terminate(&mut self) {
         self.phase = Phase::Terminated;
