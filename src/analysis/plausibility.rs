@@ -10,6 +10,7 @@
 //! sentence that says what was seen, the threshold and why it matters.
 
 use crate::contact::hertz::{contact_modulus, line_contact};
+use crate::dynamics::response::SteadyState;
 use crate::model::gear::{GearKind, GearSet, Member, MeshKind};
 use crate::scene::units::rad_per_s_to_rpm;
 
@@ -155,16 +156,16 @@ pub fn speed_drift(
     ))
 }
 
-/// The separation check of a mesh: `fraction` of the mesh cycle with the
-/// mesh force zero.
-pub fn separation(mesh: MeshKind, fraction: f64, margin: f64) -> Option<String> {
+/// The separation check of a mesh of planet number `planet` (as its front
+/// end counts): `fraction` of the mesh cycle with the mesh force zero.
+pub fn separation(planet: usize, mesh: MeshKind, fraction: f64, margin: f64) -> Option<String> {
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(fraction > margin * MAX_SEPARATION_FRACTION) {
         return None;
     }
     Some(format!(
-        "tooth separation: planet 1's {} mesh carries no force for {:.1} % of the mesh cycle, above the \
-         threshold of {:.0} %: the teeth lose contact and strike again (rattle), beyond a design point",
+        "tooth separation: planet {planet}'s {} mesh carries no force for {:.1} % of the mesh cycle, above \
+         the threshold of {:.0} %: the teeth lose contact and strike again (rattle), beyond a design point",
         mesh.name(),
         100.0 * fraction,
         100.0 * MAX_SEPARATION_FRACTION
@@ -193,8 +194,8 @@ pub fn hertz_pressure_estimate(set: &GearSet, mesh: MeshKind, force: f64) -> f64
     line_contact(force.abs() / width, rho1, rho2, g2.kind == GearKind::Internal, e).peak_pressure
 }
 
-/// The contact-pressure check of a mesh force \[N\] of planet `planet`
-/// (counted from 0).
+/// The contact-pressure check of a mesh force \[N\] of planet number
+/// `planet` (as its front end counts).
 pub fn contact_pressure(
     set: &GearSet,
     planet: usize,
@@ -208,14 +209,53 @@ pub fn contact_pressure(
         return None;
     }
     Some(format!(
-        "contact pressure: planet {}'s {} mesh force of {force:.1} N gives an estimated Hertz pressure of \
+        "contact pressure: planet {planet}'s {} mesh force of {force:.1} N gives an estimated Hertz pressure of \
          {:.0} MPa (the whole force on one pair at the pitch point), above the static limit of {:.0} MPa \
          of case-hardened steel (σ_Hlim 1500 MPa × Z_NT 1.6, ISO 6336-2/-5): the flanks are overloaded",
-        planet + 1,
         mesh.name(),
         p / 1e6,
         ALLOWABLE_HERTZ_PRESSURE / 1e6
     ))
+}
+
+/// A condition a steady state sets off, and what to say of it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Finding {
+    /// The condition: `overspeed`, or `separation`/`pressure` and the mesh.
+    pub condition: String,
+    /// The sentence for the user.
+    pub message: String,
+}
+
+/// The checks of a steady state: the overspeed at its input speed, and for
+/// each mesh the separation and the largest force of its worst planet
+/// (planets numbered as the steady state numbers them).
+pub fn steady_state(set: &GearSet, ss: &SteadyState) -> Vec<Finding> {
+    let mut out = Vec::new();
+    if let Some(m) = overspeed_at_input(set, ss.input_speed) {
+        out.push(Finding { condition: "overspeed".into(), message: m });
+    }
+    for mesh in MeshKind::ALL {
+        let of_mesh = || ss.meshes.iter().filter(move |m| m.mesh == mesh);
+        if let Some(m) = of_mesh().max_by(|a, b| a.separation.total_cmp(&b.separation)) {
+            if let Some(msg) = separation(m.planet, mesh, m.separation, 1.0) {
+                out.push(Finding { condition: format!("separation {}", mesh.name()), message: msg });
+            }
+        }
+        if let Some(m) = of_mesh().max_by(|a, b| a.max_force.abs().total_cmp(&b.max_force.abs())) {
+            if let Some(msg) = contact_pressure(set, m.planet, mesh, m.max_force, 1.0) {
+                out.push(Finding { condition: format!("pressure {}", mesh.name()), message: msg });
+            }
+        }
+    }
+    out
+}
+
+/// The overspeed check of the rigid-body rotation at the input member's
+/// speed \[rad/s\].
+pub fn overspeed_at_input(set: &GearSet, input_speed: f64) -> Option<String> {
+    let u = rigid_body_ratios(set);
+    overspeed(set, u[0] * input_speed, u[2] * input_speed, 1.0)
 }
 
 #[cfg(test)]
@@ -261,8 +301,8 @@ mod tests {
         let m = overspeed(&s, 1.01 * MAX_PITCH_LINE_VELOCITY / r, 0.0, 1.0).unwrap();
         assert!(overspeed(&s, 0.91 * MAX_PITCH_LINE_VELOCITY / r, 0.0, CLEAR_MARGIN).is_some());
         assert!(m.contains("4.0400e1 m/s"), "{m}");
-        assert!(separation(MeshKind::SunPlanet, 0.05, 1.0).is_none());
-        assert!(separation(MeshKind::RingPlanet, 0.06, 1.0).unwrap().contains("6.0 %"));
+        assert!(separation(1, MeshKind::SunPlanet, 0.05, 1.0).is_none());
+        assert!(separation(1, MeshKind::RingPlanet, 0.06, 1.0).unwrap().contains("6.0 %"));
         assert!(speed_drift(&s, 31.0, 330.0, 314.0, s.balanced_torques(), 1.0).is_none());
         assert!(speed_drift(&s, 9.9, 5.0, 0.0, s.balanced_torques(), 1.0).is_none());
         assert!(speed_drift(&s, -32.0, 250.0, 314.0, s.balanced_torques(), 1.0)
@@ -275,7 +315,7 @@ mod tests {
         // The internal mesh's concave flank spreads the contact.
         assert!(hertz_pressure_estimate(&s, MeshKind::RingPlanet, 1000.0) < p1);
         let limit_force = 1000.0 * (ALLOWABLE_HERTZ_PRESSURE / p1).powi(2);
-        assert!(contact_pressure(&s, 0, MeshKind::SunPlanet, 0.99 * limit_force, 1.0).is_none());
-        assert!(contact_pressure(&s, 0, MeshKind::SunPlanet, 1.01 * limit_force, 1.0).is_some());
+        assert!(contact_pressure(&s, 1, MeshKind::SunPlanet, 0.99 * limit_force, 1.0).is_none());
+        assert!(contact_pressure(&s, 1, MeshKind::SunPlanet, 1.01 * limit_force, 1.0).is_some());
     }
 }

@@ -140,7 +140,7 @@ impl Watch {
         for mesh in MeshKind::ALL {
             let c = Condition::Separation(mesh_index(mesh));
             let fraction = sim.window_harmonics(mesh).map(|(_, sep)| sep);
-            let finding = fraction.and_then(|f| check::separation(mesh, f, self.margin(c))).map(at);
+            let finding = fraction.and_then(|f| check::separation(1, mesh, f, self.margin(c))).map(at);
             self.note(c, finding, &mut out);
             // The most loaded planet of the mesh.
             let worst = (0..set.planet_angles().len())
@@ -148,7 +148,8 @@ impl Watch {
                 .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
             let c = Condition::Pressure(mesh_index(mesh));
             let margin = self.margin(c);
-            let finding = worst.and_then(|(p, f)| check::contact_pressure(set, p, mesh, f, margin)).map(at);
+            let finding =
+                worst.and_then(|(p, f)| check::contact_pressure(set, p + 1, mesh, f, margin)).map(at);
             self.note(c, finding, &mut out);
         }
         out
