@@ -233,3 +233,27 @@ fn a_closed_pipe_ends_the_tool_quietly() {
     assert!(!err.contains("panicked") && !err.contains("Broken pipe"), "{err}");
     assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "status {:?}", out.status);
 }
+
+/// A speed no gear set of this kind runs at is said on stderr before the
+/// run (the figures of docs/FMU.md, "Messages"); the example's own speed
+/// warns of nothing.
+#[test]
+fn run_warns_of_an_overspeed_and_not_of_the_example() {
+    let out = planetwear(&["run", "--scene", "example-2004", "--speed", "1e9"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(
+            "warning: overspeed: the sun–planet pitch-line velocity is 2.6704e6 m/s (sun 1.000000e9 rpm"
+        ),
+        "{err}"
+    );
+    assert!(err.contains("above the limit of 40 m/s"), "{err}");
+    let out = planetwear(&["run", "--scene", "example-2004"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        !String::from_utf8_lossy(&out.stderr).contains("warning"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

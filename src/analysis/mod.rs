@@ -10,6 +10,8 @@
 //!   states in speed, with stability, folds and period doublings.
 //! - [`modes`]: natural frequencies and mode shapes, with mode classes.
 //! - [`order_tracking`]: order spectra of a run-up or time history.
+//! - [`plausibility`]: the thresholds and checks of a run's warnings
+//!   (overspeed, run-away, separation, contact pressure) for FMU and CLI.
 //! - [`study`]: the published example's study: calibration, resonance
 //!   peaks, validation against the study's claims, and the wear effect.
 
@@ -17,4 +19,5 @@ pub mod accuracy;
 pub mod continuation;
 pub mod modes;
 pub mod order_tracking;
+pub mod plausibility;
 pub mod study;

@@ -2,6 +2,7 @@
 //! `modes` and `ltca`, with the printing of their results.
 
 use crate::*;
+use planetwear::analysis::plausibility;
 
 pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: SimulateArgs) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
@@ -44,7 +45,14 @@ pub(crate) fn run_command(RunArgs { scene, wear_state, speed, json, plots }: Run
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     let mut model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
     let omega = speed.map(rpm_to_rad_per_s).unwrap_or(run.input_speed());
+    // An implausible speed is said before the run, which may take long.
+    if let Some(w) = plausibility::overspeed_at_input(&set, omega) {
+        eprintln!("warning: {w}");
+    }
     let ss = steady_state(&mut model, &set, &run, omega, None)?;
+    for f in plausibility::steady_state(&set, &ss).into_iter().filter(|f| f.condition != "overspeed") {
+        eprintln!("warning: {}", f.message);
+    }
     if let Some(dir) = &plots {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         write_steady_state(&ss, &set, dir)?;
@@ -96,6 +104,22 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         vec![run(dirs[0])?]
     };
     bar.finish_and_clear();
+    // Each condition once per direction, at the first speed that sets it off.
+    for sw in &results {
+        let mut said = std::collections::BTreeSet::new();
+        for p in &sw.points {
+            for f in plausibility::steady_state(&set, p) {
+                if said.insert(f.condition.clone()) {
+                    eprintln!(
+                        "warning: sweep {:?}, from {:.1} rpm: {}",
+                        sw.direction,
+                        rad_per_s_to_rpm(p.input_speed),
+                        f.message
+                    );
+                }
+            }
+        }
+    }
     let wall = started.elapsed().as_secs_f64();
     let width_mm = set.sun().face_width * 1e3;
     let mut files = Vec::new();

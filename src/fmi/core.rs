@@ -17,7 +17,8 @@ use std::path::PathBuf;
 use fmi_sys::fmi2::*;
 
 use super::instance::{Instance, Phase, Refusal, SavedState, Status};
-use super::variables::{GUID, LOG_CATEGORIES};
+use super::variables::{vr, GUID, LOG_CATEGORIES};
+use super::warnings::{Inputs, Watch};
 
 /// Every call the table knows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,6 +101,11 @@ pub struct Component {
     /// freed or foreign pointer is refused, and fmi2FreeInstance frees every
     /// state still held.
     states: BTreeMap<usize, Box<SavedState>>,
+    /// The plausibility conditions in force (fmi/warnings.rs).
+    watch: Watch,
+    /// Warnings of the call under way: the call returns fmi2Warning and
+    /// each is logged under logStatusWarning.
+    warnings: Vec<String>,
 }
 
 fn category_of(status: Status) -> &'static str {
@@ -109,6 +115,12 @@ fn category_of(status: Status) -> &'static str {
         Status::Error => "logStatusError",
         Status::Fatal => "logStatusFatal",
     }
+}
+
+/// Whether a log category carries a status (always logged) rather than
+/// debug detail.
+fn is_status_category(category: &str) -> bool {
+    category.starts_with("logStatus")
 }
 
 fn code(status: Status) -> fmi2Status {
@@ -143,8 +155,8 @@ fn write_out<T>(out: Option<&mut T>, v: T, what: &str) -> Result<(), Refusal> {
 /// fmi2Instantiate: a new component, or `None` (the reason logged) for a
 /// missing or empty instance name, another FMU type, a GUID of another build
 /// or a resource location that is not a `file:` URI; also `None` if building
-/// it panics. With `logging_on` false nothing reaches the logger until
-/// fmi2SetDebugLogging.
+/// it panics. The status messages reach the logger whatever `logging_on`
+/// says; debug detail only with it true (or after fmi2SetDebugLogging).
 pub fn instantiate(
     name: Option<String>,
     fmu_type: fmi2Type,
@@ -167,6 +179,8 @@ pub fn instantiate(
             strings: Vec::new(),
             serialized: Vec::new(),
             states: BTreeMap::new(),
+            watch: Watch::default(),
+            warnings: Vec::new(),
         });
         let refuse = |comp: &Component, why: String| {
             comp.log(fmi2Status_fmi2Error, "logStatusError", &format!("fmi2Instantiate: {why}"));
@@ -190,9 +204,9 @@ pub fn instantiate(
             },
         };
         comp.instance = Instance::new(&name, resources);
-        // Quiet by default: with loggingOn false nothing reaches the logger
-        // until fmi2SetDebugLogging; with it true every category but the
-        // per-call trace.
+        // Status messages always reach the logger; debug detail is quiet
+        // by default: with loggingOn false none until fmi2SetDebugLogging,
+        // with it true every category but the per-call trace.
         comp.logging_on = logging_on;
         comp.enabled = LOG_CATEGORIES.iter().map(|(n, _)| *n).filter(|n| *n != "logCalls").collect();
         Some(comp)
@@ -221,8 +235,14 @@ pub fn version() -> &'static CStr {
 }
 
 impl Component {
+    /// Passes a message to the importer's logger. The status categories
+    /// (`logStatus*`: every Warning, Discard, Error and Fatal the FMU
+    /// returns) always reach it, whatever loggingOn and the enabled
+    /// categories say (FMI 2.0 lets an FMU log status messages regardless):
+    /// a refusal is never silent. The debug categories (`logCalls`,
+    /// `logModel`) need loggingOn and the category enabled.
     fn log(&self, status: fmi2Status, category: &'static str, message: &str) {
-        if !self.logging_on || !self.enabled.contains(category) {
+        if !(is_status_category(category) || self.logging_on && self.enabled.contains(category)) {
             return;
         }
         let Some(logger) = &self.logger else { return };
@@ -252,7 +272,14 @@ impl Component {
             return fmi2Status_fmi2Error;
         }
         self.log(fmi2Status_fmi2OK, "logCalls", name);
-        match catch_unwind(AssertUnwindSafe(|| f(self))) {
+        self.warnings.clear();
+        let result = catch_unwind(AssertUnwindSafe(|| f(self)));
+        let warnings = std::mem::take(&mut self.warnings);
+        for w in &warnings {
+            self.log(fmi2Status_fmi2Warning, "logStatusWarning", &format!("{name}: {w}"));
+        }
+        match result {
+            Ok(Ok(())) if !warnings.is_empty() => fmi2Status_fmi2Warning,
             Ok(Ok(())) => fmi2Status_fmi2OK,
             Ok(Err(refusal)) => {
                 match refusal.status {
@@ -283,8 +310,8 @@ impl Component {
     /// fmi2SetDebugLogging: with no categories every declared one is
     /// enabled. Every name is checked before anything changes: a call naming
     /// an undeclared category (or a NULL name) is a warning and leaves the
-    /// settings as they were, so its warning is logged under the settings
-    /// the importer had.
+    /// settings as they were. The categories filter the debug detail only:
+    /// status messages (`logStatus*`) are logged whatever is enabled.
     pub fn set_debug_logging(
         &mut self,
         logging_on: bool,
@@ -325,9 +352,15 @@ impl Component {
         Ok(())
     }
 
-    /// fmi2ExitInitializationMode: builds the simulation.
+    /// fmi2ExitInitializationMode: builds the simulation; an initial speed
+    /// past the overspeed limit is a warning (fmi/warnings.rs).
     pub fn exit_initialization_mode(&mut self) -> Result<(), Refusal> {
-        self.instance.exit_initialization()
+        self.instance.exit_initialization()?;
+        let initial_speed = self.instance.get_real(vr::INITIAL_SPEED)?;
+        if let Some(sim) = self.instance.simulation() {
+            self.warnings = self.watch.at_start(sim, initial_speed);
+        }
+        Ok(())
     }
 
     /// fmi2Terminate.
@@ -339,6 +372,7 @@ impl Component {
     /// fmi2Reset.
     pub fn reset(&mut self) -> Result<(), Refusal> {
         self.instance.reset();
+        self.watch = Watch::default();
         Ok(())
     }
 
@@ -448,9 +482,22 @@ impl Component {
         unsupported("output derivatives")
     }
 
-    /// fmi2DoStep.
+    /// fmi2DoStep; a completed step whose state sets off a plausibility
+    /// condition (fmi/warnings.rs) returns fmi2Warning.
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), Refusal> {
-        self.instance.do_step(t, h)
+        self.instance.do_step(t, h)?;
+        let inputs = Inputs {
+            torques: [
+                self.instance.get_real(vr::SUN_TORQUE)?,
+                self.instance.get_real(vr::RING_TORQUE)?,
+                self.instance.get_real(vr::CARRIER_TORQUE)?,
+            ],
+            speed_reference: self.instance.get_real(vr::INPUT_SPEED_REFERENCE)?,
+        };
+        if let Some(sim) = self.instance.simulation() {
+            self.warnings = self.watch.after_step(sim, inputs);
+        }
+        Ok(())
     }
 
     /// fmi2CancelStep: not supported (steps are never asynchronous).
@@ -580,7 +627,9 @@ impl Component {
     /// fmi2SetFMUstate.
     pub fn set_fmu_state(&mut self, state: fmi2FMUstate) -> Result<(), Refusal> {
         let s = self.held(state)?.clone();
-        self.instance.restore(&s)
+        self.instance.restore(&s)?;
+        self.watch.forget(self.instance.last_successful_time);
+        Ok(())
     }
 
     /// fmi2FreeFMUstate: frees the state a handle holds and sets the handle
@@ -686,6 +735,172 @@ mod tests {
     fn instance() -> Box<Component> {
         instantiate(Some("unit".into()), fmi2Type_fmi2CoSimulation, Some(GUID.into()), None, None, false)
             .expect("instantiated")
+    }
+
+    type Log = std::rc::Rc<std::cell::RefCell<Vec<(fmi2Status, String, String)>>>;
+
+    /// An instance with logging off whose logger keeps (status, category,
+    /// message) of every message.
+    fn logged() -> (Box<Component>, Log) {
+        let log: Log = Default::default();
+        let keep = log.clone();
+        let logger: Logger = Box::new(move |status, _name, category, message| {
+            keep.borrow_mut().push((
+                status,
+                category.to_string_lossy().into_owned(),
+                message.to_string_lossy().into_owned(),
+            ))
+        });
+        let c = instantiate(
+            Some("log".into()),
+            fmi2Type_fmi2CoSimulation,
+            Some(GUID.into()),
+            None,
+            Some(logger),
+            false,
+        )
+        .expect("instantiated");
+        (c, log)
+    }
+
+    fn initialize(c: &mut Component, reals: &[(u32, f64)]) -> fmi2Status {
+        let (refs, values): (Vec<u32>, Vec<f64>) = reals.iter().copied().unzip();
+        assert_eq!(c.call(Call::Set, "fmi2SetReal", |c| c.set_real(&refs, &values)), fmi2Status_fmi2OK);
+        assert_eq!(
+            c.call(Call::SetupExperiment, "fmi2SetupExperiment", |c| c.setup_experiment(0.0, None)),
+            0
+        );
+        let enter = c.call(Call::EnterInitializationMode, "fmi2EnterInitializationMode", |c| {
+            c.enter_initialization_mode()
+        });
+        assert_eq!(enter, fmi2Status_fmi2OK);
+        c.call(Call::ExitInitializationMode, "fmi2ExitInitializationMode", |c| c.exit_initialization_mode())
+    }
+
+    /// Steps of `h` from t = 0 to `stop`: the statuses returned and the
+    /// warnings logged, with the time of each.
+    fn steps(c: &mut Component, log: &Log, h: f64, stop: f64) -> Vec<(f64, String)> {
+        let mut warned = Vec::new();
+        let n = (stop / h).round() as usize;
+        for k in 0..n {
+            let before = log.borrow().len();
+            let status = c.call(Call::DoStep, "fmi2DoStep", |c| c.do_step(k as f64 * h, h));
+            let new: Vec<_> = log.borrow()[before..].to_vec();
+            assert!(status == fmi2Status_fmi2OK || status == fmi2Status_fmi2Warning, "{status}: {new:?}");
+            assert_eq!(status == fmi2Status_fmi2Warning, !new.is_empty(), "{new:?}");
+            for (st, cat, m) in new {
+                assert_eq!((st, cat.as_str()), (fmi2Status_fmi2Warning, "logStatusWarning"), "{m}");
+                warned.push(((k + 1) as f64 * h, m));
+            }
+        }
+        warned
+    }
+
+    #[test]
+    fn with_logging_off_a_refusal_reaches_the_logger_and_debug_detail_does_not() {
+        let (mut c, log) = logged();
+        let status = initialize(&mut c, &[(vr::MODULE, -0.0015)]);
+        assert_eq!(status, fmi2Status_fmi2Error);
+        let log = log.borrow();
+        assert_eq!(log.len(), 1, "{log:?}");
+        let (st, cat, m) = &log[0];
+        assert_eq!((*st, cat.as_str()), (fmi2Status_fmi2Error, "logStatusError"));
+        assert!(m.starts_with("fmi2ExitInitializationMode: "), "{m}");
+        assert!(m.contains("module = -0.0015 m: must be a finite number greater than zero"), "{m}");
+    }
+
+    #[test]
+    fn enabled_categories_filter_debug_detail_and_never_a_status() {
+        let (mut c, log) = logged();
+        // Only the per-call trace enabled: the Error is logged all the same.
+        let names = [Some("logCalls".to_string())];
+        assert_eq!(
+            c.call(Call::SetDebugLogging, "fmi2SetDebugLogging", |c| c.set_debug_logging(true, &names)),
+            0
+        );
+        let status = c.call(Call::Set, "fmi2SetReal", |c| c.set_real(&[vr::SUN_SPEED], &[1.0]));
+        assert_eq!(status, fmi2Status_fmi2Error);
+        let cats: Vec<String> = log.borrow().iter().map(|(_, c, _)| c.clone()).collect();
+        // (fmi2SetDebugLogging itself ran with logging off: no trace of it.)
+        assert_eq!(cats, ["logCalls", "logStatusError"]);
+        assert!(log.borrow()[1].2.contains("sun.speed is an output and cannot be set"), "{:?}", log.borrow());
+        // Logging off: the trace stops, the statuses do not.
+        assert_eq!(
+            c.call(Call::SetDebugLogging, "fmi2SetDebugLogging", |c| c.set_debug_logging(false, &names)),
+            0
+        );
+        log.borrow_mut().clear();
+        c.call(Call::Reset, "fmi2Reset", Component::reset);
+        assert_eq!(c.call(Call::DoStep, "fmi2DoStep", |c| c.do_step(0.0, 1e-3)), fmi2Status_fmi2Error);
+        let log = log.borrow();
+        assert_eq!(log.len(), 1, "{log:?}");
+        assert_eq!(log[0].1, "logStatusError");
+        assert!(log[0].2.contains("fmi2DoStep is not allowed in phase Instantiated"), "{log:?}");
+    }
+
+    #[test]
+    fn the_default_run_warns_of_nothing() {
+        let (mut c, log) = logged();
+        assert_eq!(initialize(&mut c, &[]), fmi2Status_fmi2OK);
+        assert_eq!(steps(&mut c, &log, 1e-3, 0.03), []);
+    }
+
+    #[test]
+    fn unbalanced_torques_warn_once_of_the_run_away() {
+        let (mut c, log) = logged();
+        assert_eq!(initialize(&mut c, &[(vr::SUN_TORQUE, 300.0)]), fmi2Status_fmi2OK);
+        let warned = steps(&mut c, &log, 1e-3, 0.05);
+        let runaway: Vec<_> = warned.iter().filter(|(_, m)| m.contains("run-away")).collect();
+        assert_eq!(runaway.len(), 1, "{warned:?}");
+        let (t, m) = runaway[0];
+        assert_eq!(*t, 1e-3, "{m}");
+        assert!(m.contains("sunTorque = 300 N·m"), "{m}");
+        assert!(m.contains("net torque of -450.0000 N·m"), "{m}");
+        assert!(m.contains("changed the sun's speed by -942.5 rpm from the 3000.0 rpm"), "{m}");
+        // The sun then runs past the overspeed limit: said once too.
+        let over: Vec<_> = warned.iter().filter(|(_, m)| m.contains("overspeed")).collect();
+        assert_eq!(over.len(), 1, "{warned:?}");
+        // Running away through the speeds, the meshes start to separate:
+        // each onset said once, with the figure over the window.
+        let sep = |mesh: &str| -> Vec<&(f64, String)> {
+            warned
+                .iter()
+                .filter(|(_, m)| m.contains(&format!("tooth separation: planet 1's {mesh}")))
+                .collect()
+        };
+        let (sun, ring) = (sep("sun_planet"), sep("ring_planet"));
+        assert!(!sun.is_empty() && !ring.is_empty(), "{warned:?}");
+        assert!(sun[0].0 > over[0].0 && sun[0].1.contains("above the threshold of 5 %"), "{warned:?}");
+        // 50 steps, of which the meshes separate in most after the onset:
+        // the onsets are few.
+        assert!(sun.len() <= 3 && ring.len() <= 3, "{warned:?}");
+    }
+
+    #[test]
+    fn an_initial_speed_given_in_rpm_warns_at_initialization_and_not_again() {
+        let (mut c, log) = logged();
+        assert_eq!(initialize(&mut c, &[(vr::INITIAL_SPEED, 3000.0)]), fmi2Status_fmi2Warning);
+        let first = log.borrow().clone();
+        assert_eq!(first.len(), 1);
+        assert_eq!(first[0].1, "logStatusWarning");
+        assert!(first[0].2.contains("initialSpeed = 3000 rad/s"), "{first:?}");
+        assert!(first[0].2.contains("give initialSpeed = 314.159"), "{first:?}");
+        let warned = steps(&mut c, &log, 1e-4, 2e-3);
+        assert!(warned.iter().all(|(_, m)| !m.contains("overspeed")), "{warned:?}");
+    }
+
+    #[test]
+    fn a_torque_past_the_allowable_pressure_warns_once() {
+        let (mut c, log) = logged();
+        let scale = 4.0;
+        let set = crate::scene::Scene::example_2004().validate().unwrap();
+        let [s, r, _] = set.balanced_torques();
+        let status = initialize(&mut c, &[(vr::SUN_TORQUE, scale * s), (vr::RING_TORQUE, scale * r)]);
+        assert_eq!(status, fmi2Status_fmi2OK);
+        let warned = steps(&mut c, &log, 1e-3, 0.02);
+        let pressure: Vec<_> = warned.iter().filter(|(_, m)| m.contains("contact pressure")).collect();
+        assert!(!pressure.is_empty() && pressure.len() <= 2, "{warned:?}");
+        assert!(pressure.iter().all(|(_, m)| m.contains("above the static limit of 2400 MPa")), "{warned:?}");
     }
 
     #[test]

@@ -293,8 +293,9 @@ impl Instance {
         let model = PlanetaryDynamics::new(&set, self.contact_model(&set)?)
             .map_err(|e| Refusal::error(e.to_string()))?;
         let speed = self.real(vr::INITIAL_SPEED);
-        let mut sim = Simulation::new(&set, &run, model, self.start_time, speed)
-            .map_err(|e| Refusal::error(format!("initialSpeed: {e}")))?;
+        let mut sim = Simulation::new(&set, &run, model, self.start_time, speed).map_err(|e| {
+            Refusal::error(format!("initialSpeed = {speed} rad/s: the simulation cannot start: {e}"))
+        })?;
         let cycles = usize::try_from(self.int(vr::HARMONIC_WINDOW_CYCLES)).unwrap_or(0);
         sim.set_window(cycles, run.samples_per_mesh_cycle()).map_err(|e| Refusal::error(e.to_string()))?;
         self.sim = Some(sim);
@@ -821,6 +822,11 @@ impl Instance {
         }
     }
 
+    /// The simulation, once built (for the plausibility warnings).
+    pub fn simulation(&self) -> Option<&Simulation> {
+        self.sim.as_ref()
+    }
+
     /// fmi2Terminate.
     pub fn terminate(&mut self) {
         self.phase = Phase::Terminated;
@@ -957,6 +963,17 @@ mod tests {
         assert!(m.contains("(the scene's sun.tip_radius_mm = -20)"), "{m}");
         assert!(m.contains("  - module = 0 m: must be a finite number greater than zero"), "{m}");
         assert!(!m.contains("  - sun.tip_radius_mm"), "{m}");
+    }
+
+    /// A refused initial speed is named by its variable, with its value and unit.
+    #[test]
+    fn a_refused_initial_speed_names_the_variable_and_its_value() {
+        let mut i = Instance::new("speed", None);
+        i.enter_initialization();
+        i.set_real(vr::INITIAL_SPEED, 0.0).unwrap();
+        let m = i.exit_initialization().unwrap_err().message;
+        assert!(m.starts_with("initialSpeed = 0 rad/s: "), "{m}");
+        assert!(m.contains("must be finite and non-zero"), "{m}");
     }
 
     /// The scene keys of every settable variable are keys of the scene: a

@@ -11,3 +11,4 @@ pub mod guid;
 pub mod instance;
 mod parameters;
 pub mod variables;
+pub mod warnings;

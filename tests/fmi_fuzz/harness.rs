@@ -14,9 +14,9 @@
 //! tracks independently) returns fmi2Error; a call with an invalid argument
 //! never returns fmi2OK; no call returns fmi2Fatal (the FMU answers Fatal
 //! only for a caught panic); every fmi2Warning, fmi2Discard and fmi2Error is
-//! logged with a message naming the function whenever logging is on and its
-//! category enabled, and nothing at all is logged with logging off or for a
-//! disabled category; every Real read after a successful call is finite.
+//! logged with a message naming the function whether logging is on or off
+//! (status messages always reach the logger), and no debug detail is
+//! logged with logging off or for a disabled category; every Real read after a successful call is finite.
 //! Calling anything on a freed instance or state is undefined behaviour by
 //! the standard and is never done.
 //!
@@ -499,8 +499,10 @@ impl Logging {
     fn of(i: &Inst) -> Self {
         Self { logger: i.logger, on: i.logging_on, enabled: i.enabled.clone() }
     }
+    /// Whether a message of `category` reaches the logger: a status
+    /// message always, debug detail with logging on and its category enabled.
     fn shows(&self, category: &str) -> bool {
-        self.logger && self.on && self.enabled.contains(category)
+        self.logger && (category.starts_with("logStatus") || self.on && self.enabled.contains(category))
     }
     /// Whether a message at `level` may appear (some enabled category logs at it).
     fn admits(&self, level: log::Level) -> bool {
@@ -570,9 +572,9 @@ pub struct FuzzReport {
     pub builds: u32,
     /// Messages the logger received.
     pub messages: u64,
-    /// Warning/Discard/Error returns with the category shown, each logged.
+    /// Warning/Discard/Error returns, each logged.
     pub refusals_logged: u64,
-    /// Warning/Discard/Error returns with logging off or the category disabled, each silent.
+    /// Warning/Discard/Error returns of instances without a logger callback, each silent.
     pub refusals_silent: u64,
     /// Calls with an argument the harness knows to be invalid (each refused).
     pub invalid_arguments: u64,
@@ -603,7 +605,7 @@ impl fmt::Display for FuzzReport {
         )?;
         writeln!(
             f,
-            "refusals logged {}, silent with logging off or category disabled {}, messages {}, reals checked finite {}",
+            "refusals logged {}, silent (no logger callback) {}, messages {}, reals checked finite {}",
             self.refusals_logged, self.refusals_silent, self.messages, self.reals_checked
         )?;
         writeln!(

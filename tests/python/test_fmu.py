@@ -416,3 +416,27 @@ def test_a_step_that_cannot_be_completed_is_discarded_with_terminated_reported(f
     assert k * h <= last < (k + 1) * h, (k, last)
     assert all(math.isfinite(x) for x in s.getReal([vr["planet[1].sunMeshForce"], vr["sun.speed"]]))
     s.freeInstance()
+
+
+def test_with_logging_off_the_importer_receives_the_reason_of_each_wrong_input(fmu):
+    """loggingOn false: the five wrong inputs of scripts/fmu_messages.py each
+    reach the logger with their status category, naming the variable, its
+    value and what is allowed; the warnings are said once at their onset.
+    Run in a subprocess: fmpy's logger shim keeps a global pointer."""
+    out = subprocess.run([sys.executable, str(REPO / "scripts" / "fmu_messages.py"), str(FMU)],
+                         capture_output=True, text=True, timeout=600)
+    print(out.stdout)
+    assert out.returncode == 0, out.stderr
+    cases = out.stdout.split("== ")[1:]
+    assert len(cases) == 5, out.stdout
+    expected = [
+        ("[Error logStatusError] fmi2ExitInitializationMode", "module = -0.0015 m: must be a finite number greater than zero"),
+        ("[Error logStatusError] fmi2SetReal", "sun.speed is an output and cannot be set"),
+        ("[Warning logStatusWarning] fmi2ExitInitializationMode", "give initialSpeed = 314.159"),
+        ("[Warning logStatusWarning] fmi2DoStep: at t = 0.001 s: run-away", "sunTorque = 300 N·m"),
+        ("[Error logStatusError] fmi2DoStep", "communicationStepSize = 0.001: the step to 0.002 passes the stop time 0.0015"),
+    ]
+    for text, (head, figure) in zip(cases, expected):
+        assert head in text and figure in text, text
+    # The run-away is said once in 30 steps, not at every step.
+    assert cases[3].count("run-away") == 1, cases[3]
