@@ -11,7 +11,7 @@ use super::parameters;
 use super::variables::{vr, Causality, Kind, Settable, Start, Variable, GUID, VARIABLES};
 use crate::contact::ltca::SetModel;
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::dynamics::simulation::{Bearing, Simulation, Snapshot};
+use crate::dynamics::simulation::{Bearing, Simulation, Snapshot, StepExtremes};
 use crate::dynamics::spectrum::Harmonics;
 use crate::dynamics::state_format;
 use crate::model::gear::{Member, MeshKind};
@@ -434,6 +434,7 @@ impl Instance {
             | V::BearingDampingRatio
             | V::MeshDampingRatio
             | V::ShaftStiffness
+            | V::LoadBalance
             | V::InitialSpeed => {
                 self.store(v, value);
                 self.changed(v);
@@ -522,7 +523,19 @@ impl Instance {
             | V::Planet7RingPairsInContact
             | V::Planet8SunPairsInContact
             | V::Planet8RingPairsInContact
-            | V::WindowCycles => {
+            | V::WindowCycles
+            | V::Planet1SunMeshForceMax
+            | V::Planet1SunMeshForceMin
+            | V::Planet1RingMeshForceMax
+            | V::Planet1RingMeshForceMin
+            | V::SunMeshForceMax
+            | V::RingMeshForceMax
+            | V::Planet1SunSeparated
+            | V::Planet1RingSeparated
+            | V::SunMeshSeparated
+            | V::RingMeshSeparated
+            | V::ReactionTorque
+            | V::BalancingTorque => {
                 Err(Refusal::error(format!("{} is an output and cannot be set", variable.name())))
             }
         }
@@ -580,6 +593,9 @@ impl Instance {
             real(&|s| s.window_harmonics(m).map_or(0.0, |(h, sep)| read(&h, sep)))
         };
         let pairs = |p: usize, m: MeshKind| Ok(Value::Integer(sim()?.pairs_in_contact(p, m) as i32));
+        let flag = |read: fn(&StepExtremes) -> bool| {
+            Ok::<_, Refusal>(Value::Integer(i32::from(read(&sim()?.step_extremes()))))
+        };
         Ok(match variable {
             V::SceneFile | V::WearStateFile => {
                 Value::String(self.strings.get(&v).cloned().unwrap_or_default())
@@ -595,7 +611,8 @@ impl Instance {
             | V::Planets
             | V::SunTeeth
             | V::PlanetTeeth
-            | V::RingTeeth => Value::Integer(self.int(v)),
+            | V::RingTeeth
+            | V::LoadBalance => Value::Integer(self.int(v)),
             V::RhoInfinity
             | V::RelativeTolerance
             | V::Module
@@ -716,6 +733,18 @@ impl Instance {
             V::Planet8SunPairsInContact => pairs(7, Sun)?,
             V::Planet8RingPairsInContact => pairs(7, Ring)?,
             V::WindowCycles => Value::Integer(sim()?.window_cycles() as i32),
+            V::Planet1SunMeshForceMax => real(&|s| s.step_extremes().sun.1)?,
+            V::Planet1SunMeshForceMin => real(&|s| s.step_extremes().sun.0)?,
+            V::Planet1RingMeshForceMax => real(&|s| s.step_extremes().ring.1)?,
+            V::Planet1RingMeshForceMin => real(&|s| s.step_extremes().ring.0)?,
+            V::SunMeshForceMax => real(&|s| s.step_extremes().sun_any_max)?,
+            V::RingMeshForceMax => real(&|s| s.step_extremes().ring_any_max)?,
+            V::Planet1SunSeparated => flag(|e| e.sun_separated)?,
+            V::Planet1RingSeparated => flag(|e| e.ring_separated)?,
+            V::SunMeshSeparated => flag(|e| e.sun_any_separated)?,
+            V::RingMeshSeparated => flag(|e| e.ring_any_separated)?,
+            V::ReactionTorque => real(&|s| s.reaction_torque())?,
+            V::BalancingTorque => real(&|s| s.balancing_torque())?,
         })
     }
 
@@ -981,7 +1010,8 @@ mod tests {
         };
         // Keys that are optional in a scene file: the planets' own angles
         // and bearing stiffnesses (the example spaces them equally, alike).
-        let optional = ["planets.angles_deg", "supports.planet_bearings_n_per_m"];
+        // The load balance is written only when on.
+        let optional = ["planets.angles_deg", "supports.planet_bearings_n_per_m", "dynamics.load_balance"];
         for p in Settable::ALL {
             for key in parameters::scene_keys(*p) {
                 assert!(
