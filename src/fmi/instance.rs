@@ -1023,6 +1023,44 @@ mod tests {
         }
     }
 
+    /// The run-away: an unbalanced sun torque (1.5 times the
+    /// default) with loadBalance 1 keeps the speed, and the new outputs are
+    /// finite and in their relations; loadBalance 2 is refused by name.
+    #[test]
+    fn the_load_balance_and_the_step_outputs_through_the_fmu() {
+        let mut i = Instance::new("balance", None);
+        i.enter_initialization();
+        i.set_integer(vr::FIDELITY, 0).unwrap();
+        i.set_integer(vr::LOAD_BALANCE, 1).unwrap();
+        i.exit_initialization().unwrap();
+        let reference = i.get_real(vr::INPUT_SPEED_REFERENCE).unwrap();
+        let sun = i.get_real(vr::SUN_TORQUE).unwrap();
+        i.set_real(vr::SUN_TORQUE, 1.5 * sun).unwrap();
+        let h = 1e-3;
+        let mut angle = i.get_real(vr::SUN_ANGLE).unwrap();
+        for k in 0..150 {
+            i.do_step(k as f64 * h, h).unwrap();
+            let a = i.get_real(vr::SUN_ANGLE).unwrap();
+            let mean = (a - angle) / h;
+            angle = a;
+            assert!(mean > 0.9 * reference && mean < 1.5 * reference, "mean speed {mean} at step {k}");
+            let (max, min, end) = (
+                i.get_real(vr::PLANET_1_SUN_MESH_FORCE_MAX).unwrap(),
+                i.get_real(vr::PLANET_1_SUN_MESH_FORCE_MIN).unwrap(),
+                i.get_real(vr::PLANET_1_SUN_MESH_FORCE).unwrap(),
+            );
+            assert!(min <= end && end <= max && max <= i.get_real(vr::SUN_MESH_FORCE_MAX).unwrap());
+        }
+        assert!(i.get_real(vr::BALANCING_TORQUE).unwrap() > 0.0);
+        assert!(i.get_real(vr::REACTION_TORQUE).unwrap() < 0.0);
+        assert_eq!(i.get_integer(vr::PLANET_1_SUN_SEPARATED).unwrap(), 0);
+        let mut j = Instance::new("bad", None);
+        j.enter_initialization();
+        j.set_integer(vr::LOAD_BALANCE, 2).unwrap();
+        let e = j.exit_initialization().unwrap_err();
+        assert!(e.message.contains("loadBalance = 2: allowed are 0"), "{}", e.message);
+    }
+
     #[test]
     fn the_default_parameters_are_the_built_in_example() {
         // With no scene file every parameter applies: their start values
