@@ -246,3 +246,33 @@ fn the_load_balance_holds_the_speed_of_an_unbalanced_input() {
         assert!((w / OMEGA - 1.0).abs() < 1e-3, "after the ring torque input changed: {w}");
     }
 }
+
+/// The load balance's source is part of a snapshot: a restored run
+/// continues bit-identically, through a change of the speed reference.
+#[test]
+fn a_snapshot_with_the_load_balance_continues_bit_identically() {
+    let mut scene = Scene::example_2004();
+    scene.dynamics.fidelity = Fidelity::Torsional;
+    scene.dynamics.load_balance = true;
+    let (mut sim, _) = simulation(&scene);
+    sim.set_torques(1.2 * scene.operation.input_torque_nm, 0.0, 0.0).unwrap();
+    for _ in 0..5 {
+        sim.do_step(sim.time(), 1e-3).unwrap();
+    }
+    sim.set_speed_reference(0.9 * OMEGA).unwrap();
+    sim.do_step(sim.time(), 1e-3).unwrap();
+    let snap = sim.snapshot();
+    let mut first = sim.clone();
+    for _ in 0..5 {
+        first.do_step(first.time(), 1e-3).unwrap();
+    }
+    sim.set_speed_reference(OMEGA).unwrap();
+    sim.do_step(sim.time(), 1e-3).unwrap();
+    sim.restore(&snap).unwrap();
+    for _ in 0..5 {
+        sim.do_step(sim.time(), 1e-3).unwrap();
+    }
+    assert_eq!(first.snapshot(), sim.snapshot());
+    assert_eq!(first.balancing_torque(), sim.balancing_torque());
+    assert_eq!(first.step_extremes(), sim.step_extremes());
+}
