@@ -27,11 +27,22 @@ pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: S
         // the step ends.
         let (t0, t1) = (k as f64 * step, (k + 1) as f64 * step);
         sim.do_step(t0, t1 - t0)?;
+        // The extremes over the step and the torques, named as the FMU's
+        // outputs (docs/FMU.md).
+        let e = sim.step_extremes();
         let row = serde_json::json!({
             "time": sim.time(),
             "sun.speed": sim.speed(planetwear::model::gear::Member::Sun),
             "planet[1].sunMeshForce": sim.mesh_force(0, planetwear::model::gear::MeshKind::SunPlanet),
             "planet[1].ringMeshForce": sim.mesh_force(0, planetwear::model::gear::MeshKind::RingPlanet),
+            "planet[1].sunMeshForceMin": e.sun.0,
+            "planet[1].sunMeshForceMax": e.sun.1,
+            "planet[1].ringMeshForceMin": e.ring.0,
+            "planet[1].ringMeshForceMax": e.ring.1,
+            "sunMeshSeparated": u8::from(e.sun_any_separated),
+            "ringMeshSeparated": u8::from(e.ring_any_separated),
+            "reactionTorque": sim.reaction_torque(),
+            "balancingTorque": sim.balancing_torque(),
         });
         println!("{row}");
     }

@@ -22,7 +22,10 @@ use nalgebra::DMatrix;
 use crate::contact::ltca::{CycleStats, SetModel};
 use crate::dynamics::solver::{LowRankJacobian, RankOneTerm, SecondOrderSystem, TermCoefficients};
 use crate::model::gear::{Drive, GearSet, Member, MeshKind};
-use crate::model::lumped::{add_outer, Coordinate, LumpedSet, Reduction};
+use crate::model::lumped::{
+    add_outer, full_index, planet_bearing_vectors, ring_mesh_vector, sun_mesh_vector, Coordinate, Fidelity,
+    LumpedSet, Reduction,
+};
 
 /// One mesh of one planet in the dynamic model.
 #[derive(Clone, Debug)]
@@ -74,6 +77,11 @@ pub struct PlanetaryDynamics {
     links: Vec<Link>,
     f_ext: Vec<f64>,
     speed_drive: Option<SpeedDrive>,
+    /// The load balance: a speed controller on the output member
+    /// ([`GearSet::load_balance`]), with the index of the output's rotation.
+    balance: Option<(usize, SpeedDrive)>,
+    /// The held member's reaction ([`Self::reaction_torque`]).
+    reaction: Reaction,
     /// Index of the input member's rotation among the reduced coordinates.
     pub input_index: usize,
     /// Lever of the input member's rotation: u = lever·θ \[m\].
@@ -108,6 +116,31 @@ struct SpeedDrive {
     preload: f64,
 }
 
+/// How the held member's support reacts: the held rotation's share of each
+/// mesh force and planet-bearing force.
+#[derive(Clone, Debug, Default)]
+struct Reaction {
+    /// Lever of the held member's rotation, u = lever·θ \[m\].
+    lever: f64,
+    /// dᵀb of each mesh (d: the held rotation in full coordinates).
+    links: Vec<f64>,
+    /// The planet-bearing deflections with a share in the held rotation.
+    bearings: Vec<ReactionBearing>,
+}
+
+/// A planet-bearing deflection v·q in [`Reaction`].
+#[derive(Clone, Debug)]
+struct ReactionBearing {
+    /// dᵀv: the held rotation's share.
+    share: f64,
+    /// The deflection's reduced vector (nonzero entries).
+    vector: Vec<(usize, f64)>,
+    /// Stiffness \[N/m\].
+    stiffness: f64,
+    /// Damping [N·s/m].
+    damping: f64,
+}
+
 /// Errors of the dynamic model.
 #[derive(Debug, thiserror::Error)]
 pub enum DynamicsError {
@@ -138,6 +171,11 @@ pub fn rigid_speeds(set: &GearSet) -> (f64, f64, f64) {
         _ => (0.0, 0.0, 0.0),
     }
 }
+
+/// Natural frequency of the load balance's controlled rigid-body mode \[Hz\].
+pub const BALANCE_FREQUENCY: f64 = 50.0;
+/// Damping ratio of the load balance's controlled rigid-body mode [-].
+pub const BALANCE_DAMPING: f64 = 1.0;
 
 fn lever(set: &GearSet, m: Member) -> f64 {
     match m {
@@ -322,6 +360,72 @@ impl PlanetaryDynamics {
                 })
             }
         };
+        // The held member's rotation in full coordinates: its u, and in the
+        // torsional model with the carrier held the planets' η pinned to it.
+        let held = set.held();
+        let mut d = vec![0.0; reduction.full];
+        d[full_index(Coordinate::U(held))] = 1.0;
+        if set.fidelity() == Fidelity::Torsional && held == Member::Carrier {
+            for p in 0..n {
+                d[full_index(Coordinate::Eta(p))] = 1.0;
+            }
+        }
+        let dot = |b: &[f64]| b.iter().zip(&d).map(|(x, y)| x * y).sum::<f64>();
+        let mut reaction = Reaction { lever: lever(set, held), links: Vec::new(), bearings: Vec::new() };
+        for (p, psi) in set.planet_angles().iter().enumerate() {
+            reaction.links.push(dot(&sun_mesh_vector(n, p, *psi, alpha_s)));
+            reaction.links.push(dot(&ring_mesh_vector(n, p, *psi, alpha_r)));
+            let kp = lumped.planet_bearing_of(p);
+            let cp = 2.0 * zeta[3] * (kp * lumped.planet_mass).sqrt();
+            for bv in planet_bearing_vectors(n, p, *psi) {
+                let e = dot(&bv);
+                let reduced: Vec<(usize, f64)> =
+                    reduction.reduce_vector(&bv).into_iter().enumerate().filter(|(_, x)| *x != 0.0).collect();
+                if e != 0.0 && !reduced.is_empty() {
+                    reaction.bearings.push(ReactionBearing {
+                        share: e,
+                        vector: reduced,
+                        stiffness: kp,
+                        damping: cp,
+                    });
+                }
+            }
+        }
+        // The load balance: a torsional spring and damper from a source
+        // turning at the output's kinematic speed, a PI controller of the
+        // output's speed (the spring the integral, the damper the
+        // proportional part), tuned to [`BALANCE_FREQUENCY`] and
+        // [`BALANCE_DAMPING`] on the rigid-body inertia reduced to the
+        // output, and preloaded with the set's balancing torque.
+        let balance = match (set.load_balance(), u(set.output())) {
+            (true, Some(o)) => {
+                let out_lever = lever(set, set.output());
+                let r_out = rigid[o];
+                let inertia: f64 = if r_out != 0.0 {
+                    mass.iter().zip(&rigid).map(|(m, r)| m * (r / r_out) * (r / r_out)).sum()
+                } else {
+                    mass[o]
+                };
+                let w = 2.0 * std::f64::consts::PI * BALANCE_FREQUENCY;
+                let k = inertia * w * w;
+                let output_torque = match set.output() {
+                    Member::Sun => torques[0],
+                    Member::Ring => torques[1],
+                    Member::Carrier => torques[2],
+                };
+                Some((
+                    o,
+                    SpeedDrive {
+                        stiffness: k,
+                        damping: 2.0 * BALANCE_DAMPING * inertia * w,
+                        speed: 0.0,
+                        offset: output_torque / out_lever / k,
+                        preload: output_torque / out_lever,
+                    },
+                ))
+            }
+            _ => None,
+        };
         let slots = vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()];
         let mut support_nz = Vec::new();
         for i in 0..dim {
@@ -344,6 +448,8 @@ impl PlanetaryDynamics {
             links,
             f_ext: vec![0.0; dim],
             speed_drive,
+            balance,
+            reaction,
             input_index,
             input_lever,
             rigid_velocity: rigid,
@@ -366,6 +472,9 @@ impl PlanetaryDynamics {
         if let Some(d) = self.speed_drive {
             f[self.input_index] += d.preload;
         }
+        if let Some((o, b)) = self.balance {
+            f[o] += b.preload;
+        }
     }
 
     /// Places the speed drive's source so that at t = 0 the shaft's wind-up
@@ -374,6 +483,9 @@ impl PlanetaryDynamics {
         let i = self.input_index;
         if let Some(d) = &mut self.speed_drive {
             d.offset = q[i] + d.preload / d.stiffness;
+        }
+        if let Some((o, b)) = &mut self.balance {
+            b.offset = q[*o] + b.preload / b.stiffness;
         }
     }
 
@@ -392,6 +504,10 @@ impl PlanetaryDynamics {
         if let Some(d) = self.speed_drive {
             let w = d.offset + d.speed * t - q[self.input_index];
             support += 0.5 * d.stiffness * w * w;
+        }
+        if let Some((o, b)) = self.balance {
+            let w = b.offset + b.speed * t - q[o];
+            support += 0.5 * b.stiffness * w * w;
         }
         let (mut contact, mut power) = (0.0, 0.0);
         for link in &self.links {
@@ -413,13 +529,17 @@ impl PlanetaryDynamics {
     /// Sets the external torques on sun, ring and carrier [N·m],
     /// counter-clockwise positive; a held member's torque is its reaction and
     /// is ignored, and so is the input member's under the speed drive (its
-    /// shaft carries the torque). The generalised force on u = lever·θ is
-    /// T/lever.
+    /// shaft carries the torque) and the output member's under the load
+    /// balance (its controller does). The generalised force on u = lever·θ
+    /// is T/lever.
     pub fn set_torques(&mut self, sun: f64, ring: f64, carrier: f64) {
         self.f_ext.iter_mut().for_each(|f| *f = 0.0);
         for ((index, lever), torque) in self.rotations.iter().zip([carrier, ring, sun]) {
             if let Some(i) = index {
                 if self.speed_drive.is_some() && *i == self.input_index {
+                    continue;
+                }
+                if self.balance.is_some_and(|(o, _)| o == *i) {
                     continue;
                 }
                 self.f_ext[*i] = torque / lever;
@@ -435,6 +555,38 @@ impl PlanetaryDynamics {
             let i = self.input_index;
             (d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i])) * self.input_lever
         })
+    }
+
+    /// Torque of the load balance's controller on the output member [N·m],
+    /// counter-clockwise positive, if the load balance is on.
+    pub fn balancing_torque(&self, t: f64, q: &[f64], v: &[f64]) -> Option<f64> {
+        self.balance.map(|(o, b)| {
+            let lever = self.rotations.iter().find(|(i, _)| *i == Some(o)).map_or(1.0, |(_, l)| *l);
+            (b.stiffness * (b.offset + b.speed * t - q[o]) + b.damping * (b.speed - v[o])) * lever
+        })
+    }
+
+    /// Torque the support exerts on the held member [N·m], counter-clockwise
+    /// positive (the sign of the input torques), at the state of the last
+    /// force evaluation (`q`, `v` must be that state): what holds it at rest
+    /// against the mesh forces (with their damping) and, for a held carrier,
+    /// the planet bearings' forces. In a steady state it balances the other
+    /// members' torques on average: T_sun + T_ring + T_carrier = 0 with the
+    /// held member's torque replaced by this one.
+    pub fn reaction_torque(&self, q: &[f64], v: &[f64]) -> f64 {
+        let r = &self.reaction;
+        let meshes: f64 =
+            r.links.iter().zip(&self.meshes).map(|(c, m)| c * (m.force + m.damping_force)).sum();
+        let bearings: f64 = r
+            .bearings
+            .iter()
+            .map(|b| {
+                let dq: f64 = b.vector.iter().map(|(j, x)| x * q[*j]).sum();
+                let dv: f64 = b.vector.iter().map(|(j, x)| x * v[*j]).sum();
+                b.share * (b.stiffness * dq + b.damping * dv)
+            })
+            .sum();
+        r.lever * (meshes + bearings)
     }
 
     /// Number of meshes (2 per planet).
@@ -453,21 +605,42 @@ impl PlanetaryDynamics {
         if let Some(d) = &mut self.speed_drive {
             d.speed = omega * lever;
         }
+        if let Some((o, b)) = &mut self.balance {
+            b.speed = omega * self.rigid_velocity[*o];
+        }
     }
 
     /// The speed drive's source state (angle offset \[m\] and speed [m/s] on
-    /// u), empty for the torque drive.
+    /// u), then the load balance's source state, each only if present: empty
+    /// for the torque drive without load balance.
     pub fn drive_state(&self) -> Vec<f64> {
-        self.speed_drive.map_or(Vec::new(), |d| vec![d.offset, d.speed])
+        let mut state = self.speed_drive.map_or(Vec::new(), |d| vec![d.offset, d.speed]);
+        if let Some((_, b)) = self.balance {
+            state.extend([b.offset, b.speed]);
+        }
+        state
     }
 
     /// Restores a state from [`Self::drive_state`] (ignored when its length
-    /// does not fit this model's drive).
+    /// does not fit this model's drive and load balance).
     pub fn set_drive_state(&mut self, state: &[f64]) {
-        if let (Some(d), [offset, speed]) = (&mut self.speed_drive, state) {
-            d.offset = *offset;
-            d.speed = *speed;
+        let sources = usize::from(self.speed_drive.is_some()) + usize::from(self.balance.is_some());
+        if state.len() != 2 * sources {
+            return;
         }
+        let mut rest = state;
+        if let Some(d) = &mut self.speed_drive {
+            (d.offset, d.speed) = (rest[0], rest[1]);
+            rest = &rest[2..];
+        }
+        if let Some((_, b)) = &mut self.balance {
+            (b.offset, b.speed) = (rest[0], rest[1]);
+        }
+    }
+
+    /// Whether the output member is held at its kinematic speed by the load balance.
+    pub fn has_load_balance(&self) -> bool {
+        self.balance.is_some()
     }
 
     /// Changes the speed drive's source speed at time `t` \[s\] keeping the
@@ -478,6 +651,11 @@ impl PlanetaryDynamics {
             let new = omega * lever;
             d.offset += (d.speed - new) * t;
             d.speed = new;
+        }
+        if let Some((o, b)) = &mut self.balance {
+            let new = omega * self.rigid_velocity[*o];
+            b.offset += (b.speed - new) * t;
+            b.speed = new;
         }
     }
 
@@ -580,6 +758,9 @@ impl SecondOrderSystem for PlanetaryDynamics {
             let i = self.input_index;
             f[i] += d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i]);
         }
+        if let Some((o, b)) = self.balance {
+            f[o] += b.stiffness * (b.offset + b.speed * t - q[o]) + b.damping * (b.speed - v[o]);
+        }
     }
 
     fn jacobian(&mut self, _t: f64, q: &[f64], v: &[f64], k: &mut DMatrix<f64>, c: &mut DMatrix<f64>) {
@@ -608,6 +789,10 @@ impl SecondOrderSystem for PlanetaryDynamics {
             k[(i, i)] += d.stiffness;
             c[(i, i)] += d.damping;
         }
+        if let Some((o, b)) = self.balance {
+            k[(o, o)] += b.stiffness;
+            c[(o, o)] += b.damping;
+        }
     }
 
     fn low_rank_jacobian(&self) -> Option<LowRankJacobian> {
@@ -618,6 +803,10 @@ impl SecondOrderSystem for PlanetaryDynamics {
             let i = self.input_index;
             k0[(i, i)] += d.stiffness;
             c0[(i, i)] += d.damping;
+        }
+        if let Some((o, b)) = self.balance {
+            k0[(o, o)] += b.stiffness;
+            c0[(o, o)] += b.damping;
         }
         let terms = self.links.iter().map(|l| RankOneTerm { u: l.b_nz.clone(), p: l.p_nz.clone() }).collect();
         Some(LowRankJacobian { k0, c0, terms })

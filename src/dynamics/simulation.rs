@@ -163,6 +163,93 @@ impl Window {
     }
 }
 
+/// The extremes of the mesh forces over one communication step, at every
+/// point the step's integration passed through: the step's start, each
+/// internal step end (the fixed-step integrator's steps; for the adaptive
+/// one the internal grid points read from its dense output, both
+/// `stepsPerMeshCycle` points per mesh cycle at the nominal speed) and the
+/// step's end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepExtremes {
+    /// Smallest and largest sun–planet mesh force of planet 1 \[N\].
+    pub sun: (f64, f64),
+    /// Smallest and largest ring–planet mesh force of planet 1 \[N\].
+    pub ring: (f64, f64),
+    /// Largest sun–planet mesh force of any planet \[N\].
+    pub sun_any_max: f64,
+    /// Largest ring–planet mesh force of any planet \[N\].
+    pub ring_any_max: f64,
+    /// Whether planet 1's sun–planet mesh had no tooth pair in contact (a
+    /// zero mesh force: the mesh separated) at one of the points.
+    pub sun_separated: bool,
+    /// The same for planet 1's ring–planet mesh.
+    pub ring_separated: bool,
+    /// Whether any planet's sun–planet mesh separated at one of the points.
+    pub sun_any_separated: bool,
+    /// Whether any planet's ring–planet mesh separated at one of the points.
+    pub ring_any_separated: bool,
+}
+
+impl StepExtremes {
+    /// The extremes of a single state's mesh forces (planet-major: sun, ring).
+    fn at(meshes: &[crate::dynamics::equations::MeshState]) -> Self {
+        let mut e = Self {
+            sun: (f64::INFINITY, f64::NEG_INFINITY),
+            ring: (f64::INFINITY, f64::NEG_INFINITY),
+            sun_any_max: f64::NEG_INFINITY,
+            ring_any_max: f64::NEG_INFINITY,
+            sun_separated: false,
+            ring_separated: false,
+            sun_any_separated: false,
+            ring_any_separated: false,
+        };
+        e.observe(meshes);
+        e
+    }
+
+    fn observe(&mut self, meshes: &[crate::dynamics::equations::MeshState]) {
+        for (i, m) in meshes.iter().enumerate() {
+            let f = m.force;
+            let separated = f == 0.0;
+            if i % 2 == 0 {
+                self.sun_any_max = self.sun_any_max.max(f);
+                self.sun_any_separated |= separated;
+            } else {
+                self.ring_any_max = self.ring_any_max.max(f);
+                self.ring_any_separated |= separated;
+            }
+            match i {
+                0 => {
+                    self.sun = (self.sun.0.min(f), self.sun.1.max(f));
+                    self.sun_separated |= separated;
+                }
+                1 => {
+                    self.ring = (self.ring.0.min(f), self.ring.1.max(f));
+                    self.ring_separated |= separated;
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Finite values only (0 where no mesh was observed).
+    fn finite(mut self) -> Self {
+        for x in [
+            &mut self.sun.0,
+            &mut self.sun.1,
+            &mut self.ring.0,
+            &mut self.ring.1,
+            &mut self.sun_any_max,
+            &mut self.ring_any_max,
+        ] {
+            if !x.is_finite() {
+                *x = 0.0;
+            }
+        }
+        self
+    }
+}
+
 /// Where a bearing force acts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Bearing {
@@ -184,6 +271,7 @@ pub struct Simulation {
     torques: [f64; 3],
     speed_reference: f64,
     window: Window,
+    extremes: StepExtremes,
 }
 
 const TIME_TOLERANCE: f64 = 1e-9;
@@ -231,7 +319,9 @@ impl Simulation {
         // the integrator's start.
         let mut f = vec![0.0; model.dim()];
         model.force(t0, &start.q, &start.v, &mut f);
+        let extremes = StepExtremes::at(&model.meshes);
         Ok(Self {
+            extremes,
             model,
             stepper,
             set: set.clone(),
@@ -327,7 +417,16 @@ impl Simulation {
             return Ok(());
         }
         match self.set.drive() {
-            Drive::Torque => self.speed_reference = omega,
+            Drive::Torque if !self.model.has_load_balance() => self.speed_reference = omega,
+            Drive::Torque => {
+                // The load balance's source follows the reference.
+                self.speed_reference = omega;
+                self.model.change_drive_speed(omega, self.time);
+                let t = self.time;
+                self.stepper
+                    .forces_changed(&mut self.model)
+                    .map_err(|source| SimulationError::Integration { t, source })?;
+            }
             Drive::Speed => {
                 self.speed_reference = omega;
                 self.model.change_drive_speed(omega, self.time);
@@ -427,6 +526,8 @@ impl Simulation {
             / (self.nominal_step
                 * self.run.steps_per_mesh_cycle() as f64
                 * self.model.mesh_frequency_per_input_speed);
+        // The extremes start from the state at t (the last accepted one).
+        self.extremes = StepExtremes::at(&self.model.meshes);
         let work_start = match &self.stepper {
             Stepper::Rk(r) => r.stats().rhs_evaluations,
             Stepper::Alpha(_) => 0,
@@ -487,6 +588,7 @@ impl Simulation {
             }
             self.model.force(tk, &q_dense, &v_dense, &mut f);
             let m = &self.model.meshes;
+            self.extremes.observe(m);
             if m.len() >= 2 {
                 self.window.push(m[0].position, m[0].force, m[1].force);
             }
@@ -520,6 +622,28 @@ impl Simulation {
                 Member::Carrier => self.torques[2],
             },
         }
+    }
+
+    /// The extremes of the mesh forces over the last communication step
+    /// ([`StepExtremes`]; before the first step, and after a restore until
+    /// the next step, those of the current state alone). Always finite.
+    pub fn step_extremes(&self) -> StepExtremes {
+        self.extremes.finite()
+    }
+
+    /// Torque the support exerts on the held member [N·m], counter-clockwise
+    /// positive, at the current state
+    /// ([`PlanetaryDynamics::reaction_torque`]).
+    pub fn reaction_torque(&self) -> f64 {
+        let (q, v) = self.stepper.state();
+        self.model.reaction_torque(q, v)
+    }
+
+    /// Torque of the load balance's speed controller on the output member
+    /// [N·m], counter-clockwise positive; 0 without the load balance.
+    pub fn balancing_torque(&self) -> f64 {
+        let (q, v) = self.stepper.state();
+        self.model.balancing_torque(self.time, q, v).unwrap_or(0.0)
     }
 
     /// Tooth pairs carrying load in a mesh of planet `p`.
@@ -705,6 +829,7 @@ impl Simulation {
         self.time = s.time;
         let mut f = vec![0.0; n];
         self.model.force(s.time, &s.q, &s.v, &mut f);
+        self.extremes = StepExtremes::at(&self.model.meshes);
         let cap = self.window.cycles * self.window.samples_per_cycle;
         if s.window_sun.len() == s.window_ring.len() && s.window_sun.len() <= cap {
             self.window.sun = s.window_sun.iter().copied().collect();

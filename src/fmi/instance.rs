@@ -11,7 +11,7 @@ use super::parameters;
 use super::variables::{vr, Causality, Kind, Settable, Start, Variable, GUID, VARIABLES};
 use crate::contact::ltca::SetModel;
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::dynamics::simulation::{Bearing, Simulation, Snapshot};
+use crate::dynamics::simulation::{Bearing, Simulation, Snapshot, StepExtremes};
 use crate::dynamics::spectrum::Harmonics;
 use crate::dynamics::state_format;
 use crate::model::gear::{Member, MeshKind};
@@ -435,6 +435,7 @@ impl Instance {
             | V::BearingDampingRatio
             | V::MeshDampingRatio
             | V::ShaftStiffness
+            | V::LoadBalance
             | V::InitialSpeed => {
                 self.store(v, value);
                 self.changed(v);
@@ -523,7 +524,19 @@ impl Instance {
             | V::Planet7RingPairsInContact
             | V::Planet8SunPairsInContact
             | V::Planet8RingPairsInContact
-            | V::WindowCycles => {
+            | V::WindowCycles
+            | V::Planet1SunMeshForceMax
+            | V::Planet1SunMeshForceMin
+            | V::Planet1RingMeshForceMax
+            | V::Planet1RingMeshForceMin
+            | V::SunMeshForceMax
+            | V::RingMeshForceMax
+            | V::Planet1SunSeparated
+            | V::Planet1RingSeparated
+            | V::SunMeshSeparated
+            | V::RingMeshSeparated
+            | V::ReactionTorque
+            | V::BalancingTorque => {
                 Err(Refusal::error(format!("{} is an output and cannot be set", variable.name())))
             }
         }
@@ -581,6 +594,9 @@ impl Instance {
             real(&|s| s.window_harmonics(m).map_or(0.0, |(h, sep)| read(&h, sep)))
         };
         let pairs = |p: usize, m: MeshKind| Ok(Value::Integer(sim()?.pairs_in_contact(p, m) as i32));
+        let flag = |read: fn(&StepExtremes) -> bool| {
+            Ok::<_, Refusal>(Value::Integer(i32::from(read(&sim()?.step_extremes()))))
+        };
         Ok(match variable {
             V::SceneFile | V::WearStateFile => {
                 Value::String(self.strings.get(&v).cloned().unwrap_or_default())
@@ -596,7 +612,8 @@ impl Instance {
             | V::Planets
             | V::SunTeeth
             | V::PlanetTeeth
-            | V::RingTeeth => Value::Integer(self.int(v)),
+            | V::RingTeeth
+            | V::LoadBalance => Value::Integer(self.int(v)),
             V::RhoInfinity
             | V::RelativeTolerance
             | V::Module
@@ -717,6 +734,18 @@ impl Instance {
             V::Planet8SunPairsInContact => pairs(7, Sun)?,
             V::Planet8RingPairsInContact => pairs(7, Ring)?,
             V::WindowCycles => Value::Integer(sim()?.window_cycles() as i32),
+            V::Planet1SunMeshForceMax => real(&|s| s.step_extremes().sun.1)?,
+            V::Planet1SunMeshForceMin => real(&|s| s.step_extremes().sun.0)?,
+            V::Planet1RingMeshForceMax => real(&|s| s.step_extremes().ring.1)?,
+            V::Planet1RingMeshForceMin => real(&|s| s.step_extremes().ring.0)?,
+            V::SunMeshForceMax => real(&|s| s.step_extremes().sun_any_max)?,
+            V::RingMeshForceMax => real(&|s| s.step_extremes().ring_any_max)?,
+            V::Planet1SunSeparated => flag(|e| e.sun_separated)?,
+            V::Planet1RingSeparated => flag(|e| e.ring_separated)?,
+            V::SunMeshSeparated => flag(|e| e.sun_any_separated)?,
+            V::RingMeshSeparated => flag(|e| e.ring_any_separated)?,
+            V::ReactionTorque => real(&|s| s.reaction_torque())?,
+            V::BalancingTorque => real(&|s| s.balancing_torque())?,
         })
     }
 
@@ -998,7 +1027,8 @@ mod tests {
         };
         // Keys that are optional in a scene file: the planets' own angles
         // and bearing stiffnesses (the example spaces them equally, alike).
-        let optional = ["planets.angles_deg", "supports.planet_bearings_n_per_m"];
+        // The load balance is written only when on.
+        let optional = ["planets.angles_deg", "supports.planet_bearings_n_per_m", "dynamics.load_balance"];
         for p in Settable::ALL {
             for key in parameters::scene_keys(*p) {
                 assert!(
@@ -1008,6 +1038,44 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The run-away: an unbalanced sun torque (1.5 times the
+    /// default) with loadBalance 1 keeps the speed, and the new outputs are
+    /// finite and in their relations; loadBalance 2 is refused by name.
+    #[test]
+    fn the_load_balance_and_the_step_outputs_through_the_fmu() {
+        let mut i = Instance::new("balance", None);
+        i.enter_initialization();
+        i.set_integer(vr::FIDELITY, 0).unwrap();
+        i.set_integer(vr::LOAD_BALANCE, 1).unwrap();
+        i.exit_initialization().unwrap();
+        let reference = i.get_real(vr::INPUT_SPEED_REFERENCE).unwrap();
+        let sun = i.get_real(vr::SUN_TORQUE).unwrap();
+        i.set_real(vr::SUN_TORQUE, 1.5 * sun).unwrap();
+        let h = 1e-3;
+        let mut angle = i.get_real(vr::SUN_ANGLE).unwrap();
+        for k in 0..150 {
+            i.do_step(k as f64 * h, h).unwrap();
+            let a = i.get_real(vr::SUN_ANGLE).unwrap();
+            let mean = (a - angle) / h;
+            angle = a;
+            assert!(mean > 0.9 * reference && mean < 1.5 * reference, "mean speed {mean} at step {k}");
+            let (max, min, end) = (
+                i.get_real(vr::PLANET_1_SUN_MESH_FORCE_MAX).unwrap(),
+                i.get_real(vr::PLANET_1_SUN_MESH_FORCE_MIN).unwrap(),
+                i.get_real(vr::PLANET_1_SUN_MESH_FORCE).unwrap(),
+            );
+            assert!(min <= end && end <= max && max <= i.get_real(vr::SUN_MESH_FORCE_MAX).unwrap());
+        }
+        assert!(i.get_real(vr::BALANCING_TORQUE).unwrap() > 0.0);
+        assert!(i.get_real(vr::REACTION_TORQUE).unwrap() < 0.0);
+        assert_eq!(i.get_integer(vr::PLANET_1_SUN_SEPARATED).unwrap(), 0);
+        let mut j = Instance::new("bad", None);
+        j.enter_initialization();
+        j.set_integer(vr::LOAD_BALANCE, 2).unwrap();
+        let e = j.exit_initialization().unwrap_err();
+        assert!(e.message.contains("loadBalance = 2: allowed are 0"), "{}", e.message);
     }
 
     #[test]

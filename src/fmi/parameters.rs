@@ -191,6 +191,18 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
         Settable::BearingDampingRatio => scene.supports.bearing_damping_ratio = r,
         Settable::MeshDampingRatio => scene.dynamics.mesh_damping_ratio = r,
         Settable::ShaftStiffness => scene.dynamics.shaft_stiffness_nm_per_rad = r,
+        Settable::LoadBalance => {
+            scene.dynamics.load_balance = match values.int(v) {
+                0 => false,
+                1 => true,
+                x => {
+                    return Err(format!(
+                        "loadBalance = {x}: allowed are 0 (the output loaded by its torque input), \
+                         1 (load balance: a speed controller holds the output at its kinematic speed)"
+                    ))
+                }
+            }
+        }
     }
     Ok(())
 }
@@ -274,6 +286,7 @@ pub(super) fn scene_keys(p: Settable) -> &'static [&'static str] {
         Settable::BearingDampingRatio => &["supports.bearing_damping_ratio"],
         Settable::MeshDampingRatio => &["dynamics.mesh_damping_ratio"],
         Settable::ShaftStiffness => &["dynamics.shaft_stiffness_nm_per_rad"],
+        Settable::LoadBalance => &["dynamics.load_balance"],
     }
 }
 

@@ -508,6 +508,7 @@ fn validate(scene: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
         mesh_damping_ratio: d.mesh_damping_ratio,
         drive: d.drive,
         shaft_stiffness: d.shaft_stiffness_nm_per_rad,
+        load_balance: d.load_balance,
     };
     // Bodies from the geometry, then the user's overrides.
     let mut set = set;

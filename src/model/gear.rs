@@ -408,6 +408,8 @@ pub struct GearSet {
     pub(in crate::model) drive: Drive,
     /// Input shaft torsional stiffness for the speed drive [N·m/rad].
     pub(in crate::model) shaft_stiffness: f64,
+    /// Whether a speed controller holds the output member at its kinematic speed.
+    pub(in crate::model) load_balance: bool,
 }
 
 /// Read access to a validated gear set. The fields are visible to the model
@@ -503,6 +505,13 @@ impl GearSet {
     /// Torsional stiffness of the input shaft for the speed drive [N·m/rad].
     pub fn shaft_stiffness(&self) -> f64 {
         self.shaft_stiffness
+    }
+
+    /// Whether the output member is held at the kinematic speed of the input
+    /// speed reference by a speed controller (a dynamometer) whose torque
+    /// replaces the output's external torque.
+    pub fn load_balance(&self) -> bool {
+        self.load_balance
     }
 }
 

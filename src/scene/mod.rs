@@ -192,6 +192,11 @@ pub struct DynamicsSpec {
     pub measured_revolutions: f64,
     /// Samples per mesh cycle of the recorded outputs.
     pub samples_per_mesh_cycle: u32,
+    /// Load balance: a speed controller (a dynamometer) holds the output
+    /// member at the kinematic speed of the input speed, its torque in place
+    /// of the output's external torque.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub load_balance: bool,
 }
 
 impl Default for DynamicsSpec {
@@ -212,6 +217,7 @@ impl Default for DynamicsSpec {
             steady_tolerance: 1e-5,
             measured_revolutions: 2.0,
             samples_per_mesh_cycle: 60,
+            load_balance: false,
         }
     }
 }
