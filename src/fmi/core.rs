@@ -876,6 +876,21 @@ mod tests {
         assert!(sun.len() <= 3 && ring.len() <= 3, "{warned:?}");
     }
 
+    /// With the load balance on, the output's torque is the one that keeps
+    /// its mean speed: the same unbalanced input runs nowhere and is not
+    /// called a run-away.
+    #[test]
+    fn the_load_balance_keeps_unbalanced_torques_from_being_called_a_run_away() {
+        let (mut c, log) = logged();
+        assert_eq!(
+            c.call(Call::Set, "fmi2SetInteger", |c| c.set_integer(&[vr::LOAD_BALANCE], &[1])),
+            fmi2Status_fmi2OK
+        );
+        assert_eq!(initialize(&mut c, &[(vr::SUN_TORQUE, 1125.0)]), fmi2Status_fmi2OK);
+        let warned = steps(&mut c, &log, 1e-3, 0.05);
+        assert!(warned.iter().all(|(_, m)| !m.contains("run-away")), "{warned:?}");
+    }
+
     #[test]
     fn an_initial_speed_given_in_rpm_warns_at_initialization_and_not_again() {
         let (mut c, log) = logged();

@@ -121,9 +121,12 @@ impl Watch {
         // The torques' rigid-body acceleration over the step, integrated
         // from the speed the input member started from or, under
         // driveMode 2, was last stepped to. A speed drive (driveMode 1)
-        // holds the speed through its shaft: nothing runs away.
+        // holds the speed through its shaft, and the load balance
+        // (loadBalance = 1) replaces the output's torque by the one that
+        // keeps its mean speed: nothing runs away.
         let margin = self.margin(Condition::RunAway);
         let finding = match set.drive() {
+            _ if set.load_balance() => None,
             Drive::Speed => None,
             drive => {
                 if drive == Drive::SpeedSteps && inputs.speed_reference != self.reference {
