@@ -4,7 +4,7 @@
 //! member running away from unbalanced torques, teeth separating for a
 //! large part of the mesh cycle, a contact pressure past the material's
 //! allowable. The thresholds and checks live here once; the FMU
-//! (`fmi/warnings.rs`) and the command line word them for their users.
+//! (`fmi/instance/warnings.rs`) and the command line word them for their users.
 //!
 //! A check returns `None` when the figure is plausible and otherwise the
 //! sentence that says what was seen, the threshold and why it matters.

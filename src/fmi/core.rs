@@ -16,9 +16,9 @@ use std::path::PathBuf;
 
 use fmi_sys::fmi2::*;
 
+use super::instance::warnings::{Inputs, Watch};
 use super::instance::{Instance, Phase, Refusal, SavedState, Status};
 use super::variables::{vr, GUID, LOG_CATEGORIES};
-use super::warnings::{Inputs, Watch};
 
 /// Every call the table knows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -101,7 +101,7 @@ pub struct Component {
     /// freed or foreign pointer is refused, and fmi2FreeInstance frees every
     /// state still held.
     states: BTreeMap<usize, Box<SavedState>>,
-    /// The plausibility conditions in force (fmi/warnings.rs).
+    /// The plausibility conditions in force (fmi/instance/warnings.rs).
     watch: Watch,
     /// Warnings of the call under way: the call returns fmi2Warning and
     /// each is logged under logStatusWarning.
@@ -353,7 +353,7 @@ impl Component {
     }
 
     /// fmi2ExitInitializationMode: builds the simulation; an initial speed
-    /// past the overspeed limit is a warning (fmi/warnings.rs).
+    /// past the overspeed limit is a warning (fmi/instance/warnings.rs).
     pub fn exit_initialization_mode(&mut self) -> Result<(), Refusal> {
         self.instance.exit_initialization()?;
         let initial_speed = self.instance.get_real(vr::INITIAL_SPEED)?;
@@ -483,7 +483,7 @@ impl Component {
     }
 
     /// fmi2DoStep; a completed step whose state sets off a plausibility
-    /// condition (fmi/warnings.rs) returns fmi2Warning.
+    /// condition (fmi/instance/warnings.rs) returns fmi2Warning.
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), Refusal> {
         self.instance.do_step(t, h)?;
         let inputs = Inputs {

@@ -12,7 +12,7 @@
 
 use std::collections::BTreeMap;
 
-use super::variables::{Settable, Variable};
+use crate::fmi::variables::{Settable, Variable};
 use crate::model::gear::{Drive, IntegratorKind, Member};
 use crate::model::lumped::Fidelity;
 use crate::scene::{ChamferSpec, PlanetLayoutSpec, Problem, Scene};
@@ -307,7 +307,7 @@ pub(super) fn describe_problem(
             let v = p.variable();
             let info = v.info();
             let value = match info.kind {
-                super::variables::Kind::Integer => values.int(v).to_string(),
+                crate::fmi::variables::Kind::Integer => values.int(v).to_string(),
                 _ => {
                     let unit = if info.unit.is_empty() || info.unit == "1" {
                         String::new()

@@ -2,18 +2,23 @@
 //! the parameters turned into a scene and a [`Simulation`], outputs read from
 //! it, the FMI 2.0 co-simulation phases, and FMU states. The FMI calls
 //! (`core.rs`) report what this returns; the C boundary (`export.rs`) only
-//! converts arguments.
+//! converts arguments. Beside it: the parameters → scene (`parameters.rs`),
+//! the numerical guards of a step (`guard.rs`) and the plausibility
+//! warnings (`warnings.rs`).
+
+pub mod guard;
+mod parameters;
+pub mod warnings;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
-use super::parameters;
-use super::variables::{vr, Causality, Kind, Settable, Start, Variable, GUID, VARIABLES};
 use crate::contact::ltca::SetModel;
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::simulation::{Bearing, Simulation, Snapshot, StepExtremes};
 use crate::dynamics::spectrum::Harmonics;
 use crate::dynamics::state_format;
+use crate::fmi::variables::{vr, Causality, Kind, Settable, Start, Variable, GUID, VARIABLES};
 use crate::model::gear::{Member, MeshKind};
 use crate::scene::Scene;
 
@@ -815,13 +820,12 @@ impl Instance {
             .sim
             .as_mut()
             .ok_or_else(|| Refusal::error("no simulation: exit initialization mode first"))?;
-        // The numerical guards (fmi/guard.rs): a step that would overflow is
+        // The numerical guards (fmi/instance/guard.rs): a step that would overflow is
         // discarded at once, an overflowed state is never fmi2OK.
-        let guarded =
-            super::guard::before_step(sim, torques, h).map(|()| sim.do_step(t, h)).and_then(|r| match r {
-                Ok(()) => super::guard::after_step(sim).map(|()| Ok(())),
-                Err(e) => Ok(Err(e)),
-            });
+        let guarded = guard::before_step(sim, torques, h).map(|()| sim.do_step(t, h)).and_then(|r| match r {
+            Ok(()) => guard::after_step(sim).map(|()| Ok(())),
+            Err(e) => Ok(Err(e)),
+        });
         let stepped = match guarded {
             Ok(r) => r,
             Err(why) => {
