@@ -224,6 +224,12 @@ fn model_description_xml(table: &Table, guid: &str) -> std::io::Result<String> {
     Ok(text)
 }
 
+/// A description as one line of a doc comment: brackets escaped, so that
+/// `planet[1]` in a description is text and not a link.
+fn doc_text(description: &str) -> String {
+    description.replace('\n', " ").replace('[', "\\[").replace(']', "\\]")
+}
+
 /// The CamelCase variant name of a variable: `planet[1].sunMeshForce` is
 /// `Planet1SunMeshForce`.
 fn variant_name(name: &str) -> String {
@@ -252,7 +258,7 @@ fn enum_source(table: &Table, r: &mut String) {
          #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]\npub enum Variable {\n",
     );
     for (v, variant) in table.variable.iter().zip(&variants) {
-        let _ = writeln!(r, "    /// `{}`: {}\n    {variant},", v.name, v.description.replace('\n', " "));
+        let _ = writeln!(r, "    /// `{}`: {}\n    {variant},", v.name, doc_text(&v.description));
     }
     r.push_str("}\n\nimpl Variable {\n    /// Every variable, in modelDescription.xml order.\n    pub const ALL: &'static [Variable] = &[\n");
     for variant in &variants {
@@ -449,7 +455,7 @@ fn main() {
             r,
             "    /// `{}`: {}\n    pub const {}: u32 = {};",
             v.name,
-            v.description.replace('\n', " "),
+            doc_text(&v.description),
             const_name(&v.name),
             v.vr
         );
