@@ -91,10 +91,35 @@ def test_an_invalid_parameter_is_an_error_that_names_it(fmu):
     # a global pointer to the last logger it was given.
     messages = MESSAGES
     messages.clear()
-    with pytest.raises(FMICallException):
-        simulate_fmu(str(FMU), stop_time=1e-3, start_values={"module": -0.0015}, logger=_logger, debug_logging=True)
+    try:
+        with pytest.raises(FMICallException):
+            simulate_fmu(str(FMU), stop_time=1e-3, start_values={"module": -0.0015}, logger=_logger,
+                         debug_logging=True)
+    finally:
+        restore_fmpy_default_logger()
     print(*messages, sep="\n")
     assert any("module" in m for m in messages), messages
+
+
+_DEFAULT_LOGGER_CALLBACKS = []
+
+
+def restore_fmpy_default_logger():
+    """fmpy's logging shim keeps one global pointer to the logger of the
+    last callbacks it was given (and puts itself in their place); after
+    `simulate_fmu(logger=…)` returns, that logger is freed, and an instance
+    made later with fmpy's default callbacks would call it when the FMU
+    logs a status message (which it does whatever loggingOn says). Giving
+    the shim a logger that lives as long as this module makes that safe."""
+    from ctypes import byref
+
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
+    from fmpy.logging import addLoggerProxy
+
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(printLogMessage)
+    _DEFAULT_LOGGER_CALLBACKS.append(callbacks)
+    addLoggerProxy(byref(callbacks))
 
 
 def run_states(md, unzipdir, name):
