@@ -50,6 +50,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{static_state, Stepper, Work};
+use crate::dynamics::rigid_frame::RigidFrame;
 use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics, SpectrumError};
 use crate::model::gear::{GearSet, IntegratorKind};
@@ -410,66 +411,6 @@ fn integrate<S: SecondOrderSystem>(
         Stepper::Alpha(_) => Vec::new(),
     };
     Ok(Samples { q: qs, v: vs, work: stepper.stats(), cpu_seconds, events })
-}
-
-/// The model in coordinates relative to its rigid-body motion: q = q_e +
-/// r t, q̇ = q̇_e + r with r the rigid-body velocity at the speed. The same
-/// equations (the rigid motion has no acceleration), but the integrated
-/// coordinates stay of the size of the elastic deflections instead of
-/// growing with the rotation angles, so a relative tolerance means what it
-/// says for every coordinate and no rounding of large angles accumulates.
-/// The reference and the independent integrator run in this frame.
-struct RigidFrame<'a> {
-    model: &'a mut PlanetaryDynamics,
-    rigid: Vec<f64>,
-    q: Vec<f64>,
-    v: Vec<f64>,
-}
-
-impl<'a> RigidFrame<'a> {
-    fn new(model: &'a mut PlanetaryDynamics, rigid: Vec<f64>) -> Self {
-        let n = rigid.len();
-        Self { model, rigid, q: vec![0.0; n], v: vec![0.0; n] }
-    }
-
-    fn absolute(&mut self, t: f64, qe: &[f64], ve: &[f64]) {
-        for i in 0..self.rigid.len() {
-            self.q[i] = qe[i] + self.rigid[i] * t;
-            self.v[i] = ve[i] + self.rigid[i];
-        }
-    }
-}
-
-impl SecondOrderSystem for RigidFrame<'_> {
-    fn dim(&self) -> usize {
-        self.model.dim()
-    }
-
-    fn mass(&self) -> &[f64] {
-        self.model.mass()
-    }
-
-    fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
-        self.absolute(t, q, v);
-        self.model.force(t, &self.q, &self.v, f);
-    }
-
-    fn jacobian(
-        &mut self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-        k: &mut nalgebra::DMatrix<f64>,
-        c: &mut nalgebra::DMatrix<f64>,
-    ) {
-        self.absolute(t, q, v);
-        self.model.jacobian(t, &self.q, &self.v, k, c);
-    }
-
-    fn events(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
-        self.absolute(t, q, v);
-        self.model.events(t, &self.q, &self.v, out);
-    }
 }
 
 /// Frame states back to absolute ones.

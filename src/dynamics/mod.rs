@@ -21,6 +21,7 @@
 pub mod equations;
 pub mod periodic;
 pub mod response;
+pub mod rigid_frame;
 pub mod simulation;
 pub mod solver;
 pub mod spectrum;

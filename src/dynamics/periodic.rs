@@ -38,6 +38,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{static_state, MeshResponse, State, SteadyState, Work};
+use crate::dynamics::rigid_frame::RigidFrame;
 use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, SpectrumError};
 
@@ -229,56 +230,6 @@ pub struct Linearization {
 /// model evaluated there.
 type Observer<'a> = dyn FnMut(f64, &PlanetaryDynamics) + 'a;
 
-/// The model in coordinates relative to the rigid-body motion at a speed:
-/// q = q_e + r ω t, v = v_e + r ω.
-struct Relative<'a> {
-    model: &'a mut PlanetaryDynamics,
-    rigid: Vec<f64>,
-    q: Vec<f64>,
-    v: Vec<f64>,
-}
-
-impl Relative<'_> {
-    fn absolute(&mut self, t: f64, qe: &[f64], ve: &[f64]) {
-        for i in 0..qe.len() {
-            self.q[i] = qe[i] + self.rigid[i] * t;
-            self.v[i] = ve[i] + self.rigid[i];
-        }
-    }
-}
-
-impl SecondOrderSystem for Relative<'_> {
-    fn dim(&self) -> usize {
-        self.model.dim()
-    }
-
-    fn mass(&self) -> &[f64] {
-        self.model.mass()
-    }
-
-    fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
-        self.absolute(t, q, v);
-        self.model.force(t, &self.q, &self.v, f);
-    }
-
-    fn jacobian(
-        &mut self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-        k: &mut nalgebra::DMatrix<f64>,
-        c: &mut nalgebra::DMatrix<f64>,
-    ) {
-        self.absolute(t, q, v);
-        self.model.jacobian(t, &self.q, &self.v, k, c);
-    }
-
-    fn events(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
-        self.absolute(t, q, v);
-        self.model.events(t, &self.q, &self.v, out);
-    }
-}
-
 /// Mesh cycles (1, 2, …, up to 12) after which the equations of motion in
 /// the relative frame repeat at speed `omega` [rad/s]: the least common
 /// period of all meshes' excitation. Checked on the model's forces at three
@@ -297,7 +248,7 @@ pub fn excitation_period(model: &mut PlanetaryDynamics, omega: f64) -> Result<us
     model.set_drive_speed(omega);
     let s = static_state(model, omega);
     let rigid = model.rigid_velocity_at(omega);
-    let mut frame = Relative { model, rigid, q: vec![0.0; n], v: vec![0.0; n] };
+    let mut frame = RigidFrame::new(model, rigid);
     let ve = vec![0.0; n];
     let mut worst = f64::INFINITY;
     for cycles in 1..=12usize {
@@ -453,7 +404,7 @@ impl PeriodicProblem {
         let mut rk = self.integrator(period).map_err(err)?;
         self.model.set_drive_speed(omega);
         let rigid = self.model.rigid_velocity_at(omega);
-        let mut frame = Relative { model: &mut self.model, rigid, q: vec![0.0; n], v: vec![0.0; n] };
+        let mut frame = RigidFrame::new(&mut self.model, rigid);
         rk.init(&mut frame, 0.0, &qe, &ve).map_err(err)?;
         match &mut sample {
             Some((samples, observe)) => {
@@ -468,7 +419,7 @@ impl PeriodicProblem {
                     if let Some(i) = f.iter().position(|x| !x.is_finite()) {
                         return Err(err(SolverError::NonFiniteState { t, index: i }));
                     }
-                    observe(t, frame.model);
+                    observe(t, frame.model());
                 }
                 rk.advance_to(&mut frame, period).map_err(err)?;
             }
