@@ -298,8 +298,10 @@ impl MeshModel {
             f += law.force;
             kd += law.stiffness;
             ks += law.position_derivative;
-            let slot = 2 * (i64::from(index).rem_euclid(slots as i64) as usize);
-            if slot + 1 < events.len() {
+            // No slots (the hot path of a face cut in slices) asks for no
+            // event values.
+            if slots > 0 {
+                let slot = 2 * (i64::from(index).rem_euclid(slots as i64) as usize);
                 events[slot] = law.event_drive;
                 events[slot + 1] = law.event_back;
             }
