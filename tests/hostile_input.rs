@@ -390,6 +390,47 @@ fn a_valid_looking_scene_whose_run_would_exceed_the_budget_is_refused_by_check_a
 }
 
 #[test]
+fn an_ltca_over_its_budget_is_refused_by_check_and_by_every_command() {
+    // 1e5 positions per mesh cycle on 1000 face slices: each value is in
+    // its range, but one LTCA would take most of an hour (and a dynamic run
+    // on such a face once divided by zero).
+    let dir = tempfile::tempdir().unwrap();
+    let fine = scene_file(dir.path(), "fine.toml", |t| {
+        set_key(set_key(t, "positions_per_mesh_cycle", "100000"), "face_slices", "1000")
+    });
+    for cmd in
+        [&["scene", "check", s(&fine)][..], &["ltca", "--scene", s(&fine)], &["run", "--scene", s(&fine)]]
+    {
+        refused(cmd, 10.0, &["analysis.positions_per_mesh_cycle × analysis.face_slices", "1.000e8", "1e7"]);
+    }
+}
+
+#[test]
+fn a_sweep_over_its_step_budget_is_refused_before_it_writes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sweep");
+    // 72 501 speeds both ways at about 8e4 internal steps each.
+    refused(
+        &[
+            "sweep",
+            "--scene",
+            "example-2004",
+            "--from",
+            "500",
+            "--to",
+            "15000",
+            "--step",
+            "0.2",
+            "--out",
+            s(&out),
+        ],
+        10.0,
+        &["72501 speeds × 2 directions", "internal steps", "1e10"],
+    );
+    assert!(!out.exists(), "the refused sweep created its output directory");
+}
+
+#[test]
 fn a_grid_whose_state_file_would_exceed_its_limit_is_a_warning_of_check() {
     let dir = tempfile::tempdir().unwrap();
     let fine = scene_file(dir.path(), "fine.toml", |t| {

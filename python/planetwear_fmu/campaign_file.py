@@ -459,6 +459,18 @@ def from_dict(raw, source, output_dir=None, *, probe):
         out = (out if out.is_absolute() else base / out).resolve()
         if out.exists() and not out.is_dir():
             bad("output_dir", str(out), "exists and is not a directory")
+        elif not out.exists():
+            # Checked before any run: the directory must be creatable, so
+            # its nearest existing ancestor is a directory one may write in.
+            anc = out.parent
+            while not anc.exists() and anc != anc.parent:
+                anc = anc.parent
+            if not anc.is_dir():
+                bad("output_dir", str(out), f"cannot be created: {anc} is not a directory")
+            elif not os.access(anc, os.W_OK | os.X_OK):
+                bad("output_dir", str(out), f"cannot be created: no permission to write in {anc}")
+        elif not os.access(out, os.W_OK | os.X_OK):
+            bad("output_dir", str(out), "is a directory without permission to write in it")
 
     # The speed grid.
     sp = tab["speeds"]

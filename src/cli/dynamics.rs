@@ -83,7 +83,8 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         other => bail!("--method {other}: allowed are march, continuation"),
     }
     let SweepArgs { scene, wear_state, from, to, step, direction, out, histories, json, .. } = args;
-    let (set, run_settings) = validated_with_run(&load_scene(&scene)?)?;
+    let scene = load_scene(&scene)?;
+    let (set, run_settings) = validated_with_run(&scene)?;
     let speeds = speed_grid(from, to, step)?;
     let dirs: Vec<Direction> = match direction.as_str() {
         "up" => vec![Direction::Up],
@@ -91,6 +92,8 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         "both" => vec![Direction::Up, Direction::Down],
         other => bail!("--direction {other}: allowed are up, down, both"),
     };
+    planetwear::model::cost::sweep(&scene, speeds.len(), dirs.len(), "--from/--to/--step/--direction")
+        .map_err(|p| anyhow::anyhow!("{p}"))?;
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     remove_marker(&out.join("sweep.json"))?;
     let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;

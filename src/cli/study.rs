@@ -73,7 +73,10 @@ pub(crate) fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: b
                 print_calibration(&done.report, &file.base);
             }
             if let Some(path) = out {
-                write_atomic(path, done.scene.to_toml().as_bytes())?;
+                // A scene the tool writes is one it reads back.
+                let text = done.scene.to_toml();
+                planetwear::files::check_output_size(path, planetwear::files::InputKind::Scene, text.len())?;
+                write_atomic(path, text.as_bytes())?;
                 if !json {
                     println!("wrote the calibrated scene {} to {}", done.scene.name, path.display());
                 }

@@ -276,11 +276,14 @@ pub fn check_output_size(path: &Path, kind: InputKind, len: usize) -> Result<(),
         error: std::io::Error::new(
             std::io::ErrorKind::InvalidData,
             format!(
-                "not written: {} would be larger than the {} a {} may have (the reader refuses it); \
-                 use fewer grid points or face slices",
+                "not written: {} would be larger than the {} a {} may have (the reader refuses it){}",
                 bytes_text(len as u64),
                 kind.limit_text(),
-                kind.name()
+                kind.name(),
+                match kind {
+                    InputKind::WornState => "; use fewer grid points or face slices",
+                    _ => "",
+                }
             ),
         ),
     })

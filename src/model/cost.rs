@@ -33,6 +33,15 @@ pub const STEP_BUDGET: f64 = 2.0e8;
 pub const RK_STEPS_PER_MESH_CYCLE: f64 = 800.0;
 /// The relative tolerance [`RK_STEPS_PER_MESH_CYCLE`] was measured at.
 pub const RK_REFERENCE_TOLERANCE: f64 = 3e-6;
+/// Most LTCA work one analysis may plan for, in mesh positions × face
+/// slices of each mesh: about a minute at the measured 5–7 µs each (the
+/// example: 2e6 take 11–14 s, 4e6 take 20 s); the wear stepper runs one
+/// LTCA per update.
+pub const LTCA_BUDGET: f64 = 1.0e7;
+/// Most internal steps one speed sweep may plan for: every speed of every
+/// direction a steady state at its longest; about 14 hours at the example's
+/// rate (200 000 steps per second).
+pub const SWEEP_STEP_BUDGET: f64 = 1.0e10;
 /// Bytes one number of a worn-profile state takes as written (pretty JSON:
 /// indentation, 17 significant digits, separators).
 pub const STATE_BYTES_PER_NUMBER: f64 = 40.0;
@@ -53,6 +62,8 @@ pub struct RunCost {
     pub internal_steps: f64,
     /// Size of a worn-profile state file of the scene's grid \[bytes\].
     pub worn_state_bytes: f64,
+    /// LTCA work of one analysis: mesh positions × face slices per mesh.
+    pub ltca_work: f64,
 }
 
 impl RunCost {
@@ -60,12 +71,15 @@ impl RunCost {
     pub fn summary(&self) -> String {
         format!(
             "one steady state: {:.3e} mesh cycles, {:.3e} internal steps (budget {:.0e}), window {} \
-             (budget {}); a worn-profile state file {}",
+             (budget {}); one LTCA: {:.3e} mesh positions × face slices (budget {:.0e}); a worn-profile \
+             state file {}",
             self.steady_state_mesh_cycles,
             self.internal_steps,
             STEP_BUDGET,
             mib(self.window_bytes),
             mib(MEMORY_BUDGET_BYTES),
+            self.ltca_work,
+            LTCA_BUDGET,
             mib(self.worn_state_bytes)
         )
     }
@@ -134,6 +148,7 @@ pub fn estimate(scene: &Scene) -> RunCost {
         window_bytes,
         internal_steps,
         worn_state_bytes,
+        ltca_work: f64::from(a.positions_per_mesh_cycle) * f64::from(a.face_slices),
     }
 }
 
@@ -171,7 +186,41 @@ pub fn problems(scene: &Scene) -> Vec<Problem> {
             ),
         });
     }
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(c.ltca_work <= LTCA_BUDGET) {
+        let a = &scene.analysis;
+        out.push(Problem {
+            name: "analysis.positions_per_mesh_cycle × analysis.face_slices".into(),
+            value: format!("{} × {}", a.positions_per_mesh_cycle, a.face_slices),
+            reason: format!(
+                "one loaded tooth contact analysis would solve {:.3e} mesh positions × face slices per mesh, \
+                 more than the budget of {:.0e} (about a minute; docs/LIMITS.md)",
+                c.ltca_work, LTCA_BUDGET
+            ),
+        });
+    }
     out
+}
+
+/// The cost of a speed sweep of `speeds` speeds in `directions` directions
+/// (each speed a steady state at its longest), refused over
+/// [`SWEEP_STEP_BUDGET`] with the figure: the internal steps it plans for.
+/// `key` names where the user set the grid.
+pub fn sweep(scene: &Scene, speeds: usize, directions: usize, key: &str) -> Result<f64, Problem> {
+    let steps = estimate(scene).internal_steps * speeds as f64 * directions as f64;
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(steps <= SWEEP_STEP_BUDGET) {
+        return Err(Problem {
+            name: key.into(),
+            value: format!("{speeds} speeds × {directions} directions"),
+            reason: format!(
+                "the sweep would take about {steps:.3e} internal steps ({:.3e} per steady state), more than \
+                 the budget of {SWEEP_STEP_BUDGET:.0e} (docs/LIMITS.md); use a larger step or fewer revolutions",
+                estimate(scene).internal_steps
+            ),
+        });
+    }
+    Ok(steps)
 }
 
 /// What the scene's runs may exceed without being refused: a worn-profile

@@ -194,6 +194,8 @@ pub fn write_report(
     let mut files = write_figures(v, &figures, face_width)?;
     let md = markdown(v, previous.as_ref(), "validation", command);
     let json = serde_json::to_string_pretty(v).map_err(|e| PlotError::Backend(e.to_string()))?;
+    // The next run reads it back: written only if it will be read.
+    crate::files::check_output_size(&json_path, crate::files::InputKind::Record, json.len())?;
     write_atomic(&json_path, json.as_bytes())?;
     files.push(json_path);
     let report = out.join("VALIDATION.md");

@@ -324,3 +324,17 @@ def test_the_loop_alternates_campaigns_and_the_wear_stepper_with_manifests(tmp_p
     for s, m in zip(again["stages"], manifests):
         m2 = json.loads(Path(s["manifest"]).read_text())
         assert len(m2["runs"]) == 2 and m2["runs"][0] == m["runs"][0] and m2["wear_step"] == m["wear_step"]
+
+
+def test_an_output_dir_that_cannot_be_created_is_refused_before_any_run(tmp_path):
+    """The output directory is checked when the campaign is read: below a
+    regular file it can never be created, and the problem names the key."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a directory")
+    raw = campaign_file.tomllib.loads(SMALL)
+    raw["output_dir"] = str(blocker / "out")
+    with pytest.raises(campaign_file.CampaignError, match=r"output_dir.*cannot be created: .*a-file is not a directory"):
+        campaign_file.from_dict(raw, tmp_path / "c.toml", probe=False)
+    raw["output_dir"] = str(blocker)
+    with pytest.raises(campaign_file.CampaignError, match=r"output_dir.*exists and is not a directory"):
+        campaign_file.from_dict(raw, tmp_path / "c.toml", probe=False)
