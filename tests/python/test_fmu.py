@@ -236,15 +236,30 @@ def test_the_fmu_equals_the_native_run_of_the_same_scene(tmp_path, integrator, b
     assert worst < bound
 
 
-def test_the_drivetrain_cosimulation_example_runs_and_stays_near_its_set_point(tmp_path):
+@pytest.mark.parametrize("coupling", ["torque", "speed"])
+def test_the_drivetrain_cosimulation_example_runs_and_stays_near_its_set_point(tmp_path, coupling):
+    """Both couplings of docs/FMU.md: torque in/speed out and speed in/torque
+    out. The carrier's reaction balances the other two members' torques on
+    average, and the largest mesh force within a step is never below the
+    force at the step's end."""
     sys.path.insert(0, str(REPO / "examples"))
     import drivetrain_cosim
 
-    rows = drivetrain_cosim.run(str(FMU), stop=0.01)
+    rows = drivetrain_cosim.run(str(FMU), stop=0.01, coupling=coupling)
     assert np.all(np.isfinite(rows))
-    sun_rpm = rows[:, 1] * 30 / math.pi
-    assert abs(sun_rpm[len(sun_rpm) // 2:].mean() / 3000 - 1) < 0.05
-    assert abs(rows[len(rows) // 2:, 6].mean() / F0 - 1) < 0.05
+    half = rows[len(rows) // 2:]
+    sun_rpm = half[:, 1] * 30 / math.pi
+    assert abs(sun_rpm.mean() / 3000 - 1) < 0.05
+    assert abs(half[:, 6].mean() / F0 - 1) < 0.05
+    # Torques on sun (motor, or the input shaft's mean), ring (−shaft) and
+    # carrier (reaction) sum to zero on average: within 2 % of the ring's.
+    t_sun = half[:, 4].mean()
+    t_ring = -half[:, 5].mean()
+    assert abs(t_sun + t_ring + half[:, 8].mean()) < 0.02 * abs(t_ring), (t_sun, t_ring, half[:, 8].mean())
+    # Each row is read at a communication point: the force there ends the
+    # step whose largest force the row holds beside it.
+    assert np.all(rows[:, 9] >= rows[:, 6])
+    assert rows[:, 9].max() > rows[:, 6].max()
     drivetrain_cosim.plot(rows, tmp_path / "cosim.png")
     assert (tmp_path / "cosim.png").stat().st_size > 10_000
 
