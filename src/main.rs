@@ -101,6 +101,8 @@ enum FmuAction {
     References(FmuReferencesArgs),
     /// modelDescription.xml, generated from modelDescription/variables.toml.
     Xml(FmuXmlArgs),
+    /// The variables' reference page (Markdown: docs/FMU_VARIABLES.md), from the same table.
+    Variables(FmuXmlArgs),
 }
 
 #[derive(Subcommand)]
@@ -390,7 +392,7 @@ struct FmuReferencesArgs {
     relative_tolerance: f64,
 }
 
-/// modelDescription.xml, generated from modelDescription/variables.toml.
+/// A generated file of the FMU: modelDescription.xml or the variables' page.
 #[derive(clap::Args)]
 struct FmuXmlArgs {
     /// Write it to this file (atomically) instead of standard output.
@@ -510,7 +512,9 @@ fn check_outputs(command: &Command) -> Result<()> {
         Command::Calibrate(a) => a.out.iter().try_for_each(|p| file("--out", p)),
         Command::Fmu { action: FmuAction::Pack(a) } => file("--out", &a.out),
         Command::Fmu { action: FmuAction::References(a) } => file("--out", &a.out),
-        Command::Fmu { action: FmuAction::Xml(a) } => a.out.iter().try_for_each(|p| file("--out", p)),
+        Command::Fmu { action: FmuAction::Xml(a) | FmuAction::Variables(a) } => {
+            a.out.iter().try_for_each(|p| file("--out", p))
+        }
         Command::Scene { .. }
         | Command::Simulate(_)
         | Command::Modes(_)
@@ -559,6 +563,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Fmu { action: FmuAction::Pack(a) } => fmu_pack_command(a)?,
         Command::Fmu { action: FmuAction::References(a) } => fmu_references_command(a)?,
         Command::Fmu { action: FmuAction::Xml(a) } => fmu_xml_command(a)?,
+        Command::Fmu { action: FmuAction::Variables(a) } => fmu_variables_command(a)?,
         Command::Modes(a) => modes_command(a)?,
         Command::Ltca(a) => ltca_command(a)?,
     }

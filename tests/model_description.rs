@@ -16,6 +16,20 @@ fn the_committed_model_description_is_fresh() {
 }
 
 #[test]
+fn the_committed_variables_page_is_fresh_and_lists_every_variable() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/FMU_VARIABLES.md");
+    let committed = std::fs::read_to_string(path).unwrap_or_default();
+    let page = planetwear::fmi::reference::variables_markdown();
+    assert!(
+        committed == page,
+        "docs/FMU_VARIABLES.md is stale; regenerate it with:\n    cargo run --release -- fmu variables --out docs/FMU_VARIABLES.md"
+    );
+    for v in VARIABLES {
+        assert!(page.contains(&format!("| `{}` | {} |", v.name, v.vr)), "{} is not on the page", v.name);
+    }
+}
+
+#[test]
 fn the_table_is_consistent() {
     let mut names = HashSet::new();
     let mut refs = HashSet::new();

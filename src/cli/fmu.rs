@@ -1,4 +1,5 @@
-//! The FMU's generated files: `fmu pack`, `fmu references` and `fmu xml`.
+//! The FMU's generated files: `fmu pack`, `fmu references`, `fmu xml` and
+//! `fmu variables`.
 
 use crate::*;
 
@@ -51,6 +52,15 @@ pub(crate) fn fmu_xml_command(FmuXmlArgs { out }: FmuXmlArgs) -> Result<()> {
     match out {
         Some(path) => write_atomic(&path, xml.as_bytes())?,
         None => print!("{xml}"),
+    }
+    Ok(())
+}
+
+pub(crate) fn fmu_variables_command(FmuXmlArgs { out }: FmuXmlArgs) -> Result<()> {
+    let page = planetwear::fmi::reference::variables_markdown();
+    match out {
+        Some(path) => write_atomic(&path, page.as_bytes())?,
+        None => print!("{page}"),
     }
     Ok(())
 }

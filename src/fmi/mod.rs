@@ -4,10 +4,11 @@
 //! parameters → scene, the numerical guards and the plausibility warnings of
 //! a step), the FMI calls in safe Rust (`core`), and the exported `unsafe
 //! extern "C"` functions that convert their raw arguments and call them
-//! (`export`).
+//! (`export`), and the variables' reference page for people (`reference`).
 
 pub mod core;
 pub mod export;
 pub mod guid;
 pub mod instance;
+pub mod reference;
 pub mod variables;
