@@ -22,6 +22,7 @@
 pub mod build;
 pub mod cost;
 pub mod gear;
+pub mod gear_data;
 pub mod involute;
 pub mod lumped;
 pub mod mesh;

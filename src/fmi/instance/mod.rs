@@ -441,6 +441,20 @@ impl Instance {
             | V::MeshDampingRatio
             | V::ShaftStiffness
             | V::LoadBalance
+            | V::GearData
+            | V::SunProfileShift
+            | V::PlanetProfileShift
+            | V::RingProfileShift
+            | V::AddendumFactor
+            | V::DedendumFactor
+            | V::ToolTipRadiusFactor
+            | V::RingToolTipRadiusFactor
+            | V::SunToothThicknessAllowance
+            | V::PlanetToothThicknessAllowance
+            | V::RingToothThicknessAllowance
+            | V::SunTipDiameter
+            | V::PlanetTipDiameter
+            | V::RingTipDiameter
             | V::InitialSpeed => {
                 self.store(v, value);
                 self.changed(v);
@@ -618,8 +632,22 @@ impl Instance {
             | V::SunTeeth
             | V::PlanetTeeth
             | V::RingTeeth
-            | V::LoadBalance => Value::Integer(self.int(v)),
-            V::RhoInfinity
+            | V::LoadBalance
+            | V::GearData => Value::Integer(self.int(v)),
+            V::SunProfileShift
+            | V::PlanetProfileShift
+            | V::RingProfileShift
+            | V::AddendumFactor
+            | V::DedendumFactor
+            | V::ToolTipRadiusFactor
+            | V::RingToolTipRadiusFactor
+            | V::SunToothThicknessAllowance
+            | V::PlanetToothThicknessAllowance
+            | V::RingToothThicknessAllowance
+            | V::SunTipDiameter
+            | V::PlanetTipDiameter
+            | V::RingTipDiameter
+            | V::RhoInfinity
             | V::RelativeTolerance
             | V::Module
             | V::PressureAngle
