@@ -533,6 +533,28 @@ fn run(cli: Cli) -> Result<()> {
             AnyScene::Gear(s) => {
                 let set = validated(&s)?;
                 println!("scene '{}' is valid: {} planets", set.name(), set.planet_angles().len());
+                // The radii that gear data gave (docs/GEAR_DATA.md).
+                for (key, given, g) in [
+                    ("sun", s.sun.gear_data.is_some(), set.sun()),
+                    ("planet", s.planet.gear_data.is_some(), set.planet()),
+                    ("ring", s.ring.gear_data.is_some(), set.ring()),
+                ] {
+                    if given {
+                        println!(
+                            "  {key} from gear data: tip radius {:.4} mm, root radius {:.4} mm, base radius {:.4} mm, \
+                             tooth thickness {:.4} mm, {} {:.4} mm",
+                            g.tip_radius * 1e3,
+                            g.root_radius * 1e3,
+                            g.base_radius() * 1e3,
+                            g.tooth_thickness * 1e3,
+                            if key == "ring" { "fillet radius" } else { "hob tip radius" },
+                            match g.root_form {
+                                planetwear::model::gear::RootForm::Hob { tip_radius: r }
+                                | planetwear::model::gear::RootForm::Fillet { radius: r } => r * 1e3,
+                            }
+                        );
+                    }
+                }
                 // The estimate every run is held to (docs/LIMITS.md), and what
                 // a command refuses beyond the scene's rules.
                 println!("  cost: {}", planetwear::model::cost::estimate(&s).summary());

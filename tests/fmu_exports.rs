@@ -455,3 +455,45 @@ fn a_state_restored_after_the_parameters_changed_continues_with_its_own_paramete
         fmi2FreeInstance(c);
     }
 }
+
+/// `gearData = 1` with the start values of the gear-data parameters gives
+/// the example (its gear data, docs/GEAR_DATA.md): the same mesh force after
+/// the same steps as the radius parameters; a bad gear datum or switch value
+/// makes initialization fail.
+#[test]
+fn gear_data_parameters_give_the_example_and_bad_ones_are_refused() {
+    // SAFETY: every instance is live until fmi2FreeInstance; values are locals.
+    unsafe {
+        let force = |gear_data: i32| {
+            let c = instantiate(GUID, c"gear-data");
+            assert_eq!(fmi2SetInteger(c, &vr::GEAR_DATA, 1, &gear_data), fmi2Status_fmi2OK);
+            assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 1, 0.01), fmi2Status_fmi2OK);
+            assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+            assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2OK);
+            for i in 0..5 {
+                assert_eq!(fmi2DoStep(c, f64::from(i) * 1e-4, 1e-4, 1), fmi2Status_fmi2OK);
+            }
+            let mut f = 0.0;
+            assert_eq!(fmi2GetReal(c, &vr::PLANET_1_SUN_MESH_FORCE, 1, &mut f), fmi2Status_fmi2OK);
+            fmi2FreeInstance(c);
+            f
+        };
+        let (radii, data) = (force(0), force(1));
+        assert!(radii > 0.0 && (data / radii - 1.0).abs() < 1e-9, "mesh force {radii} vs {data}");
+        for (reference, value) in [(vr::ADDENDUM_FACTOR, -1.0), (vr::SUN_PROFILE_SHIFT, 0.3)] {
+            let c = instantiate(GUID, c"bad-gear-data");
+            let one = 1;
+            assert_eq!(fmi2SetInteger(c, &vr::GEAR_DATA, 1, &one), fmi2Status_fmi2OK);
+            assert_eq!(fmi2SetReal(c, &reference, 1, &value), fmi2Status_fmi2OK);
+            assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+            assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2Error);
+            fmi2FreeInstance(c);
+        }
+        let c = instantiate(GUID, c"bad-switch");
+        let two = 2;
+        assert_eq!(fmi2SetInteger(c, &vr::GEAR_DATA, 1, &two), fmi2Status_fmi2OK);
+        assert_eq!(fmi2EnterInitializationMode(c), fmi2Status_fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2Status_fmi2Error);
+        fmi2FreeInstance(c);
+    }
+}

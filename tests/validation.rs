@@ -101,7 +101,7 @@ fn assembly_condition_and_overlapping_planets() {
     expect(&s, "planets.angles_deg[1]", "multiples of 360°/(Z_sun + Z_ring)");
     let mut s = ex();
     s.planets.count = 8;
-    expect(&s, "planets.angles_deg", "neighbouring planets overlap");
+    expect(&s, "planets.count", "neighbouring planets collide");
     let mut s = ex();
     s.planets.angles_deg = Some(vec![0.0, 90.0]);
     expect(&s, "planets.angles_deg", "exactly planets.count = 4");

@@ -11,6 +11,7 @@ use std::fmt;
 use crate::model::gear::{
     Analysis, Bodies, Body, Chamfer, GearKind, GearSet, Material, MeshKind, RootForm, Supports, ToothForm,
 };
+use crate::model::gear_data::{minimum_profile_shift, name_by_gear_data, trochoid_margin};
 use crate::model::mesh::PathOfContact;
 use crate::model::run::{RunSettings, RunValues};
 use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
@@ -197,6 +198,8 @@ impl Checker {
                 g.tip_radius_mm,
                 "the tooth is pointed below this tip radius: reduce the tip radius or thicken the tooth",
             );
+        } else if g.tip_radius_mm > rb {
+            self.tip_thickness(key, &form, g.tip_radius_mm);
         }
         if let RootForm::Hob { tip_radius } = form.root_form {
             let dedendum = form.reference_radius() - form.root_radius;
@@ -206,9 +209,67 @@ impl Checker {
                     g.hob_tip_radius_mm,
                     format!("must be below the dedendum {:.4} mm", dedendum * 1e3),
                 );
+            } else {
+                self.undercut(key, g, &form);
             }
         }
         form
+    }
+
+    /// A tooth tip thinner than [`MIN_TIP_THICKNESS_FACTOR`]·m breaks or
+    /// hardens through: refused, named by the tip's key.
+    fn tip_thickness(&mut self, key: &str, form: &ToothForm, tip_radius_mm: f64) {
+        let sa = form.thickness_at(form.tip_radius) * 1e3;
+        let least = MIN_TIP_THICKNESS_FACTOR * form.module * 1e3;
+        if sa.is_finite() && sa < least {
+            self.fail(
+                &tip_key(key),
+                tip_radius_mm,
+                format!(
+                    "the tooth tip is too thin: s_a = {sa:.4} mm at the tip circle, at least {MIN_TIP_THICKNESS_FACTOR}·m = {least:.4} mm is allowed: reduce the tip radius or thicken the tooth"
+                ),
+            );
+        }
+    }
+
+    /// Undercut of a hobbed gear: the end of the hob's straight flank, at
+    /// depth v = h − ρ·(1 − sin α) below the reference line (dedendum h,
+    /// hob tip radius ρ), must not pass the base circle's tangent point,
+    /// r·sin α − v/sin α ≥ 0; in gear data, x ≥ x_min = h_fP* − ρ_fP*·(1 −
+    /// sin α) − z·sin²α/2.
+    fn undercut(&mut self, key: &str, g: &ExternalGearSpec, form: &ToothForm) {
+        let RootForm::Hob { tip_radius: rho } = form.root_form else { return };
+        let (r, a) = (form.reference_radius(), form.pressure_angle);
+        let v = r - form.root_radius - rho * (1.0 - a.sin());
+        if r * a.sin() - v / a.sin() >= -1e-12 {
+            return;
+        }
+        match g.gear_data.filter(|d| d.root_diameter_mm.is_none()) {
+            Some(d) => {
+                let x_min = minimum_profile_shift(g.teeth, d.dedendum_factor, d.tool_tip_radius_factor, a);
+                self.fail(
+                    &format!("{key}.gear_data.profile_shift"),
+                    d.profile_shift,
+                    format!(
+                        "the {key} is undercut: {} teeth cut by this rack (h_fP* = {}, ρ_fP* = {}) need a profile shift of at least x_min = h_fP* − ρ_fP*·(1 − sin α) − z·sin²α/2 = {x_min:.4}",
+                        g.teeth, d.dedendum_factor, d.tool_tip_radius_factor
+                    ),
+                );
+            }
+            None => {
+                let least = r - r * a.sin().powi(2) - rho * (1.0 - a.sin());
+                self.fail(
+                    &format!("{key}.root_radius_mm"),
+                    g.root_radius_mm,
+                    format!(
+                        "the {key} is undercut: with {} teeth and hob tip radius {} mm the root radius must be at least r − r·sin²α − ρ·(1 − sin α) = {:.4} mm",
+                        g.teeth,
+                        g.hob_tip_radius_mm,
+                        least * 1e3
+                    ),
+                );
+            }
+        }
     }
 
     fn ring(&mut self, g: &RingGearSpec) -> ToothForm {
@@ -271,6 +332,9 @@ impl Checker {
                 format!("must be below the circular pitch π·m = {:.4} mm", PI * g.module_mm),
             );
         }
+        if g.minor_radius_mm > rb && g.tooth_thickness_mm < PI * g.module_mm {
+            self.tip_thickness("ring", &form, g.minor_radius_mm);
+        }
         if g.fillet_radius_mm >= 0.5 * (g.root_radius_mm - g.minor_radius_mm) {
             self.fail(
                 &n("fillet_radius_mm"),
@@ -294,9 +358,31 @@ fn tip_key(gear: &str) -> String {
     }
 }
 
-/// Checks every rule of a scene and converts it to SI.
+/// Least tooth thickness at the tip circle, as a fraction of the module:
+/// 0.2·m, the usual limit for case-hardened gears (a thinner tip hardens
+/// through and chips), docs/GEAR_DATA.md.
+pub const MIN_TIP_THICKNESS_FACTOR: f64 = 0.2;
+
+/// Least radial gap between the tip circles of neighbouring planets, as a
+/// fraction of the module: 0.5·m (docs/GEAR_DATA.md).
+pub const PLANET_TIP_GAP_FACTOR: f64 = 0.5;
+
+/// Checks every rule of a scene and converts it to SI; a problem found in a
+/// radius that gear data gave is named by its gear-data key.
 fn validate(scene: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
-    let mut c = Checker { problems: Vec::new() };
+    validate_radii(scene).map_err(|e| match e {
+        SceneError::Invalid { problems } => SceneError::Invalid {
+            problems: problems.into_iter().map(|p| name_by_gear_data(p, scene)).collect(),
+        },
+        other => other,
+    })
+}
+
+/// Every rule, on the scene with the radii its gear data give.
+fn validate_radii(given: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
+    let (resolved, data_problems) = crate::model::gear_data::resolve(given);
+    let scene = &resolved;
+    let mut c = Checker { problems: data_problems };
     let sun = c.external("sun", &scene.sun);
     let planet = c.external("planet", &scene.planet);
     let ring = c.ring(&scene.ring);
@@ -588,6 +674,59 @@ fn validate(scene: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
             MeshKind::SunPlanet => ("sun", "planet"),
             MeshKind::RingPlanet => ("planet", "ring"),
         };
+        // Involute interference: the mate's tip must not carry the contact
+        // past the base circle's tangent point of either gear (the start
+        // of the involute), where the flanks would cut each other.
+        if path.start_sharp < 0.0 {
+            c.fail(
+                &tip_key(k2),
+                g2.tip_radius * 1e3,
+                format!(
+                    "involute interference in the {} mesh: the {k2} tip reaches {:.4} mm past the {k1}'s \
+                     base-circle tangent point (usable limit: the {k1} base circle, radius {:.4} mm); \
+                     {}",
+                    mesh.name(),
+                    -path.start_sharp * 1e3,
+                    g1.base_radius() * 1e3,
+                    if g2.kind == GearKind::Internal {
+                        "raise the ring's minor radius or its profile shift"
+                    } else {
+                        "shorten that tip or shift the mate's profile positively"
+                    }
+                ),
+            );
+        }
+        if g2.kind == GearKind::External && path.end_sharp > path.tangency_distance {
+            c.fail(
+                &tip_key(k1),
+                g1.tip_radius * 1e3,
+                format!(
+                    "involute interference in the {} mesh: the {k1} tip reaches {:.4} mm past the {k2}'s \
+                     base-circle tangent point (usable limit: the {k2} base circle, radius {:.4} mm)",
+                    mesh.name(),
+                    (path.end_sharp - path.tangency_distance) * 1e3,
+                    g2.base_radius() * 1e3
+                ),
+            );
+        }
+        if g2.kind == GearKind::Internal {
+            if let Some(margin) = trochoid_margin(g1, g2, set.centre_distance) {
+                if margin < 0.0 {
+                    c.fail(
+                        &tip_key(k1),
+                        g1.tip_radius * 1e3,
+                        format!(
+                            "tip (trochoid) interference in the ring–planet mesh: the planet tip's path \
+                             cuts the ring teeth as it leaves mesh (θ₁·z_p/z_r + inv α_w − inv α_a,ring − θ₂ \
+                             = {margin:.5} rad, must be ≥ 0): more teeth difference z_ring − z_planet \
+                             (now {}; the handbooks' rule for unshifted 20° gears: more than 9) or other tip \
+                             diameters and profile shifts",
+                            g2.teeth - g1.teeth.min(g2.teeth)
+                        ),
+                    );
+                }
+            }
+        }
         let (r1, r2) = path.active_profile_start_radii();
         let f1 = g1.form_radius();
         let f2 = g2.form_radius();
@@ -633,7 +772,22 @@ fn validate(scene: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
 
     // Assembly: planet n at ψ_n fits when (Z_s + Z_r)·ψ_n / 2π is an integer.
     let zsum = f64::from(set.sun.teeth + set.ring.teeth);
-    for (i, psi) in set.planet_angles.iter().enumerate() {
+    let n_planets = set.planet_angles.len();
+    let equally_spaced = scene.planets.angles_deg.is_none() && n_planets > 0;
+    if equally_spaced && (set.sun.teeth + set.ring.teeth) % n_planets as u32 != 0 {
+        c.fail(
+            "planets.count",
+            n_planets,
+            format!(
+                "equally spaced planets can be assembled only when (Z_sun + Z_ring)/N is an integer: \
+                 ({} + {})/{n_planets} = {:.4}",
+                set.sun.teeth,
+                set.ring.teeth,
+                zsum / n_planets as f64
+            ),
+        );
+    }
+    for (i, psi) in set.planet_angles.iter().enumerate().filter(|_| !equally_spaced) {
         let k = zsum * psi / (2.0 * PI);
         if (k - k.round()).abs() > 1e-6 {
             c.fail(
@@ -654,14 +808,29 @@ fn validate(scene: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
             let next = if i + 1 < sorted.len() { sorted[i + 1] } else { sorted[0] + 2.0 * PI };
             let gap = next - sorted[i];
             let chord = 2.0 * set.centre_distance * (gap / 2.0).sin();
-            if chord <= 2.0 * set.planet.tip_radius {
+            let need = 2.0 * set.planet.tip_radius + PLANET_TIP_GAP_FACTOR * set.planet.module;
+            if chord <= need {
+                let (key, value) = if scene.planets.angles_deg.is_none() {
+                    ("planets.count".to_string(), sorted.len().to_string())
+                } else {
+                    (
+                        "planets.angles_deg".to_string(),
+                        format!(
+                            "{:.4}° and {:.4}°",
+                            sorted[i].to_degrees(),
+                            next.to_degrees().rem_euclid(360.0)
+                        ),
+                    )
+                };
                 c.fail(
-                    "planets.angles_deg",
-                    format!("{:.4}° and {:.4}°", sorted[i].to_degrees(), next.to_degrees().rem_euclid(360.0)),
+                    &key,
+                    value,
                     format!(
-                        "neighbouring planets overlap: centres {:.4} mm apart, tips need more than {:.4} mm",
+                        "neighbouring planets collide: centres {:.4} mm apart, their tip diameters \
+                         {:.4} mm need {:.4} mm with the gap of {PLANET_TIP_GAP_FACTOR}·m between tip circles",
                         chord * 1e3,
-                        2.0 * set.planet.tip_radius * 1e3
+                        2.0 * set.planet.tip_radius * 1e3,
+                        need * 1e3
                     ),
                 );
                 break;

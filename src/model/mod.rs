@@ -13,6 +13,9 @@
 //!   the budgets `build` holds them to.
 //! - [`gear`]: tooth forms, bodies, supports, material, the gear set (with
 //!   the terms of its equations of motion: fidelity, damping, drive).
+//! - [`gear_data`]: gears given by gear data (ISO 21771) turned into radii,
+//!   the operating pressure angle of shifted pairs, undercut and trochoid
+//!   interference limits.
 //! - [`involute`]: the involute function and its inverse relations.
 //! - [`lumped`]: degrees of freedom, fidelity, the lumped (mean-stiffness) set.
 //! - [`mesh`]: the path of contact of one mesh along its line of action.
@@ -22,6 +25,7 @@
 pub mod build;
 pub mod cost;
 pub mod gear;
+pub mod gear_data;
 pub mod involute;
 pub mod lumped;
 pub mod mesh;

@@ -2,9 +2,13 @@
 
 use super::Member;
 use super::{
-    AnalysisSpec, ChamferSpec, ExternalGearSpec, MaterialSpec, OperationSpec, PlanetLayoutSpec, RingGearSpec,
-    Scene,
+    AnalysisSpec, ChamferSpec, ExternalGearSpec, GearData, MaterialSpec, OperationSpec, PlanetLayoutSpec,
+    RingGearSpec, Scene,
 };
+
+/// The profile shift of planet and ring (and, negated, of the sun) that
+/// gives the study's radii from one dedendum factor: 7/24 = 0.291 67.
+const EXAMPLE_PROFILE_SHIFT: f64 = 7.0 / 24.0;
 
 impl Scene {
     /// The study's example system, calibrated to the study's own figures:
@@ -49,6 +53,7 @@ impl Scene {
                 hob_tip_radius_mm: 0.2,
                 face_width_mm: 30.0,
                 tip_chamfer: None,
+                gear_data: None,
             },
             planet: ExternalGearSpec {
                 teeth: 18,
@@ -61,6 +66,7 @@ impl Scene {
                 hob_tip_radius_mm: 0.2,
                 face_width_mm: 30.0,
                 tip_chamfer: None,
+                gear_data: None,
             },
             ring: RingGearSpec {
                 teeth: 70,
@@ -73,6 +79,7 @@ impl Scene {
                 fillet_radius_mm: 0.5,
                 face_width_mm: 30.0,
                 tip_chamfer: None,
+                gear_data: None,
             },
             planets: PlanetLayoutSpec { count: 4, angles_deg: None },
             centre_distance_mm: 39.0,
@@ -84,5 +91,58 @@ impl Scene {
             mesh_stiffness: Default::default(),
             dynamics: Default::default(),
         }
+    }
+
+    /// [`Scene::example_2004`] with its gears given by gear data (ISO 21771)
+    /// instead of radii: the same radii to well below a nanometre, so the
+    /// same gear set (docs/GEAR_DATA.md). Profile shifts −7/24 (sun) and
+    /// +7/24 (planet, ring) on a rack of dedendum factor 1.375 give the
+    /// study's root radii and, with an addendum factor 0.875, the planet's
+    /// tip; the sun's and the ring's tips are given by diameter as made
+    /// (52.74 mm and 103.45 mm); the tooth-thickness allowances carry the
+    /// study's backlash; the shifts sum to zero in both meshes, so the
+    /// operating centre distance is the standard 39 mm.
+    pub fn example_2004_gear_data() -> Self {
+        let mut s = Self::example_2004();
+        s.name = "example-2004-gear-data".into();
+        let x = EXAMPLE_PROFILE_SHIFT;
+        let data =
+            |profile_shift: f64, tooth_thickness_allowance_mm: f64, tool_tip_radius_factor: f64| GearData {
+                profile_shift,
+                addendum_factor: 0.875,
+                dedendum_factor: 1.375,
+                tool_tip_radius_factor,
+                tooth_thickness_allowance_mm,
+                tip_diameter_mm: None,
+                root_diameter_mm: None,
+            };
+        let hob = 0.2 / 1.5;
+        s.sun.gear_data = Some(GearData { tip_diameter_mm: Some(52.74), ..data(-x, -0.1200462457, hob) });
+        s.planet.gear_data = Some(data(x, -0.1123427346, hob));
+        s.ring.gear_data =
+            Some(GearData { tip_diameter_mm: Some(103.45), ..data(x, -0.1310462457, 0.5 / 1.5) });
+        for (t, r, f, h) in [
+            (
+                &mut s.sun.tooth_thickness_mm,
+                &mut s.sun.tip_radius_mm,
+                &mut s.sun.root_radius_mm,
+                &mut s.sun.hob_tip_radius_mm,
+            ),
+            (
+                &mut s.planet.tooth_thickness_mm,
+                &mut s.planet.tip_radius_mm,
+                &mut s.planet.root_radius_mm,
+                &mut s.planet.hob_tip_radius_mm,
+            ),
+            (
+                &mut s.ring.tooth_thickness_mm,
+                &mut s.ring.minor_radius_mm,
+                &mut s.ring.root_radius_mm,
+                &mut s.ring.fillet_radius_mm,
+            ),
+        ] {
+            (*t, *r, *f, *h) = (0.0, 0.0, 0.0, 0.0);
+        }
+        s
     }
 }

@@ -13,6 +13,7 @@
 //! May import: [`crate::files`].
 
 mod example;
+mod gear_data;
 pub mod lumped;
 mod terms;
 pub mod units;
@@ -20,6 +21,7 @@ mod validate;
 
 use serde::{Deserialize, Serialize};
 
+pub use gear_data::{GearData, ADDENDUM_FACTOR, DEDENDUM_FACTOR, TOOL_TIP_RADIUS_FACTOR};
 pub use validate::{default_chamfer, Problem, SceneError};
 
 pub use terms::{Drive, Fidelity, IntegratorKind, Member};
@@ -222,9 +224,13 @@ impl Default for DynamicsSpec {
     }
 }
 
-/// An external spur gear (sun or planet) as written in a scene file.
+/// An external spur gear (sun or planet) as written in a scene file: by
+/// its radii, or by its gear data (`gear_data`, ISO 21771; then the four
+/// derived fields `tooth_thickness_mm`, `tip_radius_mm`, `root_radius_mm`
+/// and `hob_tip_radius_mm` are absent from the file, hold 0 here and are
+/// derived when the scene is validated).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(try_from = "gear_data::ExternalGearFile", into = "gear_data::ExternalGearFile")]
 pub struct ExternalGearSpec {
     /// Number of teeth.
     pub teeth: u32,
@@ -247,13 +253,18 @@ pub struct ExternalGearSpec {
     /// Face width \[mm\].
     pub face_width_mm: f64,
     /// Tip chamfer; `None` (omitted) means the default of docs/PARAMETERS.md.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tip_chamfer: Option<ChamferSpec>,
+    /// Gear data (ISO 21771) the radii are derived from; `None` for the
+    /// radii form.
+    pub gear_data: Option<GearData>,
 }
 
-/// The internal ring gear as written in a scene file.
+/// The internal ring gear as written in a scene file: by its radii, or by
+/// its gear data (`gear_data`; then `tooth_thickness_mm`,
+/// `minor_radius_mm`, `root_radius_mm` and `fillet_radius_mm` are absent
+/// from the file, hold 0 here and are derived when the scene is validated).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(try_from = "gear_data::RingGearFile", into = "gear_data::RingGearFile")]
 pub struct RingGearSpec {
     /// Number of teeth.
     pub teeth: u32,
@@ -274,8 +285,10 @@ pub struct RingGearSpec {
     /// Face width \[mm\].
     pub face_width_mm: f64,
     /// Tip chamfer of the ring teeth; omitted means none.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tip_chamfer: Option<ChamferSpec>,
+    /// Gear data (ISO 21771) the radii are derived from; `None` for the
+    /// radii form.
+    pub gear_data: Option<GearData>,
 }
 
 /// A straight tip chamfer: it starts on the involute `height_mm` below the
@@ -407,12 +420,14 @@ impl Scene {
         match name {
             "example-2004" => Some(Self::example_2004()),
             "example-2004-annulus" => Some(Self::example_2004_annulus()),
+            "example-2004-gear-data" => Some(Self::example_2004_gear_data()),
             _ => None,
         }
     }
 
     /// Names of the built-in gear scenes.
-    pub const BUILTIN: &'static [&'static str] = &["example-2004", "example-2004-annulus"];
+    pub const BUILTIN: &'static [&'static str] =
+        &["example-2004", "example-2004-annulus", "example-2004-gear-data"];
 
     /// The calibration plan (TOML) of a built-in scene made by
     /// `planetwear calibrate`, if it has one.

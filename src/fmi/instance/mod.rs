@@ -441,6 +441,20 @@ impl Instance {
             | V::MeshDampingRatio
             | V::ShaftStiffness
             | V::LoadBalance
+            | V::GearData
+            | V::SunProfileShift
+            | V::PlanetProfileShift
+            | V::RingProfileShift
+            | V::AddendumFactor
+            | V::DedendumFactor
+            | V::ToolTipRadiusFactor
+            | V::RingToolTipRadiusFactor
+            | V::SunToothThicknessAllowance
+            | V::PlanetToothThicknessAllowance
+            | V::RingToothThicknessAllowance
+            | V::SunTipDiameter
+            | V::PlanetTipDiameter
+            | V::RingTipDiameter
             | V::InitialSpeed => {
                 self.store(v, value);
                 self.changed(v);
@@ -618,8 +632,22 @@ impl Instance {
             | V::SunTeeth
             | V::PlanetTeeth
             | V::RingTeeth
-            | V::LoadBalance => Value::Integer(self.int(v)),
-            V::RhoInfinity
+            | V::LoadBalance
+            | V::GearData => Value::Integer(self.int(v)),
+            V::SunProfileShift
+            | V::PlanetProfileShift
+            | V::RingProfileShift
+            | V::AddendumFactor
+            | V::DedendumFactor
+            | V::ToolTipRadiusFactor
+            | V::RingToolTipRadiusFactor
+            | V::SunToothThicknessAllowance
+            | V::PlanetToothThicknessAllowance
+            | V::RingToothThicknessAllowance
+            | V::SunTipDiameter
+            | V::PlanetTipDiameter
+            | V::RingTipDiameter
+            | V::RhoInfinity
             | V::RelativeTolerance
             | V::Module
             | V::PressureAngle
@@ -1014,11 +1042,15 @@ mod tests {
     /// the scene instead of the variable.
     #[test]
     fn every_scene_key_of_a_variable_is_a_key_of_the_scene_file() {
-        // The example with its derived defaults written out (chamfers, masses).
-        let text = Scene::example_2004().explicit().unwrap().to_toml();
-        let doc: toml::Table = toml::from_str(&text).unwrap();
-        let has = |key: &str| {
-            let mut t = &doc;
+        // The example with its derived defaults written out (chamfers,
+        // masses), in the radii form and in the gear-data form.
+        let docs: Vec<toml::Table> = [Scene::example_2004(), Scene::example_2004_gear_data()]
+            .iter()
+            .map(|s| toml::from_str(&s.explicit().unwrap().to_toml()).unwrap())
+            .collect();
+        let has = |key: &str| docs.iter().any(|doc| has_key(doc, key));
+        fn has_key(doc: &toml::Table, key: &str) -> bool {
+            let mut t = doc;
             let parts: Vec<&str> = key.split('.').collect();
             for (n, part) in parts.iter().enumerate() {
                 match t.get(*part) {
@@ -1028,11 +1060,17 @@ mod tests {
                 }
             }
             false
-        };
+        }
         // Keys that are optional in a scene file: the planets' own angles
         // and bearing stiffnesses (the example spaces them equally, alike).
-        // The load balance is written only when on.
-        let optional = ["planets.angles_deg", "supports.planet_bearings_n_per_m", "dynamics.load_balance"];
+        // The load balance is written only when on; a tip diameter only
+        // when the gear data give one (the example's planet has none).
+        let optional = [
+            "planets.angles_deg",
+            "supports.planet_bearings_n_per_m",
+            "dynamics.load_balance",
+            "planet.gear_data.tip_diameter_mm",
+        ];
         for p in Settable::ALL {
             for key in parameters::scene_keys(*p) {
                 assert!(

@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 use crate::fmi::variables::{Settable, Variable};
 use crate::model::gear::{Drive, IntegratorKind, Member};
 use crate::model::lumped::Fidelity;
-use crate::scene::{ChamferSpec, PlanetLayoutSpec, Problem, Scene};
+use crate::scene::{ChamferSpec, GearData, PlanetLayoutSpec, Problem, Scene};
 
 /// The values the importer holds, read by variable.
 pub(super) struct Values<'a> {
@@ -191,6 +191,22 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
         Settable::BearingDampingRatio => scene.supports.bearing_damping_ratio = r,
         Settable::MeshDampingRatio => scene.dynamics.mesh_damping_ratio = r,
         Settable::ShaftStiffness => scene.dynamics.shaft_stiffness_nm_per_rad = r,
+        // Gear data (ISO 21771): every one of them writes the three gears'
+        // gear data from the current values when gearData = 1.
+        Settable::GearData
+        | Settable::SunProfileShift
+        | Settable::PlanetProfileShift
+        | Settable::RingProfileShift
+        | Settable::AddendumFactor
+        | Settable::DedendumFactor
+        | Settable::ToolTipRadiusFactor
+        | Settable::RingToolTipRadiusFactor
+        | Settable::SunToothThicknessAllowance
+        | Settable::PlanetToothThicknessAllowance
+        | Settable::RingToothThicknessAllowance
+        | Settable::SunTipDiameter
+        | Settable::PlanetTipDiameter
+        | Settable::RingTipDiameter => gear_data(values, scene)?,
         Settable::LoadBalance => {
             scene.dynamics.load_balance = match values.int(v) {
                 0 => false,
@@ -204,6 +220,58 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
             }
         }
     }
+    Ok(())
+}
+
+/// With gearData = 1, sun, planet and ring given by their gear data from
+/// the gear-data parameters (their radius fields cleared: the radius
+/// parameters are not used); with 0, nothing.
+fn gear_data(values: &Values, scene: &mut Scene) -> Result<(), String> {
+    match values.int(Variable::GearData) {
+        0 => return Ok(()),
+        1 => {}
+        x => {
+            return Err(format!(
+                "gearData = {x}: allowed are 0 (gears given by their radii), 1 (by gear data, ISO 21771)"
+            ))
+        }
+    }
+    let diameter = |v: Variable| {
+        let d = values.mm(v);
+        (d != 0.0).then_some(d)
+    };
+    let data = |x: Variable, rho: Variable, allowance: Variable, tip: Variable| GearData {
+        profile_shift: values.real(x),
+        addendum_factor: values.real(Variable::AddendumFactor),
+        dedendum_factor: values.real(Variable::DedendumFactor),
+        tool_tip_radius_factor: values.real(rho),
+        tooth_thickness_allowance_mm: values.mm(allowance),
+        tip_diameter_mm: diameter(tip),
+        root_diameter_mm: None,
+    };
+    scene.sun.gear_data = Some(data(
+        Variable::SunProfileShift,
+        Variable::ToolTipRadiusFactor,
+        Variable::SunToothThicknessAllowance,
+        Variable::SunTipDiameter,
+    ));
+    scene.planet.gear_data = Some(data(
+        Variable::PlanetProfileShift,
+        Variable::ToolTipRadiusFactor,
+        Variable::PlanetToothThicknessAllowance,
+        Variable::PlanetTipDiameter,
+    ));
+    scene.ring.gear_data = Some(data(
+        Variable::RingProfileShift,
+        Variable::RingToolTipRadiusFactor,
+        Variable::RingToothThicknessAllowance,
+        Variable::RingTipDiameter,
+    ));
+    for g in [&mut scene.sun, &mut scene.planet] {
+        (g.tooth_thickness_mm, g.tip_radius_mm, g.root_radius_mm, g.hob_tip_radius_mm) = (0.0, 0.0, 0.0, 0.0);
+    }
+    let r = &mut scene.ring;
+    (r.tooth_thickness_mm, r.minor_radius_mm, r.root_radius_mm, r.fillet_radius_mm) = (0.0, 0.0, 0.0, 0.0);
     Ok(())
 }
 
@@ -287,6 +355,30 @@ pub(super) fn scene_keys(p: Settable) -> &'static [&'static str] {
         Settable::MeshDampingRatio => &["dynamics.mesh_damping_ratio"],
         Settable::ShaftStiffness => &["dynamics.shaft_stiffness_nm_per_rad"],
         Settable::LoadBalance => &["dynamics.load_balance"],
+        Settable::GearData => &[],
+        Settable::SunProfileShift => &["sun.gear_data.profile_shift"],
+        Settable::PlanetProfileShift => &["planet.gear_data.profile_shift"],
+        Settable::RingProfileShift => &["ring.gear_data.profile_shift"],
+        Settable::AddendumFactor => &[
+            "sun.gear_data.addendum_factor",
+            "planet.gear_data.addendum_factor",
+            "ring.gear_data.addendum_factor",
+        ],
+        Settable::DedendumFactor => &[
+            "sun.gear_data.dedendum_factor",
+            "planet.gear_data.dedendum_factor",
+            "ring.gear_data.dedendum_factor",
+        ],
+        Settable::ToolTipRadiusFactor => {
+            &["sun.gear_data.tool_tip_radius_factor", "planet.gear_data.tool_tip_radius_factor"]
+        }
+        Settable::RingToolTipRadiusFactor => &["ring.gear_data.tool_tip_radius_factor"],
+        Settable::SunToothThicknessAllowance => &["sun.gear_data.tooth_thickness_allowance_mm"],
+        Settable::PlanetToothThicknessAllowance => &["planet.gear_data.tooth_thickness_allowance_mm"],
+        Settable::RingToothThicknessAllowance => &["ring.gear_data.tooth_thickness_allowance_mm"],
+        Settable::SunTipDiameter => &["sun.gear_data.tip_diameter_mm"],
+        Settable::PlanetTipDiameter => &["planet.gear_data.tip_diameter_mm"],
+        Settable::RingTipDiameter => &["ring.gear_data.tip_diameter_mm"],
     }
 }
 
