@@ -20,6 +20,7 @@
 use nalgebra::DMatrix;
 
 use crate::contact::ltca::{CycleStats, SetModel};
+use crate::dynamics::carrier_frame::CarrierFrame;
 use crate::dynamics::solver::{LowRankJacobian, RankOneTerm, SecondOrderSystem, TermCoefficients};
 use crate::model::gear::{Drive, GearSet, Member, MeshKind};
 use crate::model::lumped::{
@@ -100,6 +101,9 @@ pub struct PlanetaryDynamics {
     /// The state of the last mesh evaluation (with or without events), so a
     /// Jacobian or an output request at the state just evaluated costs nothing.
     cache: Option<(Vec<f64>, Vec<f64>, bool)>,
+    /// The inertial terms of the turning carrier's frame (None when the
+    /// carrier is held or the model torsional).
+    frame: Option<CarrierFrame>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -437,6 +441,7 @@ impl PlanetaryDynamics {
             }
         }
         let meshes = vec![MeshState::default(); links.len()];
+        let frame = CarrierFrame::new(&lumped, a, &rigid, wc);
         let mut model = Self {
             contact,
             lumped,
@@ -459,6 +464,7 @@ impl PlanetaryDynamics {
             slots,
             events_scratch: Vec::new(),
             cache: None,
+            frame,
         };
         model.set_torques(torques[0], torques[1], torques[2]);
         Ok(model)
@@ -601,6 +607,9 @@ impl PlanetaryDynamics {
 
     /// Sets the speed of the speed drive's source [rad/s of the input member].
     pub fn set_drive_speed(&mut self, omega: f64) {
+        if let Some(frame) = &mut self.frame {
+            frame.set_input_speed(omega);
+        }
         let lever = self.input_lever;
         if let Some(d) = &mut self.speed_drive {
             d.speed = omega * lever;
@@ -638,6 +647,19 @@ impl PlanetaryDynamics {
         }
     }
 
+    /// The carrier frame's mean speed Ω_c [rad/s] (0 for a held carrier or
+    /// the torsional model, whose equations have no carrier-frame terms).
+    pub fn carrier_frame_speed(&self) -> f64 {
+        self.frame.as_ref().map_or(0.0, CarrierFrame::speed)
+    }
+
+    /// The steady centrifugal load m_p Ω_c² r_c of one planet on its bearing
+    /// \[N\], radially outward (0 when the carrier is held). The dynamics
+    /// carry it: it shifts each planet's radial bearing deflection.
+    pub fn planet_centrifugal_force(&self) -> f64 {
+        self.frame.as_ref().map_or(0.0, CarrierFrame::planet_centrifugal_force)
+    }
+
     /// Whether the output member is held at its kinematic speed by the load balance.
     pub fn has_load_balance(&self) -> bool {
         self.balance.is_some()
@@ -646,6 +668,9 @@ impl PlanetaryDynamics {
     /// Changes the speed drive's source speed at time `t` \[s\] keeping the
     /// source's angle continuous (no jump in the shaft's wind-up).
     pub fn change_drive_speed(&mut self, omega: f64, t: f64) {
+        if let Some(frame) = &mut self.frame {
+            frame.set_input_speed(omega);
+        }
         let lever = self.input_lever;
         if let Some(d) = &mut self.speed_drive {
             let new = omega * lever;
@@ -748,6 +773,9 @@ impl SecondOrderSystem for PlanetaryDynamics {
         for &(i, j, k, c) in &self.support_nz {
             f[i] -= k * q[j] + c * v[j];
         }
+        if let Some(frame) = &self.frame {
+            frame.add_force(q, v, f);
+        }
         for (link, state) in self.links.iter().zip(&self.meshes) {
             let total = state.force + state.damping_force;
             for (j, b) in &link.b_nz {
@@ -767,6 +795,9 @@ impl SecondOrderSystem for PlanetaryDynamics {
         self.evaluate_meshes(q, v, false);
         k.copy_from(&self.k_support);
         c.copy_from(&self.c_support);
+        if let Some(frame) = &self.frame {
+            frame.add_jacobian(k, c);
+        }
         for (link, state) in self.links.iter().zip(&self.meshes) {
             if state.stiffness == 0.0 {
                 continue;
@@ -799,6 +830,9 @@ impl SecondOrderSystem for PlanetaryDynamics {
         // Bearings and the drive shaft are constant; each mesh adds u = b (δ = bᵀq) with the
         // contact's tangent stiffness and damping, and the rank-one term b ∂F/∂s pᵀ.
         let (mut k0, mut c0) = (self.k_support.clone(), self.c_support.clone());
+        if let Some(frame) = &self.frame {
+            frame.add_jacobian(&mut k0, &mut c0);
+        }
         if let Some(d) = self.speed_drive {
             let i = self.input_index;
             k0[(i, i)] += d.stiffness;
