@@ -7,9 +7,14 @@
 
 use nalgebra::DMatrix;
 use planetwear::analysis::modes::{natural_modes, rotating_modes, ModeClass};
-use planetwear::dynamics::carrier_frame::CarrierFrame;
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::response::static_state;
+use planetwear::dynamics::solver::SecondOrderSystem;
+use planetwear::model::carrier_frame::CarrierFrame;
 use planetwear::model::gear::Member;
 use planetwear::model::lumped::{Coordinate, Fidelity, LumpedSet};
+use planetwear::scene::Scene;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 /// Centre distance (planet radius on the carrier) of the test sets \[m\].
@@ -345,4 +350,96 @@ fn the_carrier_frame_response_matches_the_fixed_frame_one() {
     );
     assert!(err < 1e-6 * size, "carrier-frame response off by {err} m (of {size} m)");
     assert!(err_without > 0.1 * size, "the frame terms must matter at this speed");
+}
+
+/// The example with the ring held and the sun driving: the carrier turns at
+/// ω_in Z_s/(Z_s + Z_r).
+fn ring_held() -> (planetwear::model::gear::GearSet, PlanetaryDynamics) {
+    let mut s = Scene::example_2004();
+    s.operation.held = Member::Ring;
+    s.operation.input = Member::Sun;
+    let set = s.validate().unwrap_or_else(|e| panic!("{e}"));
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+    (set, model)
+}
+
+/// The dynamic model takes the carrier's kinematic speed as the frame's
+/// speed and carries the planets' centrifugal load m_p Ω_c² r_c; a held
+/// carrier has none.
+#[test]
+fn the_dynamic_model_turns_its_frame_at_the_carriers_kinematic_speed() {
+    let (set, mut model) = ring_held();
+    assert_eq!(model.carrier_frame_speed(), 0.0);
+    let omega = 3000.0 * std::f64::consts::PI / 30.0;
+    model.set_drive_speed(omega);
+    let (zs, zr) = (f64::from(set.sun().teeth), f64::from(set.ring().teeth));
+    let wc = omega * zs / (zs + zr);
+    assert!(
+        (model.carrier_frame_speed() / wc - 1.0).abs() < 1e-12,
+        "{} vs {wc}",
+        model.carrier_frame_speed()
+    );
+    let load = set.bodies().planet.mass * wc * wc * set.centre_distance();
+    assert!((model.planet_centrifugal_force() / load - 1.0).abs() < 1e-12);
+    println!("ring held, sun at 3000 rpm: Ω_c = {wc:.3} rad/s, planet centrifugal load {load:.3} N");
+    let set = Scene::example_2004().validate().unwrap();
+    let mut held = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+    held.set_drive_speed(omega);
+    assert_eq!((held.carrier_frame_speed(), held.planet_centrifugal_force()), (0.0, 0.0));
+}
+
+/// The Jacobian with the frame's terms is the derivative of the force
+/// (central differences), and the low-rank structure assembles to it.
+#[test]
+fn the_jacobian_holds_the_frame_terms() {
+    let (_, mut model) = ring_held();
+    let omega = 3000.0 * std::f64::consts::PI / 30.0;
+    model.set_drive_speed(omega);
+    let n = model.dim();
+    let start = static_state(&model, omega);
+    let (q, v) = (start.q, start.v);
+    let (mut k, mut c) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n));
+    model.jacobian(0.0, &q, &v, &mut k, &mut c);
+    let structure = model.low_rank_jacobian().unwrap();
+    let mut coefficients = vec![Default::default(); structure.terms.len()];
+    model.jacobian_coefficients(0.0, &q, &v, &mut coefficients);
+    let (k2, c2) = structure.assemble(&coefficients);
+    assert!((&k - &k2).amax() <= 1e-12 * k.amax());
+    assert!((&c - &c2).amax() <= 1e-12 * c.amax());
+    let force = |m: &mut PlanetaryDynamics, q: &[f64], v: &[f64]| {
+        let mut f = vec![0.0; n];
+        m.force(0.0, q, v, &mut f);
+        f
+    };
+    // Velocity columns: the force is linear in v within a contact state.
+    let h = 1e-4;
+    for j in 0..n {
+        let (mut vp, mut vm) = (v.clone(), v.clone());
+        vp[j] += h;
+        vm[j] -= h;
+        let (fp, fm) = (force(&mut model, &q, &vp), force(&mut model, &q, &vm));
+        for i in 0..n {
+            let d = -(fp[i] - fm[i]) / (2.0 * h);
+            assert!((d - c[(i, j)]).abs() <= 1e-6 * c.amax(), "C[{i},{j}] {} vs {d}", c[(i, j)]);
+        }
+    }
+    // The frame's own part: C − C(Ω_c = 0) is Ω_c G, skew.
+    let mut rest = model.clone();
+    rest.set_drive_speed(0.0);
+    let (mut k0, mut c0) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n));
+    rest.jacobian(0.0, &q, &v, &mut k0, &mut c0);
+    let g = &c - &c0;
+    assert!(g.amax() > 0.0);
+    assert!((&g + g.transpose()).amax() <= 1e-12 * g.amax());
+    let wc = model.carrier_frame_speed();
+    let dk = &k - &k0;
+    let m_p = model.lumped.planet_mass;
+    let red = model.reduction.clone();
+    let zeta = red.position(Coordinate::Zeta(0)).unwrap();
+    assert!(
+        (dk[(zeta, zeta)] / (-m_p * wc * wc) - 1.0).abs() < 1e-9,
+        "{} vs {}",
+        dk[(zeta, zeta)],
+        -m_p * wc * wc
+    );
 }

@@ -3,8 +3,12 @@
 //! Coordinates: Lin & Parker's, reduced to the scene's fidelity with the held
 //! member's rotation removed ([`crate::model::lumped`]). Equations:
 //!
-//! M q̈ + C_b q̇ + K_b q + Σ_meshes b (F(s, δ) + c_m δ̇ [in contact]) = f_ext(t)
+//! M q̈ + C_b q̇ + K_b q + Σ_meshes b (F(s, δ) + c_m δ̇ [in contact]) = f_ext(t) + f_frame
 //!
+//! with f_frame the gyroscopic, centripetal and centrifugal forces of a
+//! turning carrier at its mean speed
+//! ([`CarrierFrame`](crate::model::carrier_frame::CarrierFrame); zero for a
+//! held carrier and in the torsional model),
 //! with δ = bᵀq the mesh approach along the line of action, F the tooth
 //! forces of all pairs of that mesh at their real positions
 //! ([`MeshModel::force_with_derivatives`](crate::contact::ltca::MeshModel::force_with_derivatives)), c_m the viscous mesh damping of
@@ -20,8 +24,8 @@
 use nalgebra::DMatrix;
 
 use crate::contact::ltca::{CycleStats, SetModel};
-use crate::dynamics::carrier_frame::CarrierFrame;
 use crate::dynamics::solver::{LowRankJacobian, RankOneTerm, SecondOrderSystem, TermCoefficients};
+use crate::model::carrier_frame::CarrierFrame;
 use crate::model::gear::{Drive, GearSet, Member, MeshKind};
 use crate::model::lumped::{
     add_outer, full_index, planet_bearing_vectors, ring_mesh_vector, sun_mesh_vector, Coordinate, Fidelity,

@@ -11,7 +11,6 @@
 //! [`crate::geometry`], [`crate::contact`].
 //!
 //! - [`equations`]: the equations of motion of the planetary set.
-//! - [`carrier_frame`]: the gyroscopic and centripetal forces of a turning carrier.
 //! - [`solver`]: generalized-α and RK45 integrators behind one trait.
 //! - [`simulation`]: the time-domain run from given initial conditions.
 //! - [`response`]: the steady state at one speed and its measures.
@@ -19,7 +18,6 @@
 //! - [`spectrum`]: mesh-force harmonics and separation share.
 //! - [`state_format`]: the serialized simulation state (FMU states).
 
-pub mod carrier_frame;
 pub mod equations;
 pub mod periodic;
 pub mod response;

@@ -10,7 +10,7 @@
 //!
 //! - [`build`]: the scene's rules, and the gear set built from a valid scene.
 //! - [`carrier_frame`]: the gyroscopic and centripetal terms of coordinates
-//!   that turn with the carrier.
+//!   that turn with the carrier, as matrices and as forces.
 //! - [`cost`]: what a scene's runs will cost (memory, internal steps) and
 //!   the budgets `build` holds them to.
 //! - [`gear`]: tooth forms, bodies, supports, material, the gear set (with
