@@ -112,6 +112,13 @@ pub struct PlanetaryDynamics {
 
 #[derive(Clone, Copy, Debug)]
 struct SpeedDrive {
+    /// Index of the driven rotation u among the reduced coordinates.
+    index: usize,
+    /// Lever of the driven rotation, u = lever·θ \[m\].
+    lever: f64,
+    /// Source speed on u per rad/s of input speed [m]: the driven member's
+    /// rigid-body speed (its lever for the input member).
+    rate: f64,
     /// Shaft stiffness on u [N/m].
     stiffness: f64,
     /// Shaft damping on u [N·s/m].
@@ -316,11 +323,6 @@ impl PlanetaryDynamics {
         // External torques: the set's balance ([`GearSet::balanced_torques`]),
         // applied through `set_torques` once the model stands.
         let torques = set.balanced_torques();
-        let input_torque = match set.input() {
-            Member::Sun => torques[0],
-            Member::Ring => torques[1],
-            Member::Carrier => torques[2],
-        };
         let input_index = u(set.input()).ok_or_else(|| DynamicsError::InvalidParameter {
             name: "operation.input".into(),
             value: set.input().name().into(),
@@ -355,16 +357,33 @@ impl PlanetaryDynamics {
         let speed_drive = match set.drive() {
             Drive::Torque | Drive::SpeedSteps => None,
             Drive::Speed => {
-                // Shaft stiffness on u: k_θ / lever²; damping ratio 0.05 of the
-                // input body on the shaft.
-                let k = set.shaft_stiffness() / (input_lever * input_lever);
-                let c = 2.0 * 0.05 * (k * mass[input_index]).sqrt();
+                // The speed-driven member (the input member unless the scene
+                // names another), preloaded with its balanced torque. Shaft
+                // stiffness on u: k_θ / lever²; damping ratio 0.05 of the
+                // driven body on the shaft.
+                let driven = set.speed_driven_member();
+                let index = u(driven).ok_or_else(|| DynamicsError::InvalidParameter {
+                    name: "dynamics.speed_driven_member".into(),
+                    value: driven.name().into(),
+                    reason: "the held member cannot be speed-driven".into(),
+                })?;
+                let driven_lever = lever(set, driven);
+                let torque = match driven {
+                    Member::Sun => torques[0],
+                    Member::Ring => torques[1],
+                    Member::Carrier => torques[2],
+                };
+                let k = set.shaft_stiffness() / (driven_lever * driven_lever);
+                let c = 2.0 * 0.05 * (k * mass[index]).sqrt();
                 Some(SpeedDrive {
+                    index,
+                    lever: driven_lever,
+                    rate: rigid[index],
                     stiffness: k,
                     damping: c,
                     speed: 0.0,
-                    offset: input_torque / input_lever / k,
-                    preload: input_torque / input_lever,
+                    offset: torque / driven_lever / k,
+                    preload: torque / driven_lever,
                 })
             }
         };
@@ -424,6 +443,9 @@ impl PlanetaryDynamics {
                 Some((
                     o,
                     SpeedDrive {
+                        index: o,
+                        lever: out_lever,
+                        rate: r_out,
                         stiffness: k,
                         damping: 2.0 * BALANCE_DAMPING * inertia * w,
                         speed: 0.0,
@@ -480,7 +502,7 @@ impl PlanetaryDynamics {
     pub fn external_force(&self, f: &mut [f64]) {
         f.copy_from_slice(&self.f_ext);
         if let Some(d) = self.speed_drive {
-            f[self.input_index] += d.preload;
+            f[d.index] += d.preload;
         }
         if let Some((o, b)) = self.balance {
             f[o] += b.preload;
@@ -490,9 +512,8 @@ impl PlanetaryDynamics {
     /// Places the speed drive's source so that at t = 0 the shaft's wind-up
     /// carries the mean input torque for coordinates `q`.
     pub fn rebase_drive(&mut self, q: &[f64]) {
-        let i = self.input_index;
         if let Some(d) = &mut self.speed_drive {
-            d.offset = q[i] + d.preload / d.stiffness;
+            d.offset = q[d.index] + d.preload / d.stiffness;
         }
         if let Some((o, b)) = &mut self.balance {
             b.offset = q[*o] + b.preload / b.stiffness;
@@ -512,7 +533,7 @@ impl PlanetaryDynamics {
             }
         }
         if let Some(d) = self.speed_drive {
-            let w = d.offset + d.speed * t - q[self.input_index];
+            let w = d.offset + d.speed * t - q[d.index];
             support += 0.5 * d.stiffness * w * w;
         }
         if let Some((o, b)) = self.balance {
@@ -538,7 +559,7 @@ impl PlanetaryDynamics {
 
     /// Sets the external torques on sun, ring and carrier [N·m],
     /// counter-clockwise positive; a held member's torque is its reaction and
-    /// is ignored, and so is the input member's under the speed drive (its
+    /// is ignored, and so is the speed-driven member's under the speed drive (its
     /// shaft carries the torque) and the output member's under the load
     /// balance (its controller does). The generalised force on u = lever·θ
     /// is T/lever.
@@ -546,7 +567,7 @@ impl PlanetaryDynamics {
         self.f_ext.iter_mut().for_each(|f| *f = 0.0);
         for ((index, lever), torque) in self.rotations.iter().zip([carrier, ring, sun]) {
             if let Some(i) = index {
-                if self.speed_drive.is_some() && *i == self.input_index {
+                if self.speed_drive.is_some_and(|d| d.index == *i) {
                     continue;
                 }
                 if self.balance.is_some_and(|(o, _)| o == *i) {
@@ -558,12 +579,13 @@ impl PlanetaryDynamics {
         self.cache = None;
     }
 
-    /// Torque of the speed drive's shaft on the input member [N·m], if the
-    /// input is speed-driven.
+    /// Torque of the speed drive's shaft on the speed-driven member
+    /// ([`GearSet::speed_driven_member`], the input member by default)
+    /// [N·m], counter-clockwise positive, under the speed drive.
     pub fn shaft_torque(&self, t: f64, q: &[f64], v: &[f64]) -> Option<f64> {
         self.speed_drive.map(|d| {
-            let i = self.input_index;
-            (d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i])) * self.input_lever
+            let i = d.index;
+            (d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i])) * d.lever
         })
     }
 
@@ -609,14 +631,15 @@ impl PlanetaryDynamics {
         (self.links[i].planet, self.links[i].kind)
     }
 
-    /// Sets the speed of the speed drive's source [rad/s of the input member].
+    /// Sets the speed of the speed drive's source from the input speed
+    /// `omega` [rad/s of the input member]: the speed-driven member's source
+    /// turns at its kinematic speed for that input speed.
     pub fn set_drive_speed(&mut self, omega: f64) {
         if let Some(frame) = &mut self.frame {
             frame.set_input_speed(omega);
         }
-        let lever = self.input_lever;
         if let Some(d) = &mut self.speed_drive {
-            d.speed = omega * lever;
+            d.speed = omega * d.rate;
         }
         if let Some((o, b)) = &mut self.balance {
             b.speed = omega * self.rigid_velocity[*o];
@@ -675,9 +698,8 @@ impl PlanetaryDynamics {
         if let Some(frame) = &mut self.frame {
             frame.set_input_speed(omega);
         }
-        let lever = self.input_lever;
         if let Some(d) = &mut self.speed_drive {
-            let new = omega * lever;
+            let new = omega * d.rate;
             d.offset += (d.speed - new) * t;
             d.speed = new;
         }
@@ -787,7 +809,7 @@ impl SecondOrderSystem for PlanetaryDynamics {
             }
         }
         if let Some(d) = self.speed_drive {
-            let i = self.input_index;
+            let i = d.index;
             f[i] += d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i]);
         }
         if let Some((o, b)) = self.balance {
@@ -820,7 +842,7 @@ impl SecondOrderSystem for PlanetaryDynamics {
             }
         }
         if let Some(d) = self.speed_drive {
-            let i = self.input_index;
+            let i = d.index;
             k[(i, i)] += d.stiffness;
             c[(i, i)] += d.damping;
         }
@@ -838,7 +860,7 @@ impl SecondOrderSystem for PlanetaryDynamics {
             frame.add_jacobian(&mut k0, &mut c0);
         }
         if let Some(d) = self.speed_drive {
-            let i = self.input_index;
+            let i = d.index;
             k0[(i, i)] += d.stiffness;
             c0[(i, i)] += d.damping;
         }

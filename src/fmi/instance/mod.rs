@@ -441,6 +441,7 @@ impl Instance {
             | V::MeshDampingRatio
             | V::ShaftStiffness
             | V::LoadBalance
+            | V::SpeedDrivenMember
             | V::InitialSpeed => {
                 self.store(v, value);
                 self.changed(v);
@@ -618,7 +619,8 @@ impl Instance {
             | V::SunTeeth
             | V::PlanetTeeth
             | V::RingTeeth
-            | V::LoadBalance => Value::Integer(self.int(v)),
+            | V::LoadBalance
+            | V::SpeedDrivenMember => Value::Integer(self.int(v)),
             V::RhoInfinity
             | V::RelativeTolerance
             | V::Module
@@ -1032,7 +1034,13 @@ mod tests {
         // Keys that are optional in a scene file: the planets' own angles
         // and bearing stiffnesses (the example spaces them equally, alike).
         // The load balance is written only when on.
-        let optional = ["planets.angles_deg", "supports.planet_bearings_n_per_m", "dynamics.load_balance"];
+        // So is the speed-driven member, when it is the input member.
+        let optional = [
+            "planets.angles_deg",
+            "supports.planet_bearings_n_per_m",
+            "dynamics.load_balance",
+            "dynamics.speed_driven_member",
+        ];
         for p in Settable::ALL {
             for key in parameters::scene_keys(*p) {
                 assert!(
@@ -1080,6 +1088,41 @@ mod tests {
         j.set_integer(vr::LOAD_BALANCE, 2).unwrap();
         let e = j.exit_initialization().unwrap_err();
         assert!(e.message.contains("loadBalance = 2: allowed are 0"), "{}", e.message);
+    }
+
+    /// speedDrivenMember writes dynamics.speed_driven_member (-1, its start
+    /// value, the input member); the held member and an unknown code are
+    /// refused by the variable's name.
+    #[test]
+    fn the_speed_driven_member_maps_to_its_scene_key() {
+        let i = Instance::new("driven", None);
+        assert_eq!(i.int(vr::SPEED_DRIVEN_MEMBER), -1);
+        assert_eq!(i.scene().unwrap().dynamics.speed_driven_member, None);
+        for (code, member) in [(0, Member::Sun), (1, Member::Ring), (2, Member::Carrier)] {
+            let mut j = Instance::new("driven", None);
+            j.set_integer(vr::SPEED_DRIVEN_MEMBER, code).unwrap();
+            assert_eq!(j.scene().unwrap().dynamics.speed_driven_member, Some(member));
+        }
+        let mut j = Instance::new("driven", None);
+        j.set_integer(vr::SPEED_DRIVEN_MEMBER, 3).unwrap();
+        let m = j.scene().unwrap_err().message;
+        assert!(m.contains("speedDrivenMember = 3: allowed are 0 (sun), 1 (ring), 2 (carrier)"), "{m}");
+        // The ring, speed-driven under the speed drive (the carrier held): accepted.
+        let mut k = Instance::new("driven", None);
+        k.enter_initialization();
+        k.set_integer(vr::DRIVE_MODE, 1).unwrap();
+        k.set_integer(vr::SPEED_DRIVEN_MEMBER, 1).unwrap();
+        k.exit_initialization().unwrap();
+        // The held carrier: refused, named by the variable.
+        let mut h = Instance::new("driven", None);
+        h.enter_initialization();
+        h.set_integer(vr::DRIVE_MODE, 1).unwrap();
+        h.set_integer(vr::SPEED_DRIVEN_MEMBER, 2).unwrap();
+        let m = h.exit_initialization().unwrap_err().message;
+        assert!(
+            m.contains("speedDrivenMember") && m.contains("the held member (carrier) cannot be speed-driven"),
+            "{m}"
+        );
     }
 
     #[test]

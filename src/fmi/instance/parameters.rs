@@ -91,6 +91,12 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
         }
         Settable::HeldMember => scene.operation.held = member(v, values.int(v))?,
         Settable::InputMember => scene.operation.input = member(v, values.int(v))?,
+        Settable::SpeedDrivenMember => {
+            scene.dynamics.speed_driven_member = match values.int(v) {
+                -1 => None,
+                code => Some(member(v, code).map_err(|e| format!("{e}, or -1 (the input member)"))?),
+            }
+        }
         Settable::DriveMode => {
             scene.dynamics.drive = match values.int(v) {
                 0 => Drive::Torque,
@@ -287,6 +293,7 @@ pub(super) fn scene_keys(p: Settable) -> &'static [&'static str] {
         Settable::MeshDampingRatio => &["dynamics.mesh_damping_ratio"],
         Settable::ShaftStiffness => &["dynamics.shaft_stiffness_nm_per_rad"],
         Settable::LoadBalance => &["dynamics.load_balance"],
+        Settable::SpeedDrivenMember => &["dynamics.speed_driven_member"],
     }
 }
 
