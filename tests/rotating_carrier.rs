@@ -246,8 +246,7 @@ fn integrate(
     m: &[f64],
     k: &DMatrix<f64>,
     frame: Option<&CarrierFrame>,
-    q0: &[f64],
-    v0: &[f64],
+    (q0, v0): (&[f64], &[f64]),
     dt: f64,
     steps: usize,
     mut record: impl FnMut(f64, &[f64]),
@@ -334,13 +333,13 @@ fn the_carrier_frame_response_matches_the_fixed_frame_one() {
     let steps = 4000;
     let dt = 5.0 * period / steps as f64;
     let (mut err, mut size, mut err_without) = (0.0f64, 0.0f64, 0.0f64);
-    integrate(&m, &k, Some(&frame), &q0, &v0, dt, steps, |t, q| {
+    integrate(&m, &k, Some(&frame), (&q0, &v0), dt, steps, |t, q| {
         let r = fixed(t);
         let model = [q[zeta], q[eta] - q[uc]];
         err = err.max((model[0] - r[0]).abs()).max((model[1] - r[1]).abs());
         size = size.max(r[0].abs()).max(r[1].abs());
     });
-    integrate(&m, &k, None, &q0, &v0, dt, steps, |t, q| {
+    integrate(&m, &k, None, (&q0, &v0), dt, steps, |t, q| {
         let r = fixed(t);
         err_without = err_without.max((q[zeta] - r[0]).abs()).max((q[eta] - q[uc] - r[1]).abs());
     });

@@ -182,12 +182,10 @@ impl CarrierFrame {
             out
         };
         let k = &terms.centripetal - &terms.preload_rotation;
-        let mut steady = terms.centrifugal.clone();
-        for i in 0..d {
-            for j in 0..d {
-                steady[i] += terms.gyroscopic[(i, j)] * rigid[j] / carrier_per_input;
-            }
-        }
+        // f_c + G v̄, v̄ the rigid-body velocities per rad/s of carrier speed.
+        let per_carrier = nalgebra::DVector::from_iterator(d, rigid.iter().map(|r| r / carrier_per_input));
+        let g_vbar = &terms.gyroscopic * per_carrier;
+        let steady: Vec<f64> = terms.centrifugal.iter().zip(g_vbar.iter()).map(|(f, g)| f + g).collect();
         Some(Self {
             gyroscopic: sparse(&terms.gyroscopic),
             centripetal: sparse(&k),
