@@ -7,7 +7,7 @@
 //!
 //! with f_frame the gyroscopic, centripetal and centrifugal forces of a
 //! turning carrier at its mean speed
-//! ([`CarrierFrame`](crate::model::carrier_frame::CarrierFrame); zero for a
+//! ([`CarrierFrame`]; zero for a
 //! held carrier and in the torsional model),
 //! with δ = bᵀq the mesh approach along the line of action, F the tooth
 //! forces of all pairs of that mesh at their real positions
