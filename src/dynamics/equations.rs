@@ -674,6 +674,15 @@ impl PlanetaryDynamics {
         }
     }
 
+    /// Sets the carrier frame's mean speed to the carrier's kinematic speed
+    /// for the input speed `omega` \[rad/s\], the drive's sources untouched
+    /// ([`Self::set_drive_speed`] sets both).
+    pub fn set_frame_speed(&mut self, omega: f64) {
+        if let Some(frame) = &mut self.frame {
+            frame.set_input_speed(omega);
+        }
+    }
+
     /// The carrier frame's mean speed Ω_c [rad/s] (0 for a held carrier or
     /// the torsional model, whose equations have no carrier-frame terms).
     pub fn carrier_frame_speed(&self) -> f64 {
