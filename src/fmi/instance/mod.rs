@@ -831,7 +831,10 @@ impl Instance {
         let stepped = match guarded {
             Ok(r) => r,
             Err(why) => {
-                self.last_successful_time = t;
+                // The step's start; a non-finite `t` (refused by the guard
+                // before the step's own check) is not a time: where the
+                // simulation stood.
+                self.last_successful_time = if t.is_finite() { t } else { sim.time() };
                 self.terminated = true;
                 self.phase = Phase::StepFailed;
                 return Err(Refusal {
