@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
-use planetwear::analysis::modes::{natural_modes, ModeClass};
+use planetwear::analysis::modes::{natural_modes, rotating_modes, ModeClass};
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::response::{steady_state, sweep, Direction, SteadyState};

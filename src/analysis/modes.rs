@@ -168,3 +168,64 @@ pub fn natural_modes(set: &LumpedSet) -> Vec<Mode> {
     }
     modes
 }
+
+/// One eigenvalue λ = σ + iω of the linear model with the carrier frame's
+/// gyroscopic and centripetal terms ([`rotating_modes`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WhirlMode {
+    /// Natural frequency ω/2π \[Hz\] (0 for a rigid-body or divergent mode).
+    pub frequency: f64,
+    /// Real part σ [1/s]: 0 for an undamped stable mode, positive for a
+    /// divergent one.
+    pub growth_rate: f64,
+}
+
+/// Eigenvalues of the linear (mean-stiffness, undamped) model at carrier
+/// speed `carrier_speed` Ω_c \[rad/s\]:
+///
+/// M q̈ + Ω_c G q̇ + (K − Ω_c² (K_Ω − K_σ)) q = 0
+///
+/// ([`crate::model::carrier_frame`]), a quadratic eigenvalue problem, solved
+/// in its first-order form ż = A z with z = (ω_ref M^½ q, M^½ q̇),
+/// A = [[0, ω_ref I], [−M^-½ K_Ω_c M^-½ / ω_ref, −Ω_c M^-½ G M^-½]]
+/// (K_Ω_c the stiffness at speed, ω_ref² its largest mass-scaled diagonal
+/// term, which balances the blocks), by faer's real
+/// nonsymmetric eigensolver. One entry per conjugate pair (ω ≥ 0), and both
+/// members of a real pair ±σ; sorted by frequency, then growth rate. At
+/// Ω_c = 0 (and for a held carrier or the torsional model, whose terms
+/// vanish) the frequencies are those of [`natural_modes`]. `carrier_radius`
+/// r_c \[m\] places the planets (it only enters the steady centrifugal load,
+/// not the eigenvalues; any positive value serves).
+pub fn rotating_modes(set: &LumpedSet, carrier_speed: f64, carrier_radius: f64) -> Vec<WhirlMode> {
+    let m = set.mass();
+    let d = m.len();
+    let k = set.stiffness();
+    let inv_sqrt: Vec<f64> = m.iter().map(|x| 1.0 / x.sqrt()).collect();
+    let (k_eff, g) = if crate::model::carrier_frame::CarrierFrameTerms::applies(set) && carrier_speed != 0.0 {
+        let terms = set.carrier_frame(carrier_radius);
+        (terms.effective_stiffness(&k, carrier_speed), terms.gyroscopic * carrier_speed)
+    } else {
+        (k, DMatrix::zeros(d, d))
+    };
+    // Balanced: z = (ω_ref M^½ q, M^½ q̇), ω_ref² the largest diagonal of
+    // M^-½ K M^-½, so both off-diagonal blocks are of the frequencies' size.
+    let w_ref =
+        (0..d).map(|i| k_eff[(i, i)].abs() * inv_sqrt[i] * inv_sqrt[i]).fold(0.0, f64::max).sqrt().max(1.0);
+    let a = faer::Mat::<f64>::from_fn(2 * d, 2 * d, |i, j| match (i < d, j < d) {
+        (true, true) => 0.0,
+        (true, false) => w_ref * f64::from(u8::from(j - d == i)),
+        (false, true) => -inv_sqrt[i - d] * k_eff[(i - d, j)] * inv_sqrt[j] / w_ref,
+        (false, false) => -inv_sqrt[i - d] * g[(i - d, j - d)] * inv_sqrt[j - d],
+    });
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let mut out: Vec<WhirlMode> = match a.eigenvalues() {
+        Ok(values) => values
+            .iter()
+            .filter(|l| l.im >= 0.0)
+            .map(|l| WhirlMode { frequency: l.im / two_pi, growth_rate: l.re })
+            .collect(),
+        Err(_) => Vec::new(),
+    };
+    out.sort_by(|x, y| x.frequency.total_cmp(&y.frequency).then(x.growth_rate.total_cmp(&y.growth_rate)));
+    out
+}

@@ -72,6 +72,14 @@ pub(crate) fn run_command(RunArgs { scene, wear_state, speed, json, plots }: Run
         println!("{}", serde_json::to_string_pretty(&ss)?);
     } else {
         print_steady_state(&ss, set.sun().face_width * 1e3);
+        if model.carrier_frame_speed() != 0.0 {
+            println!(
+                "  carrier turning at {:.2} rad/s: steady centrifugal load {:.2} N on each planet bearing \
+                 (radially outward, in the dynamics)",
+                model.carrier_frame_speed(),
+                model.planet_centrifugal_force()
+            );
+        }
     }
     Ok(())
 }
@@ -197,18 +205,21 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
 }
 
 pub(crate) fn modes_command(ModesArgs { scene, wear_state, json }: ModesArgs) -> Result<()> {
-    let (name, lumped) = match load_any(&scene)? {
+    let (name, lumped, frame) = match load_any(&scene)? {
         AnyScene::Gear(s) => {
-            let set = validated(&s)?;
-            let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
-            (set.name().to_string(), model.lumped)
+            let (set, run) = validated_with_run(&s)?;
+            let mut model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+            // The carrier frame at the scene's input speed (a turning carrier only).
+            model.set_drive_speed(run.input_speed());
+            let frame = (model.carrier_frame_speed(), set.centre_distance());
+            (set.name().to_string(), model.lumped, Some(frame).filter(|(w, _)| *w != 0.0))
         }
         AnyScene::Lumped(_) if wear_state.is_some() => {
             bail!("--wear-state: a lumped-parameter scene has no tooth flanks to wear")
         }
-        AnyScene::Lumped(s) => (s.name.clone(), s.validate()?),
+        AnyScene::Lumped(s) => (s.name.clone(), s.validate()?, None),
     };
-    report_modes(&name, &lumped, json)?;
+    report_modes(&name, &lumped, frame, json)?;
     Ok(())
 }
 
@@ -285,11 +296,15 @@ pub(crate) fn print_steady_state(ss: &SteadyState, width_mm: f64) {
     println!("  (forces in N/mm of face width)");
 }
 
-pub(crate) fn report_modes(name: &str, set: &LumpedSet, json: bool) -> Result<()> {
+/// Prints the natural modes of `set`; with `frame` = (Ω_c [rad/s], r_c \[m\])
+/// of a turning carrier also the whirl frequencies at that carrier speed and
+/// the planets' centrifugal bearing load.
+pub(crate) fn report_modes(name: &str, set: &LumpedSet, frame: Option<(f64, f64)>, json: bool) -> Result<()> {
     let modes = natural_modes(set);
     let red = set.reduction();
+    let whirl = frame.map(|(w, rc)| (w, set.planet_mass * w * w * rc, rotating_modes(set, w, rc)));
     if json {
-        let doc = serde_json::json!({
+        let mut doc = serde_json::json!({
             "scene": name,
             "fidelity": set.fidelity,
             "held": set.held,
@@ -297,6 +312,13 @@ pub(crate) fn report_modes(name: &str, set: &LumpedSet, json: bool) -> Result<()
             "coordinates": red.coordinates.iter().map(|c| format!("{c:?}")).collect::<Vec<_>>(),
             "modes": modes,
         });
+        if let Some((w, load, whirl)) = &whirl {
+            doc["carrier_frame"] = serde_json::json!({
+                "carrier_speed_rad_per_s": w,
+                "planet_centrifugal_load_n": load,
+                "whirl_modes": whirl,
+            });
+        }
         println!("{}", serde_json::to_string_pretty(&doc)?);
         return Ok(());
     }
@@ -317,6 +339,17 @@ pub(crate) fn report_modes(name: &str, set: &LumpedSet, json: bool) -> Result<()
         };
         println!("  {:>12.1}  {:<14} {:>12}", m.frequency, class, m.multiplicity);
         i += m.multiplicity.max(1);
+    }
+    if let Some((w, load, whirl)) = &whirl {
+        println!(
+            "carrier turning at {w:.2} rad/s ({:.1} rpm): planet centrifugal bearing load {load:.2} N; \
+             frequencies with the gyroscopic and centripetal terms:",
+            rad_per_s_to_rpm(*w)
+        );
+        println!("  {:>12}  {:>14}", "frequency Hz", "growth 1/s");
+        for m in whirl {
+            println!("  {:>12.1}  {:>14.3e}", m.frequency, m.growth_rate);
+        }
     }
     Ok(())
 }

@@ -3,8 +3,12 @@
 //! Coordinates: Lin & Parker's, reduced to the scene's fidelity with the held
 //! member's rotation removed ([`crate::model::lumped`]). Equations:
 //!
-//! M q̈ + C_b q̇ + K_b q + Σ_meshes b (F(s, δ) + c_m δ̇ [in contact]) = f_ext(t)
+//! M q̈ + C_b q̇ + K_b q + Σ_meshes b (F(s, δ) + c_m δ̇ [in contact]) = f_ext(t) + f_frame
 //!
+//! with f_frame the gyroscopic, centripetal and centrifugal forces of a
+//! turning carrier at its mean speed
+//! ([`CarrierFrame`]; zero for a
+//! held carrier and in the torsional model),
 //! with δ = bᵀq the mesh approach along the line of action, F the tooth
 //! forces of all pairs of that mesh at their real positions
 //! ([`MeshModel::force_with_derivatives`](crate::contact::ltca::MeshModel::force_with_derivatives)), c_m the viscous mesh damping of
@@ -21,6 +25,7 @@ use nalgebra::DMatrix;
 
 use crate::contact::ltca::{CycleStats, SetModel};
 use crate::dynamics::solver::{LowRankJacobian, RankOneTerm, SecondOrderSystem, TermCoefficients};
+use crate::model::carrier_frame::CarrierFrame;
 use crate::model::gear::{Drive, GearSet, Member, MeshKind};
 use crate::model::lumped::{
     add_outer, full_index, planet_bearing_vectors, ring_mesh_vector, sun_mesh_vector, Coordinate, Fidelity,
@@ -100,10 +105,20 @@ pub struct PlanetaryDynamics {
     /// The state of the last mesh evaluation (with or without events), so a
     /// Jacobian or an output request at the state just evaluated costs nothing.
     cache: Option<(Vec<f64>, Vec<f64>, bool)>,
+    /// The inertial terms of the turning carrier's frame (None when the
+    /// carrier is held or the model torsional).
+    frame: Option<CarrierFrame>,
 }
 
 #[derive(Clone, Copy, Debug)]
 struct SpeedDrive {
+    /// Index of the driven rotation u among the reduced coordinates.
+    index: usize,
+    /// Lever of the driven rotation, u = lever·θ \[m\].
+    lever: f64,
+    /// Source speed on u per rad/s of input speed [m]: the driven member's
+    /// rigid-body speed (its lever for the input member).
+    rate: f64,
     /// Shaft stiffness on u [N/m].
     stiffness: f64,
     /// Shaft damping on u [N·s/m].
@@ -308,11 +323,6 @@ impl PlanetaryDynamics {
         // External torques: the set's balance ([`GearSet::balanced_torques`]),
         // applied through `set_torques` once the model stands.
         let torques = set.balanced_torques();
-        let input_torque = match set.input() {
-            Member::Sun => torques[0],
-            Member::Ring => torques[1],
-            Member::Carrier => torques[2],
-        };
         let input_index = u(set.input()).ok_or_else(|| DynamicsError::InvalidParameter {
             name: "operation.input".into(),
             value: set.input().name().into(),
@@ -347,16 +357,33 @@ impl PlanetaryDynamics {
         let speed_drive = match set.drive() {
             Drive::Torque | Drive::SpeedSteps => None,
             Drive::Speed => {
-                // Shaft stiffness on u: k_θ / lever²; damping ratio 0.05 of the
-                // input body on the shaft.
-                let k = set.shaft_stiffness() / (input_lever * input_lever);
-                let c = 2.0 * 0.05 * (k * mass[input_index]).sqrt();
+                // The speed-driven member (the input member unless the scene
+                // names another), preloaded with its balanced torque. Shaft
+                // stiffness on u: k_θ / lever²; damping ratio 0.05 of the
+                // driven body on the shaft.
+                let driven = set.speed_driven_member();
+                let index = u(driven).ok_or_else(|| DynamicsError::InvalidParameter {
+                    name: "dynamics.speed_driven_member".into(),
+                    value: driven.name().into(),
+                    reason: "the held member cannot be speed-driven".into(),
+                })?;
+                let driven_lever = lever(set, driven);
+                let torque = match driven {
+                    Member::Sun => torques[0],
+                    Member::Ring => torques[1],
+                    Member::Carrier => torques[2],
+                };
+                let k = set.shaft_stiffness() / (driven_lever * driven_lever);
+                let c = 2.0 * 0.05 * (k * mass[index]).sqrt();
                 Some(SpeedDrive {
+                    index,
+                    lever: driven_lever,
+                    rate: rigid[index],
                     stiffness: k,
                     damping: c,
                     speed: 0.0,
-                    offset: input_torque / input_lever / k,
-                    preload: input_torque / input_lever,
+                    offset: torque / driven_lever / k,
+                    preload: torque / driven_lever,
                 })
             }
         };
@@ -416,6 +443,9 @@ impl PlanetaryDynamics {
                 Some((
                     o,
                     SpeedDrive {
+                        index: o,
+                        lever: out_lever,
+                        rate: r_out,
                         stiffness: k,
                         damping: 2.0 * BALANCE_DAMPING * inertia * w,
                         speed: 0.0,
@@ -437,6 +467,7 @@ impl PlanetaryDynamics {
             }
         }
         let meshes = vec![MeshState::default(); links.len()];
+        let frame = CarrierFrame::new(&lumped, a, &rigid, wc);
         let mut model = Self {
             contact,
             lumped,
@@ -459,6 +490,7 @@ impl PlanetaryDynamics {
             slots,
             events_scratch: Vec::new(),
             cache: None,
+            frame,
         };
         model.set_torques(torques[0], torques[1], torques[2]);
         Ok(model)
@@ -470,7 +502,7 @@ impl PlanetaryDynamics {
     pub fn external_force(&self, f: &mut [f64]) {
         f.copy_from_slice(&self.f_ext);
         if let Some(d) = self.speed_drive {
-            f[self.input_index] += d.preload;
+            f[d.index] += d.preload;
         }
         if let Some((o, b)) = self.balance {
             f[o] += b.preload;
@@ -480,9 +512,8 @@ impl PlanetaryDynamics {
     /// Places the speed drive's source so that at t = 0 the shaft's wind-up
     /// carries the mean input torque for coordinates `q`.
     pub fn rebase_drive(&mut self, q: &[f64]) {
-        let i = self.input_index;
         if let Some(d) = &mut self.speed_drive {
-            d.offset = q[i] + d.preload / d.stiffness;
+            d.offset = q[d.index] + d.preload / d.stiffness;
         }
         if let Some((o, b)) = &mut self.balance {
             b.offset = q[*o] + b.preload / b.stiffness;
@@ -502,7 +533,7 @@ impl PlanetaryDynamics {
             }
         }
         if let Some(d) = self.speed_drive {
-            let w = d.offset + d.speed * t - q[self.input_index];
+            let w = d.offset + d.speed * t - q[d.index];
             support += 0.5 * d.stiffness * w * w;
         }
         if let Some((o, b)) = self.balance {
@@ -528,7 +559,7 @@ impl PlanetaryDynamics {
 
     /// Sets the external torques on sun, ring and carrier [N·m],
     /// counter-clockwise positive; a held member's torque is its reaction and
-    /// is ignored, and so is the input member's under the speed drive (its
+    /// is ignored, and so is the speed-driven member's under the speed drive (its
     /// shaft carries the torque) and the output member's under the load
     /// balance (its controller does). The generalised force on u = lever·θ
     /// is T/lever.
@@ -536,7 +567,7 @@ impl PlanetaryDynamics {
         self.f_ext.iter_mut().for_each(|f| *f = 0.0);
         for ((index, lever), torque) in self.rotations.iter().zip([carrier, ring, sun]) {
             if let Some(i) = index {
-                if self.speed_drive.is_some() && *i == self.input_index {
+                if self.speed_drive.is_some_and(|d| d.index == *i) {
                     continue;
                 }
                 if self.balance.is_some_and(|(o, _)| o == *i) {
@@ -548,12 +579,13 @@ impl PlanetaryDynamics {
         self.cache = None;
     }
 
-    /// Torque of the speed drive's shaft on the input member [N·m], if the
-    /// input is speed-driven.
+    /// Torque of the speed drive's shaft on the speed-driven member
+    /// ([`GearSet::speed_driven_member`], the input member by default)
+    /// [N·m], counter-clockwise positive, under the speed drive.
     pub fn shaft_torque(&self, t: f64, q: &[f64], v: &[f64]) -> Option<f64> {
         self.speed_drive.map(|d| {
-            let i = self.input_index;
-            (d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i])) * self.input_lever
+            let i = d.index;
+            (d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i])) * d.lever
         })
     }
 
@@ -599,11 +631,15 @@ impl PlanetaryDynamics {
         (self.links[i].planet, self.links[i].kind)
     }
 
-    /// Sets the speed of the speed drive's source [rad/s of the input member].
+    /// Sets the speed of the speed drive's source from the input speed
+    /// `omega` [rad/s of the input member]: the speed-driven member's source
+    /// turns at its kinematic speed for that input speed.
     pub fn set_drive_speed(&mut self, omega: f64) {
-        let lever = self.input_lever;
+        if let Some(frame) = &mut self.frame {
+            frame.set_input_speed(omega);
+        }
         if let Some(d) = &mut self.speed_drive {
-            d.speed = omega * lever;
+            d.speed = omega * d.rate;
         }
         if let Some((o, b)) = &mut self.balance {
             b.speed = omega * self.rigid_velocity[*o];
@@ -638,6 +674,28 @@ impl PlanetaryDynamics {
         }
     }
 
+    /// Sets the carrier frame's mean speed to the carrier's kinematic speed
+    /// for the input speed `omega` \[rad/s\], the drive's sources untouched
+    /// ([`Self::set_drive_speed`] sets both).
+    pub fn set_frame_speed(&mut self, omega: f64) {
+        if let Some(frame) = &mut self.frame {
+            frame.set_input_speed(omega);
+        }
+    }
+
+    /// The carrier frame's mean speed Ω_c [rad/s] (0 for a held carrier or
+    /// the torsional model, whose equations have no carrier-frame terms).
+    pub fn carrier_frame_speed(&self) -> f64 {
+        self.frame.as_ref().map_or(0.0, CarrierFrame::speed)
+    }
+
+    /// The steady centrifugal load m_p Ω_c² r_c of one planet on its bearing
+    /// \[N\], radially outward (0 when the carrier is held). The dynamics
+    /// carry it: it shifts each planet's radial bearing deflection.
+    pub fn planet_centrifugal_force(&self) -> f64 {
+        self.frame.as_ref().map_or(0.0, CarrierFrame::planet_centrifugal_force)
+    }
+
     /// Whether the output member is held at its kinematic speed by the load balance.
     pub fn has_load_balance(&self) -> bool {
         self.balance.is_some()
@@ -646,9 +704,11 @@ impl PlanetaryDynamics {
     /// Changes the speed drive's source speed at time `t` \[s\] keeping the
     /// source's angle continuous (no jump in the shaft's wind-up).
     pub fn change_drive_speed(&mut self, omega: f64, t: f64) {
-        let lever = self.input_lever;
+        if let Some(frame) = &mut self.frame {
+            frame.set_input_speed(omega);
+        }
         if let Some(d) = &mut self.speed_drive {
-            let new = omega * lever;
+            let new = omega * d.rate;
             d.offset += (d.speed - new) * t;
             d.speed = new;
         }
@@ -748,6 +808,9 @@ impl SecondOrderSystem for PlanetaryDynamics {
         for &(i, j, k, c) in &self.support_nz {
             f[i] -= k * q[j] + c * v[j];
         }
+        if let Some(frame) = &self.frame {
+            frame.add_force(q, v, f);
+        }
         for (link, state) in self.links.iter().zip(&self.meshes) {
             let total = state.force + state.damping_force;
             for (j, b) in &link.b_nz {
@@ -755,7 +818,7 @@ impl SecondOrderSystem for PlanetaryDynamics {
             }
         }
         if let Some(d) = self.speed_drive {
-            let i = self.input_index;
+            let i = d.index;
             f[i] += d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i]);
         }
         if let Some((o, b)) = self.balance {
@@ -767,6 +830,9 @@ impl SecondOrderSystem for PlanetaryDynamics {
         self.evaluate_meshes(q, v, false);
         k.copy_from(&self.k_support);
         c.copy_from(&self.c_support);
+        if let Some(frame) = &self.frame {
+            frame.add_jacobian(k, c);
+        }
         for (link, state) in self.links.iter().zip(&self.meshes) {
             if state.stiffness == 0.0 {
                 continue;
@@ -785,7 +851,7 @@ impl SecondOrderSystem for PlanetaryDynamics {
             }
         }
         if let Some(d) = self.speed_drive {
-            let i = self.input_index;
+            let i = d.index;
             k[(i, i)] += d.stiffness;
             c[(i, i)] += d.damping;
         }
@@ -799,8 +865,11 @@ impl SecondOrderSystem for PlanetaryDynamics {
         // Bearings and the drive shaft are constant; each mesh adds u = b (δ = bᵀq) with the
         // contact's tangent stiffness and damping, and the rank-one term b ∂F/∂s pᵀ.
         let (mut k0, mut c0) = (self.k_support.clone(), self.c_support.clone());
+        if let Some(frame) = &self.frame {
+            frame.add_jacobian(&mut k0, &mut c0);
+        }
         if let Some(d) = self.speed_drive {
-            let i = self.input_index;
+            let i = d.index;
             k0[(i, i)] += d.stiffness;
             c0[(i, i)] += d.damping;
         }

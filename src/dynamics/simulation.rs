@@ -450,6 +450,7 @@ impl Simulation {
                 let dv = omega - self.speed_reference;
                 let v: Vec<f64> = v.iter().zip(&self.model.rigid_velocity).map(|(v, r)| v + r * dv).collect();
                 self.speed_reference = omega;
+                self.model.set_frame_speed(omega);
                 if let Some(stepper) = self.retuned_stepper(omega)? {
                     self.stepper = stepper;
                 }
@@ -817,6 +818,11 @@ impl Simulation {
         self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
         self.speed_reference = s.speed_reference;
         self.model.set_drive_state(&s.drive);
+        // The carrier frame turns at the reference's carrier speed wherever
+        // the reference moves the dynamics (not under the plain torque drive).
+        if self.set.drive() != Drive::Torque || self.model.has_load_balance() {
+            self.model.set_frame_speed(s.speed_reference);
+        }
         if self.set.drive() != Drive::Torque {
             // The internal step follows the reference (see `set_speed_reference`).
             if let Some(stepper) = self.retuned_stepper(s.speed_reference)? {

@@ -12,6 +12,7 @@ use crate::model::gear::{
     Analysis, Bodies, Body, Chamfer, GearKind, GearSet, Material, MeshKind, RootForm, Supports, ToothForm,
 };
 use crate::model::gear_data::{minimum_profile_shift, name_by_gear_data, trochoid_margin};
+use crate::model::gear::{Drive, Member};
 use crate::model::mesh::PathOfContact;
 use crate::model::run::{RunSettings, RunValues};
 use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
@@ -516,6 +517,7 @@ fn validate_radii(given: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
             format!("must differ from the held member ({})", op.held.name()),
         );
     }
+    check_speed_driven_member(d, op, &mut c);
     if !op.input_torque_nm.is_finite() {
         c.fail("operation.input_torque_nm", op.input_torque_nm, "must be a finite number");
     }
@@ -595,6 +597,7 @@ fn validate_radii(given: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
         drive: d.drive,
         shaft_stiffness: d.shaft_stiffness_nm_per_rad,
         load_balance: d.load_balance,
+        speed_driven: d.speed_driven_member.unwrap_or(op.input),
     };
     // Bodies from the geometry, then the user's overrides.
     let mut set = set;
@@ -909,5 +912,40 @@ impl RunSettings {
         let mut values = self.values;
         change(&mut values);
         RunSettings::new(values)
+    }
+}
+
+/// `dynamics.speed_driven_member`: a turning member (not the held one),
+/// only under the speed drive, and not the output member when the load
+/// balance already holds that member's speed.
+fn check_speed_driven_member(
+    d: &crate::scene::DynamicsSpec,
+    op: &crate::scene::OperationSpec,
+    c: &mut Checker,
+) {
+    let Some(m) = d.speed_driven_member else { return };
+    let key = "dynamics.speed_driven_member";
+    let output =
+        [Member::Sun, Member::Ring, Member::Carrier].into_iter().find(|x| *x != op.held && *x != op.input);
+    if m == op.held {
+        c.fail(
+            key,
+            m.name(),
+            format!(
+                "the held member ({}) cannot be speed-driven; allowed: the input member ({}) or the output member{}",
+                op.held.name(),
+                op.input.name(),
+                output.map_or(String::new(), |o| format!(" ({})", o.name()))
+            ),
+        );
+    } else if d.drive != Drive::Speed {
+        c.fail(key, m.name(), format!("applies to dynamics.drive = \"speed\" only (drive is {:?})", d.drive));
+    } else if d.load_balance && Some(m) == output {
+        c.fail(
+            key,
+            m.name(),
+            "the load balance already holds the output member's speed: drive the input member, or turn \
+             dynamics.load_balance off",
+        );
     }
 }

@@ -410,6 +410,8 @@ pub struct GearSet {
     pub(in crate::model) shaft_stiffness: f64,
     /// Whether a speed controller holds the output member at its kinematic speed.
     pub(in crate::model) load_balance: bool,
+    /// The member the speed drive turns (the input member by default).
+    pub(in crate::model) speed_driven: Member,
 }
 
 /// Read access to a validated gear set. The fields are visible to the model
@@ -512,6 +514,13 @@ impl GearSet {
     /// replaces the output's external torque.
     pub fn load_balance(&self) -> bool {
         self.load_balance
+    }
+
+    /// The member the speed drive turns through its shaft (under
+    /// [`Drive::Speed`]): the input member unless the scene's
+    /// `dynamics.speed_driven_member` names the output member.
+    pub fn speed_driven_member(&self) -> Member {
+        self.speed_driven
     }
 }
 

@@ -17,8 +17,8 @@
 //! keeps the rotations with the planets pinned to the carrier (ζ_n = 0,
 //! η_n = u_c). A held member's rotation is removed. Reduced matrices are
 //! Tᵀ M T, Tᵀ K T, and reduced mesh vectors Tᵀ b: one formulation serves both
-//! fidelities. Gyroscopic and centripetal terms of a rotating carrier are not
-//! included (exact for the held carrier of the example).
+//! fidelities. The gyroscopic and centripetal terms of a turning carrier are
+//! in [`crate::model::carrier_frame`].
 
 use serde::{Deserialize, Serialize};
 

@@ -9,6 +9,8 @@
 //! May import: [`crate::files`], [`crate::scene`].
 //!
 //! - [`build`]: the scene's rules, and the gear set built from a valid scene.
+//! - [`carrier_frame`]: the gyroscopic and centripetal terms of coordinates
+//!   that turn with the carrier, as matrices and as forces.
 //! - [`cost`]: what a scene's runs will cost (memory, internal steps) and
 //!   the budgets `build` holds them to.
 //! - [`gear`]: tooth forms, bodies, supports, material, the gear set (with
@@ -23,6 +25,7 @@
 //!   the input speed of a single run), a value apart from the gear set.
 
 pub mod build;
+pub mod carrier_frame;
 pub mod cost;
 pub mod gear;
 pub mod gear_data;

@@ -199,6 +199,11 @@ pub struct DynamicsSpec {
     /// of the output's external torque.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub load_balance: bool,
+    /// The member the speed drive turns (drive = "speed"): absent means the
+    /// input member; the output member makes the set speed-driven from its
+    /// output side, torque on the input.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_driven_member: Option<Member>,
 }
 
 impl Default for DynamicsSpec {
@@ -220,6 +225,7 @@ impl Default for DynamicsSpec {
             measured_revolutions: 2.0,
             samples_per_mesh_cycle: 60,
             load_balance: false,
+            speed_driven_member: None,
         }
     }
 }

@@ -455,6 +455,7 @@ impl Instance {
             | V::SunTipDiameter
             | V::PlanetTipDiameter
             | V::RingTipDiameter
+            | V::SpeedDrivenMember
             | V::InitialSpeed => {
                 self.store(v, value);
                 self.changed(v);
@@ -633,7 +634,8 @@ impl Instance {
             | V::PlanetTeeth
             | V::RingTeeth
             | V::LoadBalance
-            | V::GearData => Value::Integer(self.int(v)),
+            | V::GearData
+            | V::SpeedDrivenMember => Value::Integer(self.int(v)),
             V::SunProfileShift
             | V::PlanetProfileShift
             | V::RingProfileShift
@@ -857,7 +859,10 @@ impl Instance {
         let stepped = match guarded {
             Ok(r) => r,
             Err(why) => {
-                self.last_successful_time = t;
+                // The step's start; a non-finite `t` (refused by the guard
+                // before the step's own check) is not a time: where the
+                // simulation stood.
+                self.last_successful_time = if t.is_finite() { t } else { sim.time() };
                 self.terminated = true;
                 self.phase = Phase::StepFailed;
                 return Err(Refusal {
@@ -1064,12 +1069,14 @@ mod tests {
         // Keys that are optional in a scene file: the planets' own angles
         // and bearing stiffnesses (the example spaces them equally, alike).
         // The load balance is written only when on; a tip diameter only
-        // when the gear data give one (the example's planet has none).
+        // when the gear data give one (the example's planet has none); the
+        // speed-driven member only when it is not the input member.
         let optional = [
             "planets.angles_deg",
             "supports.planet_bearings_n_per_m",
             "dynamics.load_balance",
             "planet.gear_data.tip_diameter_mm",
+            "dynamics.speed_driven_member",
         ];
         for p in Settable::ALL {
             for key in parameters::scene_keys(*p) {
@@ -1118,6 +1125,41 @@ mod tests {
         j.set_integer(vr::LOAD_BALANCE, 2).unwrap();
         let e = j.exit_initialization().unwrap_err();
         assert!(e.message.contains("loadBalance = 2: allowed are 0"), "{}", e.message);
+    }
+
+    /// speedDrivenMember writes dynamics.speed_driven_member (-1, its start
+    /// value, the input member); the held member and an unknown code are
+    /// refused by the variable's name.
+    #[test]
+    fn the_speed_driven_member_maps_to_its_scene_key() {
+        let i = Instance::new("driven", None);
+        assert_eq!(i.int(vr::SPEED_DRIVEN_MEMBER), -1);
+        assert_eq!(i.scene().unwrap().dynamics.speed_driven_member, None);
+        for (code, member) in [(0, Member::Sun), (1, Member::Ring), (2, Member::Carrier)] {
+            let mut j = Instance::new("driven", None);
+            j.set_integer(vr::SPEED_DRIVEN_MEMBER, code).unwrap();
+            assert_eq!(j.scene().unwrap().dynamics.speed_driven_member, Some(member));
+        }
+        let mut j = Instance::new("driven", None);
+        j.set_integer(vr::SPEED_DRIVEN_MEMBER, 3).unwrap();
+        let m = j.scene().unwrap_err().message;
+        assert!(m.contains("speedDrivenMember = 3: allowed are 0 (sun), 1 (ring), 2 (carrier)"), "{m}");
+        // The ring, speed-driven under the speed drive (the carrier held): accepted.
+        let mut k = Instance::new("driven", None);
+        k.enter_initialization();
+        k.set_integer(vr::DRIVE_MODE, 1).unwrap();
+        k.set_integer(vr::SPEED_DRIVEN_MEMBER, 1).unwrap();
+        k.exit_initialization().unwrap();
+        // The held carrier: refused, named by the variable.
+        let mut h = Instance::new("driven", None);
+        h.enter_initialization();
+        h.set_integer(vr::DRIVE_MODE, 1).unwrap();
+        h.set_integer(vr::SPEED_DRIVEN_MEMBER, 2).unwrap();
+        let m = h.exit_initialization().unwrap_err().message;
+        assert!(
+            m.contains("speedDrivenMember") && m.contains("the held member (carrier) cannot be speed-driven"),
+            "{m}"
+        );
     }
 
     #[test]

@@ -91,6 +91,12 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
         }
         Settable::HeldMember => scene.operation.held = member(v, values.int(v))?,
         Settable::InputMember => scene.operation.input = member(v, values.int(v))?,
+        Settable::SpeedDrivenMember => {
+            scene.dynamics.speed_driven_member = match values.int(v) {
+                -1 => None,
+                code => Some(member(v, code).map_err(|e| format!("{e}, or -1 (the input member)"))?),
+            }
+        }
         Settable::DriveMode => {
             scene.dynamics.drive = match values.int(v) {
                 0 => Drive::Torque,
@@ -379,6 +385,7 @@ pub(super) fn scene_keys(p: Settable) -> &'static [&'static str] {
         Settable::SunTipDiameter => &["sun.gear_data.tip_diameter_mm"],
         Settable::PlanetTipDiameter => &["planet.gear_data.tip_diameter_mm"],
         Settable::RingTipDiameter => &["ring.gear_data.tip_diameter_mm"],
+        Settable::SpeedDrivenMember => &["dynamics.speed_driven_member"],
     }
 }
 
