@@ -4,7 +4,9 @@
 use crate::*;
 use planetwear::analysis::plausibility;
 
-pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: SimulateArgs) -> Result<()> {
+pub(crate) fn simulate_command(
+    SimulateArgs { scene, wear_state, accept_state_difference, stop, step }: SimulateArgs,
+) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     if !(step.is_finite() && step > 0.0 && stop.is_finite() && stop > 0.0) {
         bail!("--stop and --step must be finite and positive (got {stop} and {step})");
@@ -16,7 +18,10 @@ pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: S
             stop / step
         );
     }
-    let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+    let model = PlanetaryDynamics::new(
+        &set,
+        contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
+    )?;
     let mut sim =
         planetwear::dynamics::simulation::Simulation::new(&set, &run, model, 0.0, run.input_speed())?;
     let n = (stop / step).round() as u64;
@@ -52,9 +57,14 @@ pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: S
 /// Most communication points `simulate` runs and prints.
 const MAX_COMMUNICATION_POINTS: f64 = 1e7;
 
-pub(crate) fn run_command(RunArgs { scene, wear_state, speed, json, plots }: RunArgs) -> Result<()> {
+pub(crate) fn run_command(
+    RunArgs { scene, wear_state, accept_state_difference, speed, json, plots }: RunArgs,
+) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
-    let mut model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+    let mut model = PlanetaryDynamics::new(
+        &set,
+        contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
+    )?;
     let omega = speed.map(rpm_to_rad_per_s).unwrap_or(run.input_speed());
     // An implausible speed is said before the run, which may take long.
     if let Some(w) = plausibility::overspeed_at_input(&set, omega) {
@@ -82,7 +92,19 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         "continuation" => return sweep_continuation(args),
         other => bail!("--method {other}: allowed are march, continuation"),
     }
-    let SweepArgs { scene, wear_state, from, to, step, direction, out, histories, json, .. } = args;
+    let SweepArgs {
+        scene,
+        wear_state,
+        accept_state_difference,
+        from,
+        to,
+        step,
+        direction,
+        out,
+        histories,
+        json,
+        ..
+    } = args;
     let (set, run_settings) = validated_with_run(&load_scene(&scene)?)?;
     let speeds = speed_grid(from, to, step)?;
     let dirs: Vec<Direction> = match direction.as_str() {
@@ -93,7 +115,10 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
     };
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     remove_marker(&out.join("sweep.json"))?;
-    let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+    let model = PlanetaryDynamics::new(
+        &set,
+        contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
+    )?;
     let modes = natural_modes(&model.lumped);
     let bar = progress_bar((speeds.len() * dirs.len()) as u64);
     let started = std::time::Instant::now();
@@ -193,11 +218,16 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn modes_command(ModesArgs { scene, wear_state, json }: ModesArgs) -> Result<()> {
+pub(crate) fn modes_command(
+    ModesArgs { scene, wear_state, accept_state_difference, json }: ModesArgs,
+) -> Result<()> {
     let (name, lumped) = match load_any(&scene)? {
         AnyScene::Gear(s) => {
             let set = validated(&s)?;
-            let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+            let model = PlanetaryDynamics::new(
+                &set,
+                contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
+            )?;
             (set.name().to_string(), model.lumped)
         }
         AnyScene::Lumped(_) if wear_state.is_some() => {
@@ -210,7 +240,7 @@ pub(crate) fn modes_command(ModesArgs { scene, wear_state, json }: ModesArgs) ->
 }
 
 pub(crate) fn ltca_command(
-    LtcaArgs { scene, wear_state, torque, samples, json, out, plots }: LtcaArgs,
+    LtcaArgs { scene, wear_state, accept_state_difference, torque, samples, json, out, plots }: LtcaArgs,
 ) -> Result<()> {
     let mut scene = load_scene(&scene)?;
     if let Some(t) = torque {
@@ -224,10 +254,7 @@ pub(crate) fn ltca_command(
     let key = if torque.is_some() { "--torque" } else { "operation.input_torque_nm" };
     planetwear::model::cost::ltca_torque(set.input_torque(), key).map_err(|p| anyhow::anyhow!("{p}"))?;
     let state = match &wear_state {
-        Some(path) => Some(
-            planetwear::wear::state::read_worn_state(path, &set)
-                .with_context(|| format!("--wear-state {}", path.display()))?,
-        ),
+        Some(path) => Some(read_state("--wear-state", path, &set, accept_state_difference.as_deref())?),
         None => None,
     };
     let model = state.as_ref().map_or_else(|| SetModel::new(&set), |s| s.set_model(&set));

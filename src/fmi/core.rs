@@ -357,8 +357,9 @@ impl Component {
     pub fn exit_initialization_mode(&mut self) -> Result<(), Refusal> {
         self.instance.exit_initialization()?;
         let initial_speed = self.instance.get_real(vr::INITIAL_SPEED)?;
+        self.warnings = self.instance.take_build_warnings();
         if let Some(sim) = self.instance.simulation() {
-            self.warnings = self.watch.at_start(sim, initial_speed);
+            self.warnings.extend(self.watch.at_start(sim, initial_speed));
         }
         Ok(())
     }
