@@ -55,6 +55,11 @@ enum Command {
     /// Time-domain run from the start, printing outputs at every communication point (JSON lines).
     Simulate(SimulateArgs),
     /// Steady-state dynamic response at one input speed.
+    ///
+    /// The harmonics are measured over the scene's dynamics.measured_revolutions (2 input
+    /// revolutions: 68 mesh cycles for example-2004); the FMU's harmonicWindowCycles starts at
+    /// one revolution (34) so that its windowed outputs are valid sooner in a co-simulation.
+    /// Planets are numbered from 1, as the FMU's planet[1].
     Run(RunArgs),
     /// Speed sweep with continuation: forced-response curves, CSV, plots.
     Sweep(SweepArgs),

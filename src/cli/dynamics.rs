@@ -79,7 +79,7 @@ pub(crate) fn run_command(
         write_steady_state(&ss, &set, dir)?;
     }
     if json {
-        println!("{}", serde_json::to_string_pretty(&ss)?);
+        println!("{}", serde_json::to_string_pretty(&steady_state_json(&ss)?)?);
     } else {
         print_steady_state(&ss, set.sun().face_width * 1e3);
     }
@@ -297,7 +297,7 @@ pub(crate) fn print_steady_state(ss: &SteadyState, width_mm: f64) {
         let h = &m.harmonics;
         print!(
             "  planet {} {:<7} {:>9.2}",
-            m.planet,
+            m.planet + 1,
             format!("{:?}", m.mesh).replace("Planet", ""),
             h.mean / width_mm
         );
@@ -397,4 +397,18 @@ pub(crate) fn print_summary(doc: &serde_json::Value) {
         p["load_sharing_factor"].as_f64().unwrap_or(f64::NAN),
         p["sun_transmission_error"]["peak_to_peak"].as_f64().unwrap_or(f64::NAN) * 1e6
     );
+}
+
+/// A steady state as JSON with its meshes' planets numbered from 1, as the
+/// FMU's planet[1]… and every table and plot of the tool (docs/FMU.md).
+fn steady_state_json(ss: &SteadyState) -> Result<serde_json::Value> {
+    let mut doc = serde_json::to_value(ss)?;
+    if let Some(meshes) = doc.get_mut("meshes").and_then(serde_json::Value::as_array_mut) {
+        for m in meshes {
+            if let Some(p) = m.get("planet").and_then(serde_json::Value::as_u64) {
+                m["planet"] = (p + 1).into();
+            }
+        }
+    }
+    Ok(doc)
 }

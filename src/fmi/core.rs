@@ -892,6 +892,49 @@ mod tests {
         assert!(warned.iter().all(|(_, m)| !m.contains("run-away")), "{warned:?}");
     }
 
+    /// A worn-profile state of another material, accepted through
+    /// wearStateAccept, is logged once as a logStatusWarning naming what
+    /// differs; without wearStateAccept it is refused.
+    #[test]
+    fn an_accepted_wear_state_difference_is_a_logged_warning() {
+        let set = crate::scene::Scene::example_2004().validate().unwrap();
+        let state = crate::wear::state::WornState::unworn(&set, 20, 1);
+        let dir = std::env::temp_dir().join(format!("planetwear-accept-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("kappa-0.json");
+        crate::wear::state::write_worn_state(&path, &state).unwrap();
+        let file = Some(path.display().to_string());
+        for accept in ["", "material"] {
+            let (mut c, log) = logged();
+            let refs = [vr::WEAR_STATE_FILE, vr::WEAR_STATE_ACCEPT];
+            let set = c.call(Call::Set, "fmi2SetString", |c| {
+                c.set_string(&refs, &[file.clone(), Some(accept.into())])
+            });
+            assert_eq!(set, fmi2Status_fmi2OK);
+            let status = initialize(&mut c, &[(vr::YOUNGS_MODULUS, 2.1e11)]);
+            let log = log.borrow().clone();
+            if accept.is_empty() {
+                assert_eq!(status, fmi2Status_fmi2Error, "{log:?}");
+                assert!(
+                    log.iter().any(|(_, _, m)| m.contains(
+                        "material.youngs_modulus is 207000000000 in the state and 210000000000 here"
+                    )),
+                    "{log:?}"
+                );
+            } else {
+                assert_eq!(status, fmi2Status_fmi2Warning, "{log:?}");
+                let warned: Vec<_> = log.iter().filter(|(_, cat, _)| cat == "logStatusWarning").collect();
+                assert_eq!(warned.len(), 1, "{log:?}");
+                assert!(
+                    warned[0].2.contains("accepted a worn-profile state whose gear set differs in material"),
+                    "{log:?}"
+                );
+                assert!(warned[0].2.contains("(wearStateAccept = material)"), "{log:?}");
+            }
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn an_initial_speed_given_in_rpm_warns_at_initialization_and_not_again() {
         let (mut c, log) = logged();
