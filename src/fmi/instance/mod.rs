@@ -356,9 +356,21 @@ impl Instance {
         let (contact, warning) = self.contact_model(&set)?;
         let model = PlanetaryDynamics::new(&set, contact).map_err(|e| Refusal::error(e.to_string()))?;
         self.build_warnings = warning.into_iter().collect();
-        let speed = self.real(vr::INITIAL_SPEED);
+        // initialSpeed when it applies (always without a scene file), else
+        // the scene file's dynamics.input_speed_rpm.
+        let (speed, name) = if self.applies(Settable::InitialSpeed) {
+            (self.real(vr::INITIAL_SPEED), "initialSpeed".to_string())
+        } else {
+            (
+                run.input_speed(),
+                format!(
+                    "sceneFile = {}: the input speed",
+                    self.strings.get(&vr::SCENE_FILE).cloned().unwrap_or_default()
+                ),
+            )
+        };
         let mut sim = Simulation::new(&set, &run, model, self.start_time, speed).map_err(|e| {
-            Refusal::error(format!("initialSpeed = {speed} rad/s: the simulation cannot start: {e}"))
+            Refusal::error(format!("{name} = {speed} rad/s: the simulation cannot start: {e}"))
         })?;
         let cycles = usize::try_from(self.int(vr::HARMONIC_WINDOW_CYCLES)).unwrap_or(0);
         sim.set_window(cycles, run.samples_per_mesh_cycle()).map_err(|e| Refusal::error(e.to_string()))?;

@@ -70,8 +70,11 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
         // Read before the scene exists (it chooses the scene) and by the
         // contact model (the worn flanks).
         Settable::SceneFile | Settable::WearStateFile | Settable::WearStateAccept => {}
-        // The simulation's initial state, set when it is built.
-        Settable::InitialSpeed => {}
+        // The simulation's initial state, set when it is built; also the
+        // run's input speed, so that the scene's speed rule names it.
+        Settable::InitialSpeed => {
+            scene.dynamics.input_speed_rpm = crate::scene::units::rad_per_s_to_rpm(r);
+        }
         // Inputs act on the running simulation; the input member's torque
         // also sets the scene's operating load ([`input_torque`]).
         Settable::SunTorque
@@ -324,10 +327,10 @@ pub(super) fn input_torque(input: Member) -> Settable {
 /// they belong to the input member.
 pub(super) fn scene_keys(p: Settable) -> &'static [&'static str] {
     match p {
+        Settable::InitialSpeed => &["dynamics.input_speed_rpm"],
         Settable::SceneFile
         | Settable::WearStateFile
         | Settable::WearStateAccept
-        | Settable::InitialSpeed
         | Settable::InputSpeedReference
         | Settable::HarmonicWindowCycles => &[],
         Settable::SunTorque | Settable::RingTorque | Settable::CarrierTorque => {
