@@ -77,14 +77,16 @@ pub fn documentation(scene: Option<&Scene>) -> String {
     for (title, causality) in
         [("Parameters", Causality::Parameter), ("Inputs", Causality::Input), ("Outputs", Causality::Output)]
     {
-        h.push_str(&format!("<h2>{title}</h2>\n<table border=\"1\" cellpadding=\"3\"><tr><th>name</th><th>value reference</th><th>type</th><th>unit</th><th>description</th></tr>\n"));
+        h.push_str(&format!("<h2>{title}</h2>\n<table border=\"1\" cellpadding=\"3\"><tr><th>name</th><th>value reference</th><th>type</th><th>unit</th><th>min</th><th>max</th><th>description</th></tr>\n"));
         for v in VARIABLES.iter().filter(|v| v.causality == causality) {
             h.push_str(&format!(
-                "<tr><td>{}</td><td>{}</td><td>{:?}</td><td>{}</td><td>{}</td></tr>\n",
+                "<tr><td>{}</td><td>{}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
                 html_escape(v.name),
                 v.vr,
                 v.kind,
                 html_escape(v.unit),
+                v.min.map_or(String::new(), |x| x.to_string()),
+                v.max.map_or(String::new(), |x| x.to_string()),
                 html_escape(v.description)
             ));
         }

@@ -211,8 +211,9 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
 }
 
 /// The value of every settable variable with a counterpart in `scene`, in
-/// the variable's unit (SI): the inverse of [`apply`], so that the FMU's
-/// parameters at these values describe the scene's set. The torque inputs
+/// the variable's unit (SI): the inverse of the parameters → scene map the
+/// instance applies, so that the FMU's parameters at these values describe
+/// the scene's set. The torque inputs
 /// are the set's balanced torques (the input torque on the input member);
 /// initialSpeed and inputSpeedReference are the scene's input speed of a
 /// single run (`dynamics.input_speed_rpm`). Variables without a counterpart
