@@ -57,6 +57,11 @@ struct Var {
     unit: Option<String>,
     display: Option<String>,
     start: Option<toml::Value>,
+    /// Inclusive lower bound (FMI 2.0 `min`), the same as the instance's
+    /// validation accepts.
+    min: Option<toml::Value>,
+    /// Inclusive upper bound (FMI 2.0 `max`).
+    max: Option<toml::Value>,
     description: String,
 }
 
@@ -99,6 +104,21 @@ fn start_text(v: &Var) -> Option<String> {
         ("Boolean", toml::Value::Boolean(b)) => b.to_string(),
         ("String", toml::Value::String(s)) => s.clone(),
         _ => fail(format!("{}: start value {s} does not fit type {}", v.name, v.ty)),
+    })
+}
+
+/// A bound (`min` or `max`) of a variable as a number and as written in
+/// modelDescription.xml.
+fn bound(v: &Var, which: &str, b: &Option<toml::Value>) -> Option<(f64, String)> {
+    let b = b.as_ref()?;
+    Some(match (v.ty.as_str(), b) {
+        ("Real", toml::Value::Float(f)) => (*f, real_text(*f)),
+        ("Real", toml::Value::Integer(n)) => (*n as f64, real_text(*n as f64)),
+        ("Integer", toml::Value::Integer(n)) => (*n as f64, n.to_string()),
+        _ => fail(format!(
+            "{}: {which} {b} does not fit type {} (only Real and Integer have bounds)",
+            v.name, v.ty
+        )),
     })
 }
 
@@ -188,9 +208,12 @@ fn model_description_xml(table: &Table, guid: &str) -> std::io::Result<String> {
                     ];
                     attrs.extend(v.initial.as_deref().map(|i| ("initial", i)));
                     let start = start_text(v);
+                    let (min, max) = (bound(v, "min", &v.min), bound(v, "max", &v.max));
                     let mut typed = Vec::new();
                     typed.extend(v.unit.as_deref().map(|u| ("unit", u)));
                     typed.extend(v.display.as_deref().map(|d| ("displayUnit", d)));
+                    typed.extend(min.as_ref().map(|(_, t)| ("min", t.as_str())));
+                    typed.extend(max.as_ref().map(|(_, t)| ("max", t.as_str())));
                     typed.extend(start.as_deref().map(|s| ("start", s)));
                     w.create_element("ScalarVariable").with_attributes(attrs).write_inner_content(|w| {
                         w.create_element(v.ty.as_str()).with_attributes(typed).write_empty()?;
@@ -382,6 +405,25 @@ fn main() {
         if v.ty != "Real" && v.variability == "continuous" {
             fail(format!("{}: only Real variables may be continuous", v.name));
         }
+        let (min, max) = (bound(v, "min", &v.min), bound(v, "max", &v.max));
+        if (min.is_some() || max.is_some()) && v.causality == "output" {
+            fail(format!("{}: only parameters and inputs carry min and max here", v.name));
+        }
+        let start = match &v.start {
+            Some(toml::Value::Float(f)) => Some(*f),
+            Some(toml::Value::Integer(n)) => Some(*n as f64),
+            _ => None,
+        };
+        if let (Some((lo, _)), Some((hi, _))) = (&min, &max) {
+            if lo > hi {
+                fail(format!("{}: min {lo} is above max {hi}", v.name));
+            }
+        }
+        if let Some(x) = start {
+            if min.as_ref().is_some_and(|(lo, _)| x < *lo) || max.as_ref().is_some_and(|(hi, _)| x > *hi) {
+                fail(format!("{}: start {x} lies outside [min, max]", v.name));
+            }
+        }
     }
 
     // GUID from the interface.
@@ -437,9 +479,11 @@ fn main() {
             let mut c = s.chars();
             c.next().map(|f| f.to_ascii_uppercase().to_string() + c.as_str()).unwrap_or_default()
         };
+        let opt = |b: Option<(f64, String)>| b.map_or("None".to_string(), |(x, _)| format!("Some({x:?})"));
+        let (min, max) = (opt(bound(v, "min", &v.min)), opt(bound(v, "max", &v.max)));
         let _ = writeln!(
             r,
-            "    VariableInfo {{ name: {:?}, vr: {}, kind: Kind::{}, causality: Causality::{}, variability: Variability::{}, unit: {:?}, start: {start}, description: {:?} }},",
+            "    VariableInfo {{ name: {:?}, vr: {}, kind: Kind::{}, causality: Causality::{}, variability: Variability::{}, unit: {:?}, start: {start}, min: {min}, max: {max}, description: {:?} }},",
             v.name,
             v.vr,
             v.ty,

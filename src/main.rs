@@ -25,6 +25,7 @@ use planetwear::scene::Scene;
 use planetwear::wear::archard::{Limit, PressureSource, WearError, WearSettings, WearingFlanks};
 use planetwear::wear::compare::compare_sources;
 use planetwear::wear::flank::Flank;
+use planetwear::wear::state::{StateDifference, WornState};
 use planetwear::wear::stepper::WearModel;
 
 mod cli;
@@ -54,6 +55,11 @@ enum Command {
     /// Time-domain run from the start, printing outputs at every communication point (JSON lines).
     Simulate(SimulateArgs),
     /// Steady-state dynamic response at one input speed.
+    ///
+    /// The harmonics are measured over the scene's dynamics.measured_revolutions (2 input
+    /// revolutions: 68 mesh cycles for example-2004); the FMU's harmonicWindowCycles starts at
+    /// one revolution (34) so that its windowed outputs are valid sooner in a co-simulation.
+    /// Planets are numbered from 1, as the FMU's planet[1].
     Run(RunArgs),
     /// Speed sweep with continuation: forced-response curves, CSV, plots.
     Sweep(SweepArgs),
@@ -122,6 +128,12 @@ struct ModesArgs {
     /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
     #[arg(long)]
     wear_state: Option<PathBuf>,
+    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
+    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
+    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
+    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
+    #[arg(long, value_name = "KINDS")]
+    accept_state_difference: Option<String>,
     /// Print the full result as JSON (SI units, frequencies in Hz).
     #[arg(long)]
     json: bool,
@@ -136,6 +148,12 @@ struct SimulateArgs {
     /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
     #[arg(long)]
     wear_state: Option<PathBuf>,
+    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
+    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
+    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
+    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
+    #[arg(long, value_name = "KINDS")]
+    accept_state_difference: Option<String>,
     /// End time [s].
     #[arg(long)]
     stop: f64,
@@ -153,6 +171,12 @@ struct RunArgs {
     /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
     #[arg(long)]
     wear_state: Option<PathBuf>,
+    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
+    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
+    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
+    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
+    #[arg(long, value_name = "KINDS")]
+    accept_state_difference: Option<String>,
     /// Input speed [rpm]; default: the scene's dynamics.input_speed_rpm.
     #[arg(long)]
     speed: Option<f64>,
@@ -173,6 +197,12 @@ struct SweepArgs {
     /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
     #[arg(long)]
     wear_state: Option<PathBuf>,
+    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
+    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
+    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
+    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
+    #[arg(long, value_name = "KINDS")]
+    accept_state_difference: Option<String>,
     /// First speed [rpm].
     #[arg(long)]
     from: f64,
@@ -259,6 +289,12 @@ struct LtcaArgs {
     /// transmission error of the worn set.
     #[arg(long)]
     wear_state: Option<PathBuf>,
+    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
+    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
+    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
+    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
+    #[arg(long, value_name = "KINDS")]
+    accept_state_difference: Option<String>,
     /// Input torque [N·m], overriding the scene's.
     #[arg(long)]
     torque: Option<f64>,
@@ -286,6 +322,12 @@ struct WearStepArgs {
     /// The state to advance; default: the unworn set (κ = 0).
     #[arg(long)]
     state: Option<PathBuf>,
+    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
+    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
+    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
+    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
+    #[arg(long, value_name = "KINDS")]
+    accept_state_difference: Option<String>,
     /// Where to write the new state (atomically).
     #[arg(long)]
     out: PathBuf,
@@ -314,6 +356,12 @@ struct WearCompareArgs {
     /// The worn-profile state to compare on; default: the unworn set.
     #[arg(long)]
     state: Option<PathBuf>,
+    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
+    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
+    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
+    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
+    #[arg(long, value_name = "KINDS")]
+    accept_state_difference: Option<String>,
     /// Input speeds [rpm].
     #[arg(long, value_delimiter = ',', required = true)]
     speeds: Vec<f64>,
@@ -378,6 +426,11 @@ struct FmuPackArgs {
     /// The shared library; default: libplanetwear.so beside this executable.
     #[arg(long)]
     library: Option<PathBuf>,
+    /// Make this scene (a built-in name or a scene file) the FMU's default set:
+    /// resources/default-scene.toml, every parameter's and input's start value, its own
+    /// worn-profile states and regression references. Default: the built-in example-2004.
+    #[arg(long)]
+    scene: Option<String>,
 }
 
 /// The regression references the FMU ships (resources/regression/example-2004.json),
@@ -469,15 +522,31 @@ fn validated_with_run(scene: &Scene) -> Result<(GearSet, RunSettings)> {
 }
 
 /// The contact model of the set, unworn or with the flanks of a worn-profile state.
-fn contact_model(set: &GearSet, wear_state: Option<&Path>) -> Result<SetModel> {
+fn contact_model(set: &GearSet, wear_state: Option<&Path>, accept: Option<&str>) -> Result<SetModel> {
     match wear_state {
         None => Ok(SetModel::new(set)),
-        Some(path) => {
-            let state = planetwear::wear::state::read_worn_state(path, set)
-                .with_context(|| format!("--wear-state {}", path.display()))?;
-            Ok(state.set_model(set))
-        }
+        Some(path) => Ok(read_state("--wear-state", path, set, accept)?.set_model(set)),
     }
+}
+
+/// The worn-profile state at `path` (given by `flag`) for `set`, accepting a
+/// gear set that differs only in the kinds `accept` names
+/// (--accept-state-difference); an accepted difference is printed as a
+/// warning line.
+fn read_state(flag: &str, path: &Path, set: &GearSet, accept: Option<&str>) -> Result<WornState> {
+    let text = accept.unwrap_or("");
+    let kinds = StateDifference::parse_list(text)
+        .map_err(|e| anyhow::anyhow!("--accept-state-difference {text}: {e}"))?;
+    let (state, accepted) = planetwear::wear::state::read_worn_state_accepting(path, set, &kinds)
+        .with_context(|| format!("{flag} {}", path.display()))?;
+    if !accepted.is_empty() {
+        eprintln!(
+            "warning: {flag} {}: {} (--accept-state-difference {text})",
+            path.display(),
+            planetwear::wear::state::describe_accepted(&accepted)
+        );
+    }
+    Ok(state)
 }
 
 /// Every output path of a command checked before any computation

@@ -287,3 +287,68 @@ fn scene_check_refuses_an_interfering_internal_mesh() {
     let out = planetwear(&["scene", "check", "example-2004-gear-data"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
+
+/// `--accept-state-difference material`: a state of another material is
+/// refused without it, taken with a warning line with it, and the state
+/// `wear step` writes records what was accepted.
+#[test]
+fn wear_step_accepts_another_material_only_when_asked_and_records_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).display().to_string();
+    let out = planetwear(&["scene", "show", "example-2004"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("youngs_modulus_gpa = 207.0"), "{text}");
+    std::fs::write(
+        path("steel.toml"),
+        text.replace("youngs_modulus_gpa = 207.0", "youngs_modulus_gpa = 210.0"),
+    )
+    .unwrap();
+    let first = planetwear(&[
+        "wear",
+        "step",
+        "--scene",
+        "example-2004",
+        "--out",
+        &path("a.json"),
+        "--revolutions",
+        "1",
+    ]);
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let step = |accept: &[&str]| {
+        let (scene, state, out) = (path("steel.toml"), path("a.json"), path("b.json"));
+        let mut args = vec!["wear", "step", "--scene", &scene, "--state", &state, "--out", &out];
+        args.extend(["--revolutions", "1"]);
+        args.extend(accept);
+        planetwear(&args)
+    };
+    let refused = step(&[]);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success());
+    assert!(
+        err.contains("--state")
+            && err.contains("material.youngs_modulus is 207000000000 in the state and 210000000000 here"),
+        "{err}"
+    );
+    assert!(!dir.path().join("b.json").exists());
+    let taken = step(&["--accept-state-difference", "material"]);
+    let err = String::from_utf8_lossy(&taken.stderr);
+    assert!(taken.status.success(), "{err}");
+    assert!(
+        err.contains("warning: --state ")
+            && err.contains(
+                "accepted a worn-profile state whose gear set differs in material: material.youngs_modulus"
+            )
+            && err.contains("(--accept-state-difference material)"),
+        "{err}"
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(path("b.json")).unwrap()).unwrap();
+    assert_eq!(doc["content"]["accepted_differences"], serde_json::json!(["material"]));
+    let bad = step(&["--accept-state-difference", "geometry"]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains(
+            "--accept-state-difference geometry: 'geometry' is not a difference that can be accepted"
+        ),
+        "{err}"
+    );
+}

@@ -154,6 +154,8 @@ struct Row<'a> {
     unit: Option<&'a str>,
     display: Option<&'a str>,
     start: Option<&'a toml::Value>,
+    min: Option<&'a toml::Value>,
+    max: Option<&'a toml::Value>,
     description: &'a str,
 }
 
@@ -178,6 +180,8 @@ fn rows(table: &toml::Table) -> Vec<Row<'_>> {
                 unit: s(v, "unit"),
                 display: s(v, "display"),
                 start: v.get("start"),
+                min: v.get("min"),
+                max: v.get("max"),
                 description: s(v, "description").unwrap_or_default(),
             }
         })
@@ -241,6 +245,15 @@ fn against_table(d: &Description, toml_text: &str) -> Vec<String> {
             if table != xml {
                 problems.push(format!(
                     "{n}: {what} is {xml:?} in modelDescription.xml, {table:?} in variables.toml"
+                ));
+            }
+        }
+        for (what, bound) in [("min", r.min), ("max", r.max)] {
+            if !same_start(r.ty, bound, v.type_attr(what)) {
+                problems.push(format!(
+                    "{n}: {what} is {:?} in modelDescription.xml, {:?} in variables.toml",
+                    v.type_attr(what),
+                    bound.map(ToString::to_string)
                 ));
             }
         }
@@ -334,6 +347,32 @@ fn fmi_rules(d: &Description) -> Vec<String> {
                         if !displays.contains(du) {
                             problems.push(format!("{n}: display unit {du} is not declared for unit {u}"));
                         }
+                    }
+                }
+            }
+        }
+        // min <= start <= max (FMI 2.0: the bounds are inclusive), on Real
+        // and Integer only.
+        let number = |what: &str| v.type_attr(what).map(|x| x.parse::<f64>().map_err(|_| x.to_string()));
+        for what in ["min", "max"] {
+            if v.type_attr(what).is_some() && !["Real", "Integer"].contains(&v.ty.as_str()) {
+                problems.push(format!("{n}: {what} on a {} variable", v.ty));
+            }
+        }
+        match (number("min"), number("start"), number("max")) {
+            (Some(Err(x)), _, _) | (_, _, Some(Err(x))) => {
+                problems.push(format!("{n}: bound {x:?} is not a number"))
+            }
+            (lo, start, hi) => {
+                let (lo, hi) = (lo.and_then(Result::ok), hi.and_then(Result::ok));
+                if let (Some(a), Some(b)) = (lo, hi) {
+                    if a > b {
+                        problems.push(format!("{n}: min {a} is above max {b}"));
+                    }
+                }
+                if let Some(Ok(x)) = start {
+                    if lo.is_some_and(|a| x < a) || hi.is_some_and(|b| x > b) {
+                        problems.push(format!("{n}: start {x} lies outside min {lo:?}, max {hi:?}"));
                     }
                 }
             }
@@ -485,6 +524,13 @@ fn every_check_catches_a_corrupted_description() {
         ),
         ("another unit", corrupt("ring.speed", r#"unit="rad/s""#, r#"unit="rad""#), &["ring.speed: unit"]),
         ("another start", corrupt("fidelity", r#"start="1""#, r#"start="0""#), &["fidelity: start"]),
+        ("another max", corrupt("fidelity", r#"max="1""#, r#"max="2""#), &["fidelity: max"]),
+        ("a min dropped", corrupt("planets", r#" min="1""#, ""), &["planets: min"]),
+        (
+            "a start past its max",
+            corrupt("planets", r#"start="4""#, r#"start="9""#),
+            &["planets: start 9 lies outside min Some(1.0), max Some(8.0)"],
+        ),
         (
             "a name used twice",
             corrupt("ring.speed", r#"name="ring.speed""#, r#"name="sun.speed""#),

@@ -395,3 +395,78 @@ fn a_state_file_moves_the_unloaded_separation_and_the_static_te_of_the_dynamic_m
         - b.static_transmission_error(0, MeshKind::RingPlanet);
     assert!(dr.abs() < 1e-12, "{dr}");
 }
+
+/// The example with another Young's modulus: same geometry, other material.
+fn other_material() -> GearSet {
+    let mut s = Scene::example_2004();
+    s.material.youngs_modulus_gpa = 210.0;
+    s.validate().unwrap()
+}
+
+#[test]
+fn a_state_of_another_material_is_refused_unless_accepted_and_then_recorded() {
+    use planetwear::wear::state::StateDifference;
+    let text = worn().to_json().unwrap();
+    let set = other_material();
+    let refused = WornState::from_json(&text, &set).unwrap_err().to_string();
+    assert!(
+        refused.contains("material.youngs_modulus is 207000000000 in the state and 210000000000 here"),
+        "{refused}"
+    );
+    assert!(
+        refused.contains("differences of kind material only: they may be accepted explicitly"),
+        "{refused}"
+    );
+    // Accepting another kind is not enough.
+    assert!(WornState::from_json_accepting(&text, &set, &[StateDifference::MeshStiffness]).is_err());
+    let (state, accepted) =
+        WornState::from_json_accepting(&text, &set, &[StateDifference::Material]).unwrap();
+    assert_eq!(accepted.len(), 1);
+    assert_eq!(accepted[0].name, "material.youngs_modulus");
+    assert_eq!(state.accepted_differences, vec![StateDifference::Material]);
+    // The accepted state belongs to the new set, keeps its wear, and says
+    // what was accepted in its document; read again it needs no acceptance.
+    assert_eq!(state.gear_set, GearSetPrint::of(&set));
+    assert_eq!(state.flanks, worn().flanks);
+    let written = state.to_json().unwrap();
+    let doc: Value = serde_json::from_str(&written).unwrap();
+    assert_eq!(doc["content"]["accepted_differences"], serde_json::json!(["material"]));
+    assert_eq!(WornState::from_json(&written, &set).unwrap(), state);
+    // A state with nothing accepted writes no such key (older readers and
+    // checksums are unchanged).
+    assert!(!text.contains("accepted_differences"));
+    // A step from the accepted state keeps the record.
+    let model = WearModel::new(&set, WearSettings::default()).unwrap();
+    let next = model.step(&state, Limit::Update).unwrap();
+    assert_eq!(next.accepted_differences, vec![StateDifference::Material]);
+}
+
+#[test]
+fn a_geometry_difference_is_refused_even_with_every_acceptance() {
+    use planetwear::wear::state::StateDifference;
+    let text = worn().to_json().unwrap();
+    let mut s = Scene::example_2004();
+    s.material.youngs_modulus_gpa = 210.0;
+    s.sun.face_width_mm = 28.0;
+    s.planet.face_width_mm = 28.0;
+    s.ring.face_width_mm = 28.0;
+    let set = s.validate().unwrap();
+    let e = WornState::from_json_accepting(&text, &set, &StateDifference::ALL).unwrap_err().to_string();
+    assert!(e.contains("sun.face_width is 0.03 in the state and 0.028 here"), "{e}");
+    assert!(e.contains("material.youngs_modulus"), "{e}");
+    assert!(e.contains("(a geometry difference, here planet.face_width, ring.face_width, sun.face_width, is never accepted)"), "{e}");
+    // Nor can the geometry be named, and the load is never refused.
+    let geometry = StateDifference::parse_list("material,geometry").unwrap_err();
+    assert!(geometry.contains("'geometry' is not a difference that can be accepted: allowed are material, mesh_stiffness (the geometry is never accepted"), "{geometry}");
+    let load = StateDifference::parse_list("load").unwrap_err();
+    assert!(load.contains("the operating point is not part of a state's gear set"), "{load}");
+    assert_eq!(
+        StateDifference::parse_list(" mesh_stiffness, material ,material").unwrap(),
+        vec![StateDifference::Material, StateDifference::MeshStiffness]
+    );
+    assert_eq!(StateDifference::parse_list("").unwrap(), vec![]);
+    // The load is not in the print: a state is read at any torque.
+    let mut heavier = Scene::example_2004();
+    heavier.operation.input_torque_nm = 1500.0;
+    assert!(WornState::from_json(&text, &heavier.validate().unwrap()).is_ok());
+}

@@ -12,7 +12,19 @@ use crate::*;
 use planetwear::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 
 pub(crate) fn sweep_continuation(
-    SweepArgs { scene, wear_state, from, to, step, direction, out, histories, json, .. }: SweepArgs,
+    SweepArgs {
+        scene,
+        wear_state,
+        accept_state_difference,
+        from,
+        to,
+        step,
+        direction,
+        out,
+        histories,
+        json,
+        ..
+    }: SweepArgs,
 ) -> Result<()> {
     let set = validated(&load_scene(&scene)?)?;
     // The grid check of the marching sweep: the same rules for the same flags.
@@ -21,7 +33,10 @@ pub(crate) fn sweep_continuation(
         bail!("--direction {direction}: allowed are up, down, both");
     }
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+    let model = PlanetaryDynamics::new(
+        &set,
+        contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
+    )?;
     let started = std::time::Instant::now();
     let mut problem = PeriodicProblem::new(model, ShootingSettings::default(), rpm_to_rad_per_s(from))?;
     let settings =

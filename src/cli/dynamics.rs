@@ -4,7 +4,9 @@
 use crate::*;
 use planetwear::analysis::plausibility;
 
-pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: SimulateArgs) -> Result<()> {
+pub(crate) fn simulate_command(
+    SimulateArgs { scene, wear_state, accept_state_difference, stop, step }: SimulateArgs,
+) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     if !(step.is_finite() && step > 0.0 && stop.is_finite() && stop > 0.0) {
         bail!("--stop and --step must be finite and positive (got {stop} and {step})");
@@ -16,7 +18,10 @@ pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: S
             stop / step
         );
     }
-    let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+    let model = PlanetaryDynamics::new(
+        &set,
+        contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
+    )?;
     let mut sim =
         planetwear::dynamics::simulation::Simulation::new(&set, &run, model, 0.0, run.input_speed())?;
     let n = (stop / step).round() as u64;
@@ -52,9 +57,14 @@ pub(crate) fn simulate_command(SimulateArgs { scene, wear_state, stop, step }: S
 /// Most communication points `simulate` runs and prints.
 const MAX_COMMUNICATION_POINTS: f64 = 1e7;
 
-pub(crate) fn run_command(RunArgs { scene, wear_state, speed, json, plots }: RunArgs) -> Result<()> {
+pub(crate) fn run_command(
+    RunArgs { scene, wear_state, accept_state_difference, speed, json, plots }: RunArgs,
+) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
-    let mut model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+    let mut model = PlanetaryDynamics::new(
+        &set,
+        contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
+    )?;
     let omega = speed.map(rpm_to_rad_per_s).unwrap_or(run.input_speed());
     // An implausible speed is said before the run, which may take long.
     if let Some(w) = plausibility::overspeed_at_input(&set, omega) {
@@ -69,7 +79,7 @@ pub(crate) fn run_command(RunArgs { scene, wear_state, speed, json, plots }: Run
         write_steady_state(&ss, &set, dir)?;
     }
     if json {
-        println!("{}", serde_json::to_string_pretty(&ss)?);
+        println!("{}", serde_json::to_string_pretty(&steady_state_json(&ss)?)?);
     } else {
         print_steady_state(&ss, set.sun().face_width * 1e3);
         if model.carrier_frame_speed() != 0.0 {
@@ -90,7 +100,19 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         "continuation" => return sweep_continuation(args),
         other => bail!("--method {other}: allowed are march, continuation"),
     }
-    let SweepArgs { scene, wear_state, from, to, step, direction, out, histories, json, .. } = args;
+    let SweepArgs {
+        scene,
+        wear_state,
+        accept_state_difference,
+        from,
+        to,
+        step,
+        direction,
+        out,
+        histories,
+        json,
+        ..
+    } = args;
     let scene = load_scene(&scene)?;
     let (set, run_settings) = validated_with_run(&scene)?;
     let speeds = speed_grid(from, to, step)?;
@@ -104,7 +126,10 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         .map_err(|p| anyhow::anyhow!("{p}"))?;
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     remove_marker(&out.join("sweep.json"))?;
-    let model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+    let model = PlanetaryDynamics::new(
+        &set,
+        contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
+    )?;
     let modes = natural_modes(&model.lumped);
     let bar = progress_bar((speeds.len() * dirs.len()) as u64);
     let started = std::time::Instant::now();
@@ -204,11 +229,16 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn modes_command(ModesArgs { scene, wear_state, json }: ModesArgs) -> Result<()> {
+pub(crate) fn modes_command(
+    ModesArgs { scene, wear_state, accept_state_difference, json }: ModesArgs,
+) -> Result<()> {
     let (name, lumped, frame) = match load_any(&scene)? {
         AnyScene::Gear(s) => {
             let (set, run) = validated_with_run(&s)?;
-            let mut model = PlanetaryDynamics::new(&set, contact_model(&set, wear_state.as_deref())?)?;
+            let mut model = PlanetaryDynamics::new(
+                &set,
+                contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
+            )?;
             // The carrier frame at the scene's input speed (a turning carrier only).
             model.set_drive_speed(run.input_speed());
             let frame = (model.carrier_frame_speed(), set.centre_distance());
@@ -224,7 +254,7 @@ pub(crate) fn modes_command(ModesArgs { scene, wear_state, json }: ModesArgs) ->
 }
 
 pub(crate) fn ltca_command(
-    LtcaArgs { scene, wear_state, torque, samples, json, out, plots }: LtcaArgs,
+    LtcaArgs { scene, wear_state, accept_state_difference, torque, samples, json, out, plots }: LtcaArgs,
 ) -> Result<()> {
     let mut scene = load_scene(&scene)?;
     if let Some(t) = torque {
@@ -238,10 +268,7 @@ pub(crate) fn ltca_command(
     let key = if torque.is_some() { "--torque" } else { "operation.input_torque_nm" };
     planetwear::model::cost::ltca_torque(set.input_torque(), key).map_err(|p| anyhow::anyhow!("{p}"))?;
     let state = match &wear_state {
-        Some(path) => Some(
-            planetwear::wear::state::read_worn_state(path, &set)
-                .with_context(|| format!("--wear-state {}", path.display()))?,
-        ),
+        Some(path) => Some(read_state("--wear-state", path, &set, accept_state_difference.as_deref())?),
         None => None,
     };
     let model = state.as_ref().map_or_else(|| SetModel::new(&set), |s| s.set_model(&set));
@@ -284,7 +311,7 @@ pub(crate) fn print_steady_state(ss: &SteadyState, width_mm: f64) {
         let h = &m.harmonics;
         print!(
             "  planet {} {:<7} {:>9.2}",
-            m.planet,
+            m.planet + 1,
             format!("{:?}", m.mesh).replace("Planet", ""),
             h.mean / width_mm
         );
@@ -406,4 +433,18 @@ pub(crate) fn print_summary(doc: &serde_json::Value) {
         p["load_sharing_factor"].as_f64().unwrap_or(f64::NAN),
         p["sun_transmission_error"]["peak_to_peak"].as_f64().unwrap_or(f64::NAN) * 1e6
     );
+}
+
+/// A steady state as JSON with its meshes' planets numbered from 1, as the
+/// FMU's planet[1]… and every table and plot of the tool (docs/FMU.md).
+fn steady_state_json(ss: &SteadyState) -> Result<serde_json::Value> {
+    let mut doc = serde_json::to_value(ss)?;
+    if let Some(meshes) = doc.get_mut("meshes").and_then(serde_json::Value::as_array_mut) {
+        for m in meshes {
+            if let Some(p) = m.get("planet").and_then(serde_json::Value::as_u64) {
+                m["planet"] = (p + 1).into();
+            }
+        }
+    }
+    Ok(doc)
 }

@@ -3,7 +3,7 @@
 
 use crate::*;
 
-pub(crate) fn fmu_pack_command(FmuPackArgs { out, library }: FmuPackArgs) -> Result<()> {
+pub(crate) fn fmu_pack_command(FmuPackArgs { out, library, scene }: FmuPackArgs) -> Result<()> {
     let library = match library {
         Some(l) => l,
         None => std::env::current_exe()?
@@ -11,8 +11,19 @@ pub(crate) fn fmu_pack_command(FmuPackArgs { out, library }: FmuPackArgs) -> Res
             .map(|d| d.join("libplanetwear.so"))
             .context("locating the executable's directory")?,
     };
-    planetwear::package::pack::pack(&library, &out)?;
-    println!("wrote {} (library {})", out.display(), library.display());
+    let scene = scene.map(|s| load_scene(&s).with_context(|| format!("--scene {s}"))).transpose()?;
+    planetwear::package::pack::pack_scene(
+        &library,
+        &out,
+        scene.as_ref(),
+        &planetwear::package::regression::CASES,
+    )?;
+    match &scene {
+        Some(s) => {
+            println!("wrote {} (library {}, default scene '{}')", out.display(), library.display(), s.name)
+        }
+        None => println!("wrote {} (library {})", out.display(), library.display()),
+    }
     Ok(())
 }
 

@@ -120,13 +120,12 @@ pub(crate) fn wear_run_command(
 }
 
 pub(crate) fn wear_compare_command(
-    WearCompareArgs { scene, state, speeds, json }: WearCompareArgs,
+    WearCompareArgs { scene, state, accept_state_difference, speeds, json }: WearCompareArgs,
 ) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     let model = wear_model(&set, &run, false, None, None)?;
     let state = match &state {
-        Some(path) => planetwear::wear::state::read_worn_state(path, &set)
-            .with_context(|| format!("--state {}", path.display()))?,
+        Some(path) => read_state("--state", path, &set, accept_state_difference.as_deref())?,
         None => model.unworn(),
     };
     let face_mm = set.sun().face_width * 1e3;
@@ -224,13 +223,12 @@ pub(crate) fn wear_effect_command(
 }
 
 pub(crate) fn wear_step_command(
-    WearStepArgs { scene, state, out, threshold, revolutions, ring, dynamic_speed }: WearStepArgs,
+    WearStepArgs { scene, state, accept_state_difference, out, threshold, revolutions, ring, dynamic_speed }: WearStepArgs,
 ) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     let model = wear_model(&set, &run, ring, threshold, dynamic_speed)?;
     let before = match &state {
-        Some(path) => planetwear::wear::state::read_worn_state(path, &set)
-            .with_context(|| format!("--state {}", path.display()))?,
+        Some(path) => read_state("--state", path, &set, accept_state_difference.as_deref())?,
         None => model.unworn(),
     };
     let limit = match revolutions {

@@ -357,8 +357,9 @@ impl Component {
     pub fn exit_initialization_mode(&mut self) -> Result<(), Refusal> {
         self.instance.exit_initialization()?;
         let initial_speed = self.instance.get_real(vr::INITIAL_SPEED)?;
+        self.warnings = self.instance.take_build_warnings();
         if let Some(sim) = self.instance.simulation() {
-            self.warnings = self.watch.at_start(sim, initial_speed);
+            self.warnings.extend(self.watch.at_start(sim, initial_speed));
         }
         Ok(())
     }
@@ -889,6 +890,49 @@ mod tests {
         assert_eq!(initialize(&mut c, &[(vr::SUN_TORQUE, 1125.0)]), fmi2Status_fmi2OK);
         let warned = steps(&mut c, &log, 1e-3, 0.05);
         assert!(warned.iter().all(|(_, m)| !m.contains("run-away")), "{warned:?}");
+    }
+
+    /// A worn-profile state of another material, accepted through
+    /// wearStateAccept, is logged once as a logStatusWarning naming what
+    /// differs; without wearStateAccept it is refused.
+    #[test]
+    fn an_accepted_wear_state_difference_is_a_logged_warning() {
+        let set = crate::scene::Scene::example_2004().validate().unwrap();
+        let state = crate::wear::state::WornState::unworn(&set, 20, 1);
+        let dir = std::env::temp_dir().join(format!("planetwear-accept-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("kappa-0.json");
+        crate::wear::state::write_worn_state(&path, &state).unwrap();
+        let file = Some(path.display().to_string());
+        for accept in ["", "material"] {
+            let (mut c, log) = logged();
+            let refs = [vr::WEAR_STATE_FILE, vr::WEAR_STATE_ACCEPT];
+            let set = c.call(Call::Set, "fmi2SetString", |c| {
+                c.set_string(&refs, &[file.clone(), Some(accept.into())])
+            });
+            assert_eq!(set, fmi2Status_fmi2OK);
+            let status = initialize(&mut c, &[(vr::YOUNGS_MODULUS, 2.1e11)]);
+            let log = log.borrow().clone();
+            if accept.is_empty() {
+                assert_eq!(status, fmi2Status_fmi2Error, "{log:?}");
+                assert!(
+                    log.iter().any(|(_, _, m)| m.contains(
+                        "material.youngs_modulus is 207000000000 in the state and 210000000000 here"
+                    )),
+                    "{log:?}"
+                );
+            } else {
+                assert_eq!(status, fmi2Status_fmi2Warning, "{log:?}");
+                let warned: Vec<_> = log.iter().filter(|(_, cat, _)| cat == "logStatusWarning").collect();
+                assert_eq!(warned.len(), 1, "{log:?}");
+                assert!(
+                    warned[0].2.contains("accepted a worn-profile state whose gear set differs in material"),
+                    "{log:?}"
+                );
+                assert!(warned[0].2.contains("(wearStateAccept = material)"), "{log:?}");
+            }
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

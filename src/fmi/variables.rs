@@ -75,6 +75,11 @@ pub struct VariableInfo {
     pub unit: &'static str,
     /// Start value.
     pub start: Start,
+    /// Inclusive lower bound (modelDescription.xml's `min`; Integer bounds
+    /// as exact reals), where the instance refuses every value below it.
+    pub min: Option<f64>,
+    /// Inclusive upper bound (modelDescription.xml's `max`).
+    pub max: Option<f64>,
     /// Description.
     pub description: &'static str,
 }

@@ -11,8 +11,8 @@ use std::fmt;
 use crate::model::gear::{
     Analysis, Bodies, Body, Chamfer, GearKind, GearSet, Material, MeshKind, RootForm, Supports, ToothForm,
 };
-use crate::model::gear_data::{minimum_profile_shift, name_by_gear_data, trochoid_margin};
 use crate::model::gear::{Drive, Member};
+use crate::model::gear_data::{minimum_profile_shift, name_by_gear_data, trochoid_margin};
 use crate::model::mesh::PathOfContact;
 use crate::model::run::{RunSettings, RunValues};
 use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};

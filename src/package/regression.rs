@@ -29,7 +29,7 @@ use std::collections::BTreeMap;
 use crate::analysis::order_tracking::{order_tracked_windows, WindowMeasure, HARMONICS};
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::Work;
-use crate::fmi::variables::{Start, GUID, VARIABLES};
+use crate::fmi::variables::GUID;
 use crate::model::gear::IntegratorKind;
 use crate::scene::Scene;
 use crate::wear::state::WornState;
@@ -195,17 +195,6 @@ impl References {
     }
 }
 
-fn start_real(name: &str) -> Result<f64, ReferenceError> {
-    VARIABLES
-        .iter()
-        .find(|v| v.name == name)
-        .and_then(|v| match v.start {
-            Start::Real(x) => Some(x),
-            _ => None,
-        })
-        .ok_or_else(|| ReferenceError::Setup(format!("the FMU has no Real input {name} with a start value")))
-}
-
 /// Rounds up to two significant digits.
 fn round_up(x: f64) -> f64 {
     if !(x.is_finite() && x > 0.0) {
@@ -260,8 +249,24 @@ pub fn window_error(a: &WindowMeasure, b: &WindowMeasure) -> f64 {
 
 /// Computes the references of `cases` ((κ, rpm)) of the example, with
 /// `states` the JSON texts of its worn-profile states κ = 0, 1, … as the FMU
-/// ships them, at relative tolerance `rtol`; the cases run in parallel.
+/// ships them (`wear/example-2004/kappa-<κ>.json`), at relative tolerance
+/// `rtol`; the cases run in parallel.
 pub fn example_references(
+    states: &[String],
+    cases: &[(usize, f64)],
+    rtol: f64,
+) -> Result<References, ReferenceError> {
+    scene_references(&Scene::example_2004(), "wear/example-2004", states, cases, rtol)
+}
+
+/// Computes the references of `cases` ((κ, rpm)) of `scene`, the default
+/// set of the FMU they ship in, with `states` the JSON texts of its
+/// worn-profile states κ = 0, 1, … as the FMU ships them in
+/// `resources/<state_dir>/kappa-<κ>.json`, at relative tolerance `rtol`; the
+/// cases run in parallel.
+pub fn scene_references(
+    scene: &Scene,
+    state_dir: &str,
     states: &[String],
     cases: &[(usize, f64)],
     rtol: f64,
@@ -271,7 +276,7 @@ pub fn example_references(
             "relative tolerance {rtol}: the references need a tight setting, at most 1e-6"
         )));
     }
-    let mut scene = Scene::example_2004();
+    let mut scene = scene.clone();
     scene.dynamics.integrator = IntegratorKind::Rk45;
     scene.dynamics.relative_tolerance = rtol;
     let (set, run_settings) = scene.validate_with_run().map_err(|e| ReferenceError::Setup(e.to_string()))?;
@@ -316,8 +321,7 @@ pub fn example_references(
             let fm = model.mesh_frequency_per_input_speed * omega;
             let mut parameters = BTreeMap::new();
             parameters.insert("initialSpeed".to_string(), omega.into());
-            parameters
-                .insert("wearStateFile".to_string(), format!("wear/example-2004/kappa-{kappa}.json").into());
+            parameters.insert("wearStateFile".to_string(), format!("{state_dir}/kappa-{kappa}.json").into());
             Ok(Case {
                 name,
                 kappa,
@@ -345,9 +349,12 @@ pub fn example_references(
     parameters.insert("stepsPerMeshCycle".to_string(), STEPS_PER_MESH_CYCLE.into());
     parameters.insert("samplesPerMeshCycle".to_string(), samples.into());
     parameters.insert("harmonicWindowCycles".to_string(), WINDOW_CYCLES.into());
+    // The set's balanced torques: the FMU's start values of the inputs for
+    // its default set (crate::fmi::instance::scene_values).
     let mut inputs = BTreeMap::new();
-    for name in ["sunTorque", "ringTorque", "carrierTorque"] {
-        inputs.insert(name.to_string(), start_real(name)?);
+    for (name, torque) in ["sunTorque", "ringTorque", "carrierTorque"].into_iter().zip(set.balanced_torques())
+    {
+        inputs.insert(name.to_string(), torque);
     }
     Ok(References {
         format: FORMAT.into(),
@@ -356,11 +363,12 @@ pub fn example_references(
         scene: set.name().to_string(),
         protocol: Protocol {
             description: format!(
-                "The FMU with its default parameters (the example-2004 set) and the protocol's and the case's \
+                "The FMU with its default parameters (the {} set) and the protocol's and the case's \
                  parameters, instantiated, set up at t = 0 and initialized (the set starts from the static \
                  deflection at initialSpeed); the inputs held at the values given; doStep of one mesh period \
                  of the case's speed, {} times ({RUN_IN_CYCLES} cycles of run-in, then the {WINDOW_CYCLES}-cycle \
                  window); then the window.* outputs are read.",
+                set.name(),
                 RUN_IN_CYCLES + WINDOW_CYCLES
             ),
             parameters,

@@ -44,7 +44,7 @@ pub fn continuation_csv(branch: &Branch, states: &[SteadyState], width_mm: f64) 
     out
 }
 
-/// Forced-response charts (F^(rms) of planet 0's sun–planet and ring–planet
+/// Forced-response charts (F^(rms) of planet 1's sun–planet and ring–planet
 /// mesh against speed) of a branch: stable points a solid line, unstable
 /// ones dashed, folds and period doublings as markers.
 pub fn write_continuation_response(
@@ -101,7 +101,7 @@ pub fn write_continuation_response(
         }
         files.extend(write_chart(
             &Chart {
-                title: format!("{name} F(rms), planet 0, continuation (unstable dashed)"),
+                title: format!("{name} F(rms), planet 1, continuation (unstable dashed)"),
                 x_label: "input speed (rpm)".into(),
                 y_label: "F(rms) of mesh harmonics 1-6 (N/mm)".into(),
                 series,

@@ -243,7 +243,7 @@ impl LtcaStudy {
                     .enumerate()
                     .map(|(n, l)| {
                         Series::new(
-                            format!("planet {n}"),
+                            format!("planet {}", n + 1),
                             travel_mm.clone(),
                             l.iter().map(|f| f / width_mm).collect(),
                         )

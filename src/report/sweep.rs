@@ -27,7 +27,8 @@ pub fn sweep_csv(sweep: &Sweep, width_mm: f64) -> String {
     let mut s = String::from("direction,speed_rpm,mesh_frequency_hz,steps,newton_iterations,rhs_evaluations");
     if let Some(first) = sweep.points.first() {
         for m in &first.meshes {
-            let p = format!("p{}_{}", m.planet, mesh_label(m.mesh));
+            // Planets numbered from 1, as the FMU's planet[1]… (docs/FMU.md).
+            let p = format!("p{}_{}", m.planet + 1, mesh_label(m.mesh));
             let _ = write!(s, ",{p}_mean_n_per_mm");
             for i in 1..=6 {
                 let _ = write!(s, ",{p}_f{i}_n_per_mm");
@@ -69,7 +70,7 @@ pub fn write_csv(path: &Path, text: &str) -> Result<(), PlotError> {
 }
 
 /// Forced-response charts (F^(rms) vs speed) of the sun–planet and
-/// ring–planet meshes of planet 0 for every sweep, with separated points
+/// ring–planet meshes of planet 1 for every sweep, with separated points
 /// marked and the speeds where a harmonic meets a natural frequency of the
 /// family it excites drawn as vertical lines.
 pub fn write_forced_response(
@@ -125,7 +126,7 @@ pub fn write_forced_response(
         }
         files.extend(write_chart(
             &Chart {
-                title: format!("{name} F(rms), planet 0 (f_m = {:.4} Hz per rpm)", fm_per_rpm),
+                title: format!("{name} F(rms), planet 1 (f_m = {:.4} Hz per rpm)", fm_per_rpm),
                 x_label: "input speed (rpm)".into(),
                 y_label: "F(rms) of mesh harmonics 1-6 (N/mm)".into(),
                 series,
@@ -152,7 +153,7 @@ pub fn write_steady_state(ss: &SteadyState, set: &GearSet, dir: &Path) -> Result
     let mut series = Vec::new();
     for (i, m) in ss.meshes.iter().enumerate().filter(|(_, m)| m.planet == 0) {
         series.push(Series::new(
-            format!("planet 0 {}", mesh_label(m.mesh)),
+            format!("planet 1 {}", mesh_label(m.mesh)),
             cycles.clone(),
             ss.mesh_force[i][..keep].iter().map(|f| f / width_mm).collect(),
         ));
@@ -171,7 +172,7 @@ pub fn write_steady_state(ss: &SteadyState, set: &GearSet, dir: &Path) -> Result
     for (i, m) in ss.meshes.iter().enumerate().filter(|(_, m)| m.planet == 0) {
         if let Ok(spec) = order_spectrum(&ss.mesh_force[i], ss.cycles, 8.0) {
             let (x, y): (Vec<f64>, Vec<f64>) = spec.into_iter().map(|(o, a)| (o, a / width_mm)).unzip();
-            series.push(Series::new(format!("planet 0 {}", mesh_label(m.mesh)), x, y));
+            series.push(Series::new(format!("planet 1 {}", mesh_label(m.mesh)), x, y));
         }
     }
     if !series.is_empty() {

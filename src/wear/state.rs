@@ -32,7 +32,10 @@
 //! in name order with each value's bits: the name of the scene and the
 //! operating point (torque, speeds) are not part of it, so a worn set can be
 //! run at any load. A state for another gear set is refused with the
-//! parameters that differ.
+//! parameters that differ, unless every difference is of a kind the caller
+//! accepts explicitly ([`StateDifference`]: the material, the stiffness
+//! corrections; never the geometry): the accepted state then belongs to the
+//! new set and records what was accepted (`accepted_differences`).
 
 use std::collections::BTreeMap;
 
@@ -159,8 +162,9 @@ pub enum WornStateError {
     },
     /// The state belongs to another gear set.
     #[error(
-        "the worn-profile state belongs to gear set '{state_set}' (fingerprint {state_fingerprint}), not to '{expected_set}' (fingerprint {expected_fingerprint}): {}",
-        describe_differences(.differences)
+        "the worn-profile state belongs to gear set '{state_set}' (fingerprint {state_fingerprint}), not to '{expected_set}' (fingerprint {expected_fingerprint}): {}{}",
+        describe_differences(.differences),
+        acceptance_hint(.differences)
     )]
     Foreign {
         /// Name of the state's gear set.
@@ -202,6 +206,89 @@ fn describe_differences(d: &[ParameterDifference]) -> String {
         parts.push(format!("and {} more", d.len() - 6));
     }
     parts.join("; ")
+}
+
+/// What may be done about `d`: whether every difference is of a kind that
+/// can be accepted explicitly, or which ones never can.
+fn acceptance_hint(d: &[ParameterDifference]) -> String {
+    if d.is_empty() {
+        return String::new();
+    }
+    let geometry: Vec<&str> = d
+        .iter()
+        .filter(|p| StateDifference::of_parameter(&p.name).is_none())
+        .map(|p| p.name.as_str())
+        .collect();
+    if !geometry.is_empty() {
+        return format!(" (a geometry difference, here {}, is never accepted)", geometry.join(", "));
+    }
+    let mut kinds: Vec<&str> =
+        d.iter().filter_map(|p| StateDifference::of_parameter(&p.name)).map(StateDifference::name).collect();
+    kinds.dedup();
+    format!(" (differences of kind {} only: they may be accepted explicitly)", kinds.join(", "))
+}
+
+/// A kind of difference between a state's gear set and another that a user
+/// may accept explicitly: the state's wear was made on one set and is then
+/// read on the other. The geometry is never one of them (a worn profile is
+/// a deviation of a particular involute and grid), and the operating point
+/// (torque, speeds) is not part of a gear set's print at all.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StateDifference {
+    /// Young's modulus and Poisson's ratio (`material.*` of the print).
+    Material,
+    /// The factors on the tooth-pair stiffness (`mesh_stiffness.*`).
+    MeshStiffness,
+}
+
+impl StateDifference {
+    /// Every kind, in the order of their names.
+    pub const ALL: [StateDifference; 2] = [StateDifference::Material, StateDifference::MeshStiffness];
+
+    /// Its name as a user writes it (`material`, `mesh_stiffness`).
+    pub fn name(self) -> &'static str {
+        match self {
+            StateDifference::Material => "material",
+            StateDifference::MeshStiffness => "mesh_stiffness",
+        }
+    }
+
+    /// The kind of a difference in the print's parameter `name`; `None` for
+    /// the geometry, which is never accepted.
+    pub fn of_parameter(name: &str) -> Option<Self> {
+        if name.starts_with("material.") {
+            Some(StateDifference::Material)
+        } else if name.starts_with("mesh_stiffness.") {
+            Some(StateDifference::MeshStiffness)
+        } else {
+            None
+        }
+    }
+
+    /// The kinds of a comma-separated list (`material,mesh_stiffness`;
+    /// blanks around a name are ignored, an empty list accepts nothing), or
+    /// why an entry is not one.
+    pub fn parse_list(text: &str) -> Result<Vec<Self>, String> {
+        let mut out = Vec::new();
+        for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            let kind = Self::ALL.into_iter().find(|k| k.name() == item).ok_or_else(|| {
+                let why = match item {
+                    "geometry" => " (the geometry is never accepted: a worn profile belongs to its involute)",
+                    "load" | "torque" | "speed" => {
+                        " (the operating point is not part of a state's gear set: a state is read at any load and speed)"
+                    }
+                    _ => "",
+                };
+                format!("'{item}' is not a difference that can be accepted: allowed are material, mesh_stiffness{why}")
+            })?;
+            if !out.contains(&kind) {
+                out.push(kind);
+            }
+        }
+        out.sort();
+        Ok(out)
+    }
 }
 
 /// Relative difference below which two gear-set parameters are the same
@@ -376,6 +463,11 @@ pub struct WornState {
     pub flanks: FlankDeviations,
     /// The updates, oldest first.
     pub history: Vec<UpdateRecord>,
+    /// Kinds of difference accepted explicitly when this state, or one it
+    /// was advanced from, was read for a set that differed from the one its
+    /// wear was made on (absent when none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub accepted_differences: Vec<StateDifference>,
 }
 
 impl WornState {
@@ -403,6 +495,7 @@ impl WornState {
                 ring_coast: grid(Flank::RingCoast),
             },
             history: Vec::new(),
+            accepted_differences: Vec::new(),
         }
     }
 
@@ -457,9 +550,21 @@ impl WornState {
     /// through the FMU's parameters) converts back with rounding in the last
     /// bits and is the same set.
     pub fn check_gear_set(&self, set: &GearSet) -> Result<(), WornStateError> {
+        self.gear_set_differences(set, &[]).map(|_| ())
+    }
+
+    /// The differences between this state's gear set and `set` when every
+    /// one is of a kind in `accept` (none when the sets agree); otherwise
+    /// the refusal of [`WornState::check_gear_set`], which names every
+    /// differing parameter.
+    pub fn gear_set_differences(
+        &self,
+        set: &GearSet,
+        accept: &[StateDifference],
+    ) -> Result<Vec<ParameterDifference>, WornStateError> {
         let here = GearSetPrint::of(set);
         if here.fingerprint == self.gear_set.fingerprint {
-            return Ok(());
+            return Ok(Vec::new());
         }
         let mut differences = Vec::new();
         let names: std::collections::BTreeSet<&String> =
@@ -474,8 +579,11 @@ impl WornState {
                 differences.push(ParameterDifference { name: name.clone(), state: a, expected: b });
             }
         }
-        if differences.is_empty() {
-            return Ok(());
+        let accepted = |d: &ParameterDifference| {
+            StateDifference::of_parameter(&d.name).is_some_and(|k| accept.contains(&k))
+        };
+        if differences.iter().all(accepted) {
+            return Ok(differences);
         }
         Err(WornStateError::Foreign {
             state_set: self.gear_set.name.clone(),
@@ -484,6 +592,31 @@ impl WornState {
             expected_fingerprint: here.fingerprint,
             differences,
         })
+    }
+
+    /// This state taken over by `set` when it differs from the state's gear
+    /// set only in kinds of `accept`: the state then belongs to `set` (its
+    /// print) and records the kinds accepted; returned with the differences
+    /// accepted (none when the sets agree). Otherwise the refusal of
+    /// [`WornState::check_gear_set`].
+    pub fn accepted_for(
+        mut self,
+        set: &GearSet,
+        accept: &[StateDifference],
+    ) -> Result<(Self, Vec<ParameterDifference>), WornStateError> {
+        let differences = self.gear_set_differences(set, accept)?;
+        if !differences.is_empty() {
+            for d in &differences {
+                if let Some(kind) = StateDifference::of_parameter(&d.name) {
+                    if !self.accepted_differences.contains(&kind) {
+                        self.accepted_differences.push(kind);
+                    }
+                }
+            }
+            self.accepted_differences.sort();
+            self.gear_set = GearSetPrint::of(set);
+        }
+        Ok((self, differences))
     }
 
     /// The deepest point of `flank` over its slices.
@@ -644,10 +777,20 @@ impl WornState {
     /// mismatch, non-finite or negative values, malformed grids, and a state
     /// of another gear set.
     pub fn from_json(text: &str, set: &GearSet) -> Result<Self, WornStateError> {
-        let state = Self::from_json_any_set(text)?;
-        state.check_gear_set(set)?;
+        Self::from_json_accepting(text, set, &[]).map(|(state, _)| state)
+    }
+
+    /// [`WornState::from_json`] accepting a gear set that differs only in
+    /// kinds of `accept` ([`WornState::accepted_for`]); returned with the
+    /// differences accepted.
+    pub fn from_json_accepting(
+        text: &str,
+        set: &GearSet,
+        accept: &[StateDifference],
+    ) -> Result<(Self, Vec<ParameterDifference>), WornStateError> {
+        let (state, differences) = Self::from_json_any_set(text)?.accepted_for(set, accept)?;
         state.check_plausible(set)?;
-        Ok(state)
+        Ok((state, differences))
     }
 
     /// The largest plausible depth on a flank of `gear` of `set` \[m\]
@@ -795,8 +938,36 @@ pub fn write_worn_state(path: &std::path::Path, state: &WornState) -> Result<(),
 /// Reads the worn-profile state at `path` for the gear set `set`, with every
 /// check of [`WornState::from_json`] (through [`crate::files::read_input`]).
 pub fn read_worn_state(path: &std::path::Path, set: &GearSet) -> Result<WornState, StateFileError> {
+    read_worn_state_accepting(path, set, &[]).map(|(state, _)| state)
+}
+
+/// [`read_worn_state`] accepting a gear set that differs only in kinds of
+/// `accept` ([`WornState::from_json_accepting`]); returned with the
+/// differences accepted.
+pub fn read_worn_state_accepting(
+    path: &std::path::Path,
+    set: &GearSet,
+    accept: &[StateDifference],
+) -> Result<(WornState, Vec<ParameterDifference>), StateFileError> {
     let bytes = crate::files::read_input(path, crate::files::InputKind::WornState)?;
     let text = String::from_utf8_lossy(&bytes);
-    WornState::from_json(&text, set)
+    WornState::from_json_accepting(&text, set, accept)
         .map_err(|source| StateFileError::State { path: path.to_path_buf(), source: Box::new(source) })
+}
+
+/// One line that says what was accepted: each kind with its parameters'
+/// values in the state and here.
+pub fn describe_accepted(differences: &[ParameterDifference]) -> String {
+    let mut kinds: Vec<&str> = differences
+        .iter()
+        .filter_map(|d| StateDifference::of_parameter(&d.name))
+        .map(StateDifference::name)
+        .collect();
+    kinds.sort();
+    kinds.dedup();
+    format!(
+        "accepted a worn-profile state whose gear set differs in {}: {}",
+        kinds.join(", "),
+        describe_differences(differences)
+    )
 }

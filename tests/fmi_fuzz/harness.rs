@@ -1903,6 +1903,12 @@ impl Engine<'_> {
                 (1, Some(Start::Integer(x))) => x.saturating_add(self.rng.pick(&[-1, 1, 2])),
                 _ => self.rng.pick(&SPECIAL_INTEGERS),
             });
+            if *r == planetwear::fmi::variables::vr::WEAR_STATE_ACCEPT && kind == Kind::String {
+                // Kinds of difference, not files: mostly valid lists, some refused.
+                const ACCEPT: [&str; 6] = ["", "", "material", "material,mesh_stiffness", "geometry", "load"];
+                strings.push(CString::new(self.rng.pick(&ACCEPT)).ok());
+                continue;
+            }
             let choice = self.rng.below(self.files.choices.len() + 1);
             strings.push(self.files.choices.get(choice).map(|b| CString::new(b.clone()).unwrap_or_default()));
         }

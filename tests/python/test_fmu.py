@@ -308,7 +308,7 @@ def test_a_speed_sweep_driven_from_python_reproduces_the_native_sweep(fmu, tmp_p
     speeds = [2000.0, 3000.0, 4000.0]
     subprocess.run([exe, "sweep", "--scene", str(tmp_path / "speed.toml"), "--from", "2000", "--to", "4000",
                     "--step", "1000", "--direction", "up", "--out", str(tmp_path / "sweep")], check=True, capture_output=True)
-    native = {float(r["speed_rpm"]): float(r["p0_sun_rms_n_per_mm"]) * 30.0
+    native = {float(r["speed_rpm"]): float(r["p1_sun_rms_n_per_mm"]) * 30.0
               for r in csv.DictReader(open(tmp_path / "sweep" / "sweep_up.csv"))}
 
     md, unzipdir = fmu
@@ -361,7 +361,7 @@ def test_a_sweep_with_speed_steps_through_the_fmu_reproduces_the_native_torque_d
     for r in rows:
         n = native[r["speed_rpm"]]
         for mesh in ("sun", "ring"):
-            ours, theirs = r[f"{mesh}_frms"], float(n[f"p0_{mesh}_rms_n_per_mm"])
+            ours, theirs = r[f"{mesh}_frms"], float(n[f"p1_{mesh}_rms_n_per_mm"])
             print(f"{r['speed_rpm']:.0f} rpm {mesh}: FMU {ours:.3f} N/mm, native {theirs:.3f} N/mm")
             assert abs(ours / theirs - 1) < 0.01, (r["speed_rpm"], mesh, ours, theirs)
     peak = max(rows, key=lambda r: r["sun_frms"])

@@ -260,7 +260,7 @@ def test_the_window_is_order_tracked_and_its_time_sampled_counterpart_is_the_nat
                    capture_output=True)
     [row] = list(csv.DictReader(open(tmp_path / "sweep" / "sweep_up.csv")))
     face_mm = 30.0
-    native = [float(row[f"p0_sun_f{k}_n_per_mm"]) * face_mm for k in range(1, 7)]
+    native = [float(row[f"p1_sun_f{k}_n_per_mm"]) * face_mm for k in range(1, 7)]
 
     refs = load_references(FMU)
     case = refs.case("kappa-0/3000rpm")

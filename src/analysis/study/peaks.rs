@@ -28,7 +28,7 @@ pub fn excited_family(harmonic: u32, sun_teeth: u32, planets: usize) -> ModeClas
 pub struct Peak {
     /// Direction of the sweep.
     pub direction: Direction,
-    /// The mesh (of planet 0) whose curve peaks.
+    /// The mesh (of planet 1, the first) whose curve peaks.
     pub mesh: MeshKind,
     /// Input speed of the peak [rad/s] (written in rpm, as `speed_rpm`).
     #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]

@@ -10,6 +10,34 @@ pub mod guard;
 mod parameters;
 pub mod warnings;
 
+pub use parameters::scene_values;
+
+/// The scene an FMU packed with `planetwear fmu pack --scene` carries in
+/// resources/: when it is there, it is sceneFile's start value and the other
+/// parameters start at its values ([`scene_values`]), as that FMU's
+/// modelDescription.xml says.
+pub const DEFAULT_SCENE: &str = "default-scene.toml";
+
+/// The start values of an instance whose resources/ holds
+/// [`DEFAULT_SCENE`]: sceneFile names it and every parameter with a
+/// counterpart in it starts at its value. A scene that cannot be read or is
+/// invalid leaves the table's start values (sceneFile still names it, so
+/// initialization says why it is refused).
+fn packed_starts(resources: Option<&std::path::Path>) -> Vec<(u32, Start)> {
+    let Some(path) = resources.map(|r| r.join(DEFAULT_SCENE)).filter(|p| p.is_file()) else {
+        return Vec::new();
+    };
+    let mut out = vec![(vr::SCENE_FILE, Start::String(DEFAULT_SCENE))];
+    let scene = crate::files::read_input(&path, crate::files::InputKind::Scene)
+        .ok()
+        .and_then(|b| String::from_utf8(b).ok())
+        .and_then(|t| Scene::from_toml(&t).ok());
+    if let Some(values) = scene.and_then(|s| scene_values(&s).ok()) {
+        out.extend(values.into_iter().map(|(p, v)| (p.variable().value_reference(), v)));
+    }
+    out
+}
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
@@ -98,6 +126,8 @@ pub struct Instance {
     /// Current phase.
     pub phase: Phase,
     resources: Option<PathBuf>,
+    /// Start values that differ from the table's ([`packed_starts`]).
+    packed: Vec<(u32, Start)>,
     reals: BTreeMap<u32, f64>,
     integers: BTreeMap<u32, i32>,
     booleans: BTreeMap<u32, bool>,
@@ -108,6 +138,8 @@ pub struct Instance {
     sim: Option<Simulation>,
     /// The parameters `sim` was built from ([`Instance::build_key`]).
     built_from: String,
+    /// What the last build accepted and the importer should be told.
+    build_warnings: Vec<String>,
     /// Set when a step was discarded and the simulation cannot go on.
     pub terminated: bool,
     /// Time of the last completed step \[s\].
@@ -115,11 +147,13 @@ pub struct Instance {
 }
 
 impl Instance {
-    /// A new instance with every variable at its start value.
+    /// A new instance with every variable at its start value (those of
+    /// [`DEFAULT_SCENE`] when `resources` holds one).
     pub fn new(name: &str, resources: Option<PathBuf>) -> Self {
         let mut i = Self {
             name: name.to_string(),
             phase: Phase::Instantiated,
+            packed: packed_starts(resources.as_deref()),
             resources,
             reals: BTreeMap::new(),
             integers: BTreeMap::new(),
@@ -130,6 +164,7 @@ impl Instance {
             stop_time: None,
             sim: None,
             built_from: String::new(),
+            build_warnings: Vec::new(),
             terminated: false,
             last_successful_time: 0.0,
         };
@@ -142,19 +177,20 @@ impl Instance {
         self.integers.clear();
         self.booleans.clear();
         self.strings.clear();
-        for v in VARIABLES {
-            match v.start {
+        let starts = VARIABLES.iter().map(|v| (v.vr, v.start)).chain(self.packed.iter().copied());
+        for (vr, start) in starts {
+            match start {
                 Start::Real(x) => {
-                    self.reals.insert(v.vr, x);
+                    self.reals.insert(vr, x);
                 }
                 Start::Integer(x) => {
-                    self.integers.insert(v.vr, x);
+                    self.integers.insert(vr, x);
                 }
                 Start::Boolean(x) => {
-                    self.booleans.insert(v.vr, x);
+                    self.booleans.insert(vr, x);
                 }
                 Start::String(x) => {
-                    self.strings.insert(v.vr, x.to_string());
+                    self.strings.insert(vr, x.to_string());
                 }
                 Start::None => {}
             }
@@ -219,12 +255,7 @@ impl Instance {
         let mut scene = if file.is_empty() {
             Scene::example_2004()
         } else {
-            let mut path = PathBuf::from(&file);
-            if !path.is_absolute() && !path.exists() {
-                if let Some(r) = &self.resources {
-                    path = r.join(&file);
-                }
-            }
+            let path = self.resolve(&file);
             let bytes = crate::files::read_input(&path, crate::files::InputKind::Scene)
                 .map_err(|e| Refusal::error(format!("sceneFile = {file}: cannot read {e}")))?;
             let text = String::from_utf8(bytes).map_err(|_| {
@@ -246,20 +277,47 @@ impl Instance {
     /// The contact model: unworn, or with the flanks of the worn-profile
     /// state named by wearStateFile (a path, or a file in resources/ such as
     /// `wear/example-2004/kappa-2.json`), which must belong to this gear set.
-    fn contact_model(&self, set: &crate::model::gear::GearSet) -> Result<SetModel, Refusal> {
+    ///
+    /// A state whose gear set differs only in kinds wearStateAccept names is
+    /// taken, and what was accepted is returned as a warning.
+    fn contact_model(
+        &self,
+        set: &crate::model::gear::GearSet,
+    ) -> Result<(SetModel, Option<String>), Refusal> {
         let file = self.strings.get(&vr::WEAR_STATE_FILE).cloned().unwrap_or_default();
+        let accept_text = self.strings.get(&vr::WEAR_STATE_ACCEPT).cloned().unwrap_or_default();
+        let accept = crate::wear::state::StateDifference::parse_list(&accept_text)
+            .map_err(|e| Refusal::error(format!("wearStateAccept = {accept_text}: {e}")))?;
         if file.is_empty() {
-            return Ok(SetModel::new(set));
+            return Ok((SetModel::new(set), None));
         }
-        let mut path = PathBuf::from(&file);
-        if !path.is_absolute() && !path.exists() {
-            if let Some(r) = &self.resources {
-                path = r.join(&file);
-            }
-        }
-        let state = crate::wear::state::read_worn_state(&path, set)
+        let path = self.resolve(&file);
+        let (state, accepted) = crate::wear::state::read_worn_state_accepting(&path, set, &accept)
             .map_err(|e| Refusal::error(format!("wearStateFile = {file}: {e}")))?;
-        Ok(state.set_model(set))
+        let warning = (!accepted.is_empty()).then(|| {
+            format!(
+                "wearStateFile = {file}: {} (wearStateAccept = {accept_text})",
+                crate::wear::state::describe_accepted(&accepted)
+            )
+        });
+        Ok((state.set_model(set), warning))
+    }
+
+    /// The file a sceneFile or wearStateFile value names: an absolute path
+    /// as it is; a relative one in the current working directory when it
+    /// exists there, else in the FMU's resources/ directory.
+    fn resolve(&self, file: &str) -> PathBuf {
+        let path = PathBuf::from(file);
+        match &self.resources {
+            Some(r) if !path.is_absolute() && !path.exists() => r.join(file),
+            _ => path,
+        }
+    }
+
+    /// Warnings of the last build (an accepted wear-state difference), for
+    /// the caller to log; taken, so each is said once.
+    pub fn take_build_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.build_warnings)
     }
 
     /// A refused scene said in the importer's terms: each problem named by
@@ -295,11 +353,24 @@ impl Instance {
                 set.planet_angles().len()
             )));
         }
-        let model = PlanetaryDynamics::new(&set, self.contact_model(&set)?)
-            .map_err(|e| Refusal::error(e.to_string()))?;
-        let speed = self.real(vr::INITIAL_SPEED);
+        let (contact, warning) = self.contact_model(&set)?;
+        let model = PlanetaryDynamics::new(&set, contact).map_err(|e| Refusal::error(e.to_string()))?;
+        self.build_warnings = warning.into_iter().collect();
+        // initialSpeed when it applies (always without a scene file), else
+        // the scene file's dynamics.input_speed_rpm.
+        let (speed, name) = if self.applies(Settable::InitialSpeed) {
+            (self.real(vr::INITIAL_SPEED), "initialSpeed".to_string())
+        } else {
+            (
+                run.input_speed(),
+                format!(
+                    "sceneFile = {}: the input speed",
+                    self.strings.get(&vr::SCENE_FILE).cloned().unwrap_or_default()
+                ),
+            )
+        };
         let mut sim = Simulation::new(&set, &run, model, self.start_time, speed).map_err(|e| {
-            Refusal::error(format!("initialSpeed = {speed} rad/s: the simulation cannot start: {e}"))
+            Refusal::error(format!("{name} = {speed} rad/s: the simulation cannot start: {e}"))
         })?;
         let cycles = usize::try_from(self.int(vr::HARMONIC_WINDOW_CYCLES)).unwrap_or(0);
         sim.set_window(cycles, run.samples_per_mesh_cycle()).map_err(|e| Refusal::error(e.to_string()))?;
@@ -388,6 +459,7 @@ impl Instance {
         match variable {
             V::SceneFile
             | V::WearStateFile
+            | V::WearStateAccept
             | V::Fidelity
             | V::HeldMember
             | V::InputMember
@@ -618,7 +690,7 @@ impl Instance {
             Ok::<_, Refusal>(Value::Integer(i32::from(read(&sim()?.step_extremes()))))
         };
         Ok(match variable {
-            V::SceneFile | V::WearStateFile => {
+            V::SceneFile | V::WearStateFile | V::WearStateAccept => {
                 Value::String(self.strings.get(&v).cloned().unwrap_or_default())
             }
             V::Fidelity

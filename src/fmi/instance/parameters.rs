@@ -12,10 +12,10 @@
 
 use std::collections::BTreeMap;
 
-use crate::fmi::variables::{Settable, Variable};
+use crate::fmi::variables::{Settable, Start, Variable};
 use crate::model::gear::{Drive, IntegratorKind, Member};
 use crate::model::lumped::Fidelity;
-use crate::scene::{ChamferSpec, GearData, PlanetLayoutSpec, Problem, Scene};
+use crate::scene::{default_chamfer, ChamferSpec, GearData, PlanetLayoutSpec, Problem, Scene, SceneError};
 
 /// The values the importer holds, read by variable.
 pub(super) struct Values<'a> {
@@ -69,9 +69,12 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
     match p {
         // Read before the scene exists (it chooses the scene) and by the
         // contact model (the worn flanks).
-        Settable::SceneFile | Settable::WearStateFile => {}
-        // The simulation's initial state, set when it is built.
-        Settable::InitialSpeed => {}
+        Settable::SceneFile | Settable::WearStateFile | Settable::WearStateAccept => {}
+        // The simulation's initial state, set when it is built; also the
+        // run's input speed, so that the scene's speed rule names it.
+        Settable::InitialSpeed => {
+            scene.dynamics.input_speed_rpm = crate::scene::units::rad_per_s_to_rpm(r);
+        }
         // Inputs act on the running simulation; the input member's torque
         // also sets the scene's operating load ([`input_torque`]).
         Settable::SunTorque
@@ -281,6 +284,187 @@ fn gear_data(values: &Values, scene: &mut Scene) -> Result<(), String> {
     Ok(())
 }
 
+/// The value of every settable variable with a counterpart in `scene`, in
+/// the variable's unit (SI): the inverse of the parameters → scene map the
+/// instance applies, so that the FMU's parameters at these values describe
+/// the scene's set. The torque inputs
+/// are the set's balanced torques (the input torque on the input member);
+/// initialSpeed and inputSpeedReference are the scene's input speed of a
+/// single run (`dynamics.input_speed_rpm`). Variables without a counterpart
+/// are left out: the files, wearStateAccept and harmonicWindowCycles (the
+/// CLI measures over `dynamics.measured_revolutions` instead).
+pub fn scene_values(scene: &Scene) -> Result<BTreeMap<Settable, Start>, SceneError> {
+    let set = scene.validate()?;
+    let torques = set.balanced_torques();
+    let mut out = BTreeMap::new();
+    let mm = |x: f64| Start::Real(x * 1e-3);
+    let count = |x: u32| Start::Integer(i32::try_from(x).unwrap_or(i32::MAX));
+    let code = |m: Member| match m {
+        Member::Sun => Start::Integer(0),
+        Member::Ring => Start::Integer(1),
+        Member::Carrier => Start::Integer(2),
+    };
+    let optional = |x: Option<f64>| Start::Real(x.unwrap_or(0.0));
+    let (d, g) = (&scene.dynamics, &scene.sun);
+    let chamfer = g.tip_chamfer.unwrap_or_else(|| default_chamfer(g.module_mm));
+    let speed = crate::scene::units::rpm_to_rad_per_s(d.input_speed_rpm);
+    // The FMU gives either every gear by its radii or every gear by its
+    // gear data (gearData); a scene that mixes the two forms has no
+    // parameter set.
+    let data = [&scene.sun.gear_data, &scene.planet.gear_data, &scene.ring.gear_data];
+    let by_data = match data.iter().filter(|g| g.is_some()).count() {
+        0 => None,
+        3 => Some([data[0].unwrap_or_default(), data[1].unwrap_or_default(), data[2].unwrap_or_default()]),
+        _ => {
+            return Err(SceneError::Invalid {
+                problems: vec![Problem {
+                    name: "sun.gear_data, planet.gear_data, ring.gear_data".into(),
+                    value: "some given, some not".into(),
+                    reason:
+                        "the FMU's parameters give all three gears by their radii or all three by gear data \
+                             (gearData); write every gear in one form"
+                            .into(),
+                }],
+            })
+        }
+    };
+    // One addendum and one dedendum factor for all three gears, one hob tip
+    // factor for sun and planets: the FMU's parameters hold no more.
+    if let Some([sun, planet, ring]) = by_data {
+        let shared = [
+            ("addendum_factor", [sun.addendum_factor, planet.addendum_factor, ring.addendum_factor]),
+            ("dedendum_factor", [sun.dedendum_factor, planet.dedendum_factor, ring.dedendum_factor]),
+            (
+                "tool_tip_radius_factor",
+                [sun.tool_tip_radius_factor, planet.tool_tip_radius_factor, sun.tool_tip_radius_factor],
+            ),
+        ];
+        for (key, [a, b, c]) in shared {
+            if a != b || a != c {
+                return Err(SceneError::Invalid {
+                    problems: vec![Problem {
+                        name: format!("sun.gear_data.{key}, planet.gear_data.{key}"),
+                        value: format!("{a}, {b}, {c}"),
+                        reason: "the FMU's parameters hold one value for the gears that share it \
+                                 (docs/GEAR_DATA.md); give it alike"
+                            .into(),
+                    }],
+                });
+            }
+        }
+    }
+    let diameter = |x: Option<f64>| Start::Real(x.map_or(0.0, |d| d * 1e-3));
+    for p in Settable::ALL.iter().copied() {
+        let value = match p {
+            Settable::SceneFile
+            | Settable::WearStateFile
+            | Settable::WearStateAccept
+            | Settable::HarmonicWindowCycles => continue,
+            Settable::GearData => Start::Integer(i32::from(by_data.is_some())),
+            Settable::SpeedDrivenMember => d.speed_driven_member.map_or(Start::Integer(-1), code),
+            Settable::SunProfileShift
+            | Settable::PlanetProfileShift
+            | Settable::RingProfileShift
+            | Settable::AddendumFactor
+            | Settable::DedendumFactor
+            | Settable::ToolTipRadiusFactor
+            | Settable::RingToolTipRadiusFactor
+            | Settable::SunToothThicknessAllowance
+            | Settable::PlanetToothThicknessAllowance
+            | Settable::RingToothThicknessAllowance
+            | Settable::SunTipDiameter
+            | Settable::PlanetTipDiameter
+            | Settable::RingTipDiameter => {
+                // Unused with the radii form: their start values stand.
+                let Some([sun, planet, ring]) = by_data else { continue };
+                match p {
+                    Settable::SunProfileShift => Start::Real(sun.profile_shift),
+                    Settable::PlanetProfileShift => Start::Real(planet.profile_shift),
+                    Settable::RingProfileShift => Start::Real(ring.profile_shift),
+                    Settable::AddendumFactor => Start::Real(sun.addendum_factor),
+                    Settable::DedendumFactor => Start::Real(sun.dedendum_factor),
+                    Settable::ToolTipRadiusFactor => Start::Real(sun.tool_tip_radius_factor),
+                    Settable::RingToolTipRadiusFactor => Start::Real(ring.tool_tip_radius_factor),
+                    Settable::SunToothThicknessAllowance => mm(sun.tooth_thickness_allowance_mm),
+                    Settable::PlanetToothThicknessAllowance => mm(planet.tooth_thickness_allowance_mm),
+                    Settable::RingToothThicknessAllowance => mm(ring.tooth_thickness_allowance_mm),
+                    Settable::SunTipDiameter => diameter(sun.tip_diameter_mm),
+                    Settable::PlanetTipDiameter => diameter(planet.tip_diameter_mm),
+                    _ => diameter(ring.tip_diameter_mm),
+                }
+            }
+            Settable::InitialSpeed | Settable::InputSpeedReference => Start::Real(speed),
+            Settable::SunTorque => Start::Real(torques[0]),
+            Settable::RingTorque => Start::Real(torques[1]),
+            Settable::CarrierTorque => Start::Real(torques[2]),
+            Settable::Fidelity => Start::Integer(match d.fidelity {
+                Fidelity::Torsional => 0,
+                Fidelity::TransverseTorsional => 1,
+            }),
+            Settable::HeldMember => code(scene.operation.held),
+            Settable::InputMember => code(scene.operation.input),
+            Settable::DriveMode => Start::Integer(match d.drive {
+                Drive::Torque => 0,
+                Drive::Speed => 1,
+                Drive::SpeedSteps => 2,
+            }),
+            Settable::Integrator => Start::Integer(match d.integrator {
+                IntegratorKind::GeneralizedAlpha => 0,
+                IntegratorKind::Rk45 => 1,
+            }),
+            Settable::StepsPerMeshCycle => count(d.steps_per_mesh_cycle),
+            Settable::RhoInfinity => Start::Real(d.rho_infinity),
+            Settable::RelativeTolerance => Start::Real(d.relative_tolerance),
+            Settable::SamplesPerMeshCycle => count(d.samples_per_mesh_cycle),
+            Settable::Planets => count(scene.planets.count),
+            Settable::SunTeeth => count(scene.sun.teeth),
+            Settable::PlanetTeeth => count(scene.planet.teeth),
+            Settable::RingTeeth => count(scene.ring.teeth),
+            Settable::Module => mm(g.module_mm),
+            Settable::PressureAngle => Start::Real(g.pressure_angle_deg.to_radians()),
+            Settable::FaceWidth => mm(g.face_width_mm),
+            Settable::CentreDistance => mm(scene.centre_distance_mm),
+            Settable::SunToothThickness => mm(scene.sun.tooth_thickness_mm),
+            Settable::PlanetToothThickness => mm(scene.planet.tooth_thickness_mm),
+            Settable::RingToothThickness => mm(scene.ring.tooth_thickness_mm),
+            Settable::SunTipRadius => mm(scene.sun.tip_radius_mm),
+            Settable::SunRootRadius => mm(scene.sun.root_radius_mm),
+            Settable::SunBoreRadius => mm(scene.sun.bore_radius_mm),
+            Settable::PlanetTipRadius => mm(scene.planet.tip_radius_mm),
+            Settable::PlanetRootRadius => mm(scene.planet.root_radius_mm),
+            Settable::PlanetBoreRadius => mm(scene.planet.bore_radius_mm),
+            Settable::RingMinorRadius => mm(scene.ring.minor_radius_mm),
+            Settable::RingRootRadius => mm(scene.ring.root_radius_mm),
+            Settable::RingRimRadius => mm(scene.ring.rim_radius_mm),
+            Settable::HobTipRadius => mm(g.hob_tip_radius_mm),
+            Settable::RingFilletRadius => mm(scene.ring.fillet_radius_mm),
+            Settable::TipChamferHeight => mm(chamfer.height_mm),
+            Settable::TipChamferAngle => Start::Real(chamfer.angle_deg.to_radians()),
+            Settable::YoungsModulus => Start::Real(scene.material.youngs_modulus_gpa * 1e9),
+            Settable::PoissonRatio => Start::Real(scene.material.poisson_ratio),
+            Settable::Density => Start::Real(scene.material.density_kg_per_m3),
+            Settable::SunInertia => optional(scene.inertia.sun_inertia_kg_m2),
+            Settable::PlanetInertia => optional(scene.inertia.planet_inertia_kg_m2),
+            Settable::RingInertia => optional(scene.inertia.ring_inertia_kg_m2),
+            Settable::CarrierInertia => optional(scene.inertia.carrier_inertia_kg_m2),
+            Settable::SunMass => optional(scene.inertia.sun_mass_kg),
+            Settable::PlanetMass => optional(scene.inertia.planet_mass_kg),
+            Settable::RingMass => optional(scene.inertia.ring_mass_kg),
+            Settable::CarrierMass => optional(scene.inertia.carrier_mass_kg),
+            Settable::SunBearingStiffness => Start::Real(scene.supports.sun_radial_n_per_m),
+            Settable::RingBearingStiffness => Start::Real(scene.supports.ring_radial_n_per_m),
+            Settable::CarrierBearingStiffness => Start::Real(scene.supports.carrier_radial_n_per_m),
+            Settable::PlanetBearingStiffness => Start::Real(scene.supports.planet_bearing_n_per_m),
+            Settable::BearingDampingRatio => Start::Real(scene.supports.bearing_damping_ratio),
+            Settable::MeshDampingRatio => Start::Real(d.mesh_damping_ratio),
+            Settable::ShaftStiffness => Start::Real(d.shaft_stiffness_nm_per_rad),
+            Settable::LoadBalance => Start::Integer(i32::from(d.load_balance)),
+        };
+        out.insert(p, value);
+    }
+    Ok(out)
+}
+
 /// The torque input of the scene's input member, which sets the operating
 /// load of the mean-stiffness linearisation and the static transmission
 /// error (the inputs themselves drive the simulation).
@@ -297,9 +481,10 @@ pub(super) fn input_torque(input: Member) -> Settable {
 /// they belong to the input member.
 pub(super) fn scene_keys(p: Settable) -> &'static [&'static str] {
     match p {
+        Settable::InitialSpeed => &["dynamics.input_speed_rpm"],
         Settable::SceneFile
         | Settable::WearStateFile
-        | Settable::InitialSpeed
+        | Settable::WearStateAccept
         | Settable::InputSpeedReference
         | Settable::HarmonicWindowCycles => &[],
         Settable::SunTorque | Settable::RingTorque | Settable::CarrierTorque => {
