@@ -103,7 +103,7 @@ impl SeparationTable {
 /// Separation tables of one mesh, both indexed by the position `s` on the
 /// drive line of action of one gear-1 tooth's drive-flank contact point
 /// (with the drive flanks touching); the next tooth of gear 1 is at s − p_b.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MeshSeparation {
     /// The path of contact.
     pub path: PathOfContact,
@@ -121,8 +121,10 @@ pub struct MeshSeparation {
     pub back_mirror: f64,
     /// Drive positions \[m\] beyond which the drive flanks are relieved (a
     /// tip chamfer whose edge carries no load); ±∞ without relief.
+    #[serde(with = "crate::contact::cache::float_pair_bits")]
     pub drive_window: (f64, f64),
     /// Drive positions \[m\] beyond which the back flanks are relieved.
+    #[serde(with = "crate::contact::cache::float_pair_bits")]
     pub back_window: (f64, f64),
     /// Reliefs before and after the drive window
     /// ([`crate::model::gear::ToothForm::edge_relief`] of gear 2 and
