@@ -11,7 +11,9 @@
 //! - `planetwear run` as a process, start to finish (scene file, model set-up,
 //!   the point, the report);
 //! - the point in-process from the static state, the model built once;
-//! - the point inside a speed sweep (2500–3500 rpm in 50 rpm steps), per point.
+//! - the point inside a speed sweep (2500–3500 rpm in 50 rpm steps), per point;
+//! - both again by the Fig. 11 route (`analysis::frame_sweep`: marching in the
+//!   rigid-body frame one period at a time, one period measured once settled).
 //!
 //! and E_h of the point (docs/ACCURACY.md) against long time marching (RK 5(4)
 //! at 1e-10, 300 mesh cycles of run-in). Medians of 3 runs.
@@ -23,6 +25,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use planetwear::analysis::accuracy::{harmonic_error, reference, Protocol};
+use planetwear::analysis::frame_sweep::{frame_sweep, FrameSweepSettings};
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::response::{steady_state, sweep, Direction};
@@ -81,6 +84,7 @@ fn main() {
         "| rpm | baseline process [s] | baseline integration [s] | ours process [s] | ours point, cold [s] | ours per point in a sweep [s] | process ratio | cold-point ratio | in-sweep ratio | E_h ours |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
+    let mut frame_rows = Vec::new();
     for rpm in [3000.0, 8000.0] {
         let omega = rpm_to_rad_per_s(rpm);
         let base = script.as_deref().and_then(|s| baseline(&python, s, rpm));
@@ -127,12 +131,54 @@ fn main() {
         let ours: Vec<_> = point.expect("ran").meshes[..2].iter().map(|m| m.harmonics.clone()).collect();
         let e_h = harmonic_error(&ours, &r.measured.harmonics);
         let (bw, bi) = base.map_or((f64::NAN, f64::NAN), |b| b);
+        for rtol in [1e-6, 1e-5] {
+            let mut settings = FrameSweepSettings::default();
+            settings.flow.relative_tolerance = rtol;
+            // The Fig. 11 route: marching in the rigid-body frame, one period at a time.
+            let mut frame_point = None;
+            let frame_cold = median(
+                (0..ROUNDS)
+                    .map(|_| {
+                        let start = Instant::now();
+                        frame_point =
+                            Some(frame_sweep(&model, &[omega], &settings).expect("point").remove(0));
+                        start.elapsed().as_secs_f64()
+                    })
+                    .collect(),
+            );
+            let frame_in_sweep = median(
+                (0..ROUNDS)
+                    .map(|_| {
+                        let start = Instant::now();
+                        frame_sweep(&model, &grid, &settings).expect("sweep");
+                        start.elapsed().as_secs_f64() / grid.len() as f64
+                    })
+                    .collect(),
+            );
+            let frame: Vec<_> =
+                frame_point.expect("ran").state.meshes[..2].iter().map(|m| m.harmonics.clone()).collect();
+            let e_frame = harmonic_error(&frame, &r.measured.harmonics);
+            frame_rows.push(format!(
+                "| {rpm:.0} | {rtol:.0e} | {bi:.3} | {frame_cold:.4} | {frame_in_sweep:.4} | {:.1} | {:.1} | {e_frame:.1e} |",
+                bi / frame_cold,
+                bi / frame_in_sweep
+            ));
+        }
         println!(
             "| {rpm:.0} | {bw:.3} | {bi:.3} | {process:.3} | {cold:.4} | {in_sweep:.4} | {:.1} | {:.1} | {:.1} | {e_h:.1e} |",
             bw / process,
             bi / cold,
             bi / in_sweep
         );
+    }
+    println!();
+    println!(
+        "the same points by marching in the rigid-body frame (analysis::frame_sweep, the Fig. 11 route):"
+    );
+    println!("| rpm | flow rtol | baseline integration [s] | ours point, cold [s] | ours per point in a sweep [s] | cold-point ratio | in-sweep ratio | E_h ours |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for row in &frame_rows {
+        println!("{row}");
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
