@@ -74,20 +74,3 @@ pub fn separation(set: &GearSet, mesh: MeshKind, flanks: &MeshFlanks, step: f64)
     }
     entry.tables
 }
-
-/// Serde for a pair of floats that may be infinite (JSON has no infinity):
-/// written as their bit patterns.
-pub(crate) mod float_pair_bits {
-    use serde::{Deserialize, Deserializer, Serialize, Serializer};
-
-    /// Writes the pair as two u64 bit patterns.
-    pub fn serialize<S: Serializer>(v: &(f64, f64), s: S) -> Result<S::Ok, S::Error> {
-        (v.0.to_bits(), v.1.to_bits()).serialize(s)
-    }
-
-    /// Reads the pair from two u64 bit patterns.
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<(f64, f64), D::Error> {
-        let (a, b) = <(u64, u64)>::deserialize(d)?;
-        Ok((f64::from_bits(a), f64::from_bits(b)))
-    }
-}
