@@ -230,3 +230,18 @@ fn marching_in_the_rigid_frame_settles_on_the_shooting_solution() {
         assert!(e <= 2e-4, "E_h {e:.2e} against shooting");
     }
 }
+
+/// The frame sweep refuses settings that cannot work, naming them.
+#[test]
+fn the_frame_sweep_refuses_a_tolerance_that_cannot_work() {
+    use planetwear::analysis::frame_sweep::{frame_sweep, FrameSweepSettings};
+    let (_, _, model) = build(&torsional());
+    for tolerance in [0.0, -1.0, f64::NAN] {
+        let settings = FrameSweepSettings { tolerance, ..FrameSweepSettings::default() };
+        let e = frame_sweep(&model, &[3000.0 * RPM], &settings).unwrap_err().to_string();
+        assert!(e.contains("frame sweep tolerance"), "{e}");
+    }
+    let settings = FrameSweepSettings { max_periods: 0, ..FrameSweepSettings::default() };
+    let e = frame_sweep(&model, &[3000.0 * RPM], &settings).unwrap_err().to_string();
+    assert!(e.contains("max_periods"), "{e}");
+}

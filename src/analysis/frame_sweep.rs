@@ -74,12 +74,37 @@ pub struct FramePoint {
     pub periods: usize,
 }
 
+impl FrameSweepSettings {
+    /// Refuses settings that cannot work, naming the setting and the range
+    /// (the flow's settings are checked by [`PeriodicProblem::new`]).
+    pub fn check(&self) -> Result<(), PeriodicError> {
+        let bad = |name: &str, value: f64, reason: &str| {
+            Err(PeriodicError::InvalidRequest {
+                name: name.into(),
+                value: value.to_string(),
+                reason: reason.into(),
+            })
+        };
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return bad("frame sweep tolerance", self.tolerance, "must be positive and finite");
+        }
+        if self.max_periods == 0 {
+            return bad("frame sweep max_periods", 0.0, "must be at least 1");
+        }
+        if self.window_periods == 0 {
+            return bad("frame sweep window_periods", 0.0, "must be at least 1");
+        }
+        Ok(())
+    }
+}
+
 /// Sweeps `model` over `speeds` [rad/s], in the given order.
 pub fn frame_sweep(
     model: &PlanetaryDynamics,
     speeds: &[f64],
     settings: &FrameSweepSettings,
 ) -> Result<Vec<FramePoint>, PeriodicError> {
+    settings.check()?;
     let mut points = Vec::with_capacity(speeds.len());
     // The relative state (q_e, v_e) carried from one speed to the next.
     let mut carried: Option<(Vec<f64>, Vec<f64>)> = None;
