@@ -714,6 +714,21 @@ fn error_report(e: &anyhow::Error) -> String {
     out
 }
 
+/// The set-up cache's directory (docs/PERFORMANCE.md, "The set-up cache"):
+/// `PLANETWEAR_CACHE` when set (`off` or empty turns the cache off), else
+/// `$XDG_CACHE_HOME/planetwear`, else `$HOME/.cache/planetwear`; none when
+/// neither variable is set.
+fn cache_directory() -> Option<PathBuf> {
+    let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty());
+    match std::env::var_os("PLANETWEAR_CACHE") {
+        Some(v) if v.is_empty() || v == "off" => None,
+        Some(v) => Some(PathBuf::from(v)),
+        None => var("XDG_CACHE_HOME")
+            .map(|d| PathBuf::from(d).join("planetwear"))
+            .or_else(|| var("HOME").map(|h| PathBuf::from(h).join(".cache").join("planetwear"))),
+    }
+}
+
 fn main() -> ExitCode {
     // A reader that closes the pipe early (`planetwear simulate … | head`)
     // ends the process by SIGPIPE, as for any Unix filter, instead of a
@@ -722,6 +737,9 @@ fn main() -> ExitCode {
     // is a valid disposition for SIGPIPE.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+    if let Some(dir) = cache_directory() {
+        planetwear::contact::cache::enable(&dir);
     }
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,

@@ -8,6 +8,8 @@
 //! - [`accuracy`]: work-precision of the integrators.
 //! - [`continuation`]: pseudo-arclength continuation of periodic steady
 //!   states in speed, with stability, folds and period doublings.
+//! - [`frame_sweep`]: speed sweeps by time marching in the rigid-body frame,
+//!   one period at a time, measured over one period once the state repeats.
 //! - [`modes`]: natural frequencies and mode shapes, with mode classes.
 //! - [`order_tracking`]: order spectra of a run-up or time history.
 //! - [`plausibility`]: the thresholds and checks of a run's warnings
@@ -17,6 +19,7 @@
 
 pub mod accuracy;
 pub mod continuation;
+pub mod frame_sweep;
 pub mod modes;
 pub mod order_tracking;
 pub mod plausibility;

@@ -103,7 +103,7 @@ impl MeshModel {
         for (j, flanks) in slices.iter().enumerate() {
             match slices[..j].iter().position(|f| f == flanks) {
                 Some(same) => tables.push(tables[same].clone()),
-                None => tables.push(MeshSeparation::new(set, mesh, flanks, step)),
+                None => tables.push(crate::contact::cache::separation(set, mesh, flanks, step)),
             }
         }
         let separation = tables[0].clone();
@@ -325,8 +325,8 @@ impl MeshModel {
         // with 0 ≤ x ≤ last.
         let x0 = (s - grid.start) * inv_step;
         let per_pitch = self.path().base_pitch * inv_step;
-        let k_lo = (-x0 / per_pitch).ceil();
-        let k_hi = ((last - x0) / per_pitch).floor();
+        let k_lo = -fast_floor(x0 / per_pitch);
+        let k_hi = fast_floor((last - x0) / per_pitch);
         // Counted, not stepped by k += 1: at a travel beyond 2^53 pitches
         // (a diverging iterate) k + 1 == k and a stepped loop never ends.
         let pairs = if k_hi >= k_lo { ((k_hi - k_lo) as usize + 1).min(last as usize + 2) } else { 0 };
@@ -844,4 +844,22 @@ pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
     }
     out.load_sharing_factor = out.planet_load.iter().flatten().cloned().fold(0.0, f64::max) / mean_all;
     out
+}
+
+/// `x.floor()` without the library call (the release build targets baseline
+/// x86-64, which has no rounding instruction): the same value for every
+/// finite x, NaN and the infinities through `floor` itself. On the dynamic
+/// model's hot path ([`MeshModel::force_tangents`]).
+#[inline(always)]
+fn fast_floor(x: f64) -> f64 {
+    if x.abs() < 4.0e15 {
+        let t = x as i64 as f64;
+        if t > x {
+            t - 1.0
+        } else {
+            t
+        }
+    } else {
+        x.floor()
+    }
 }

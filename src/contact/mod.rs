@@ -12,7 +12,9 @@
 //! - [`hertz`]: Hertzian line contact.
 //! - [`iso6336`]: the ISO/TR 6336-30 single-pair stiffness example.
 //! - [`ltca`]: loaded tooth contact analysis.
+//! - [`cache`]: the separation tables on disk, keyed by what they are made from.
 
+pub mod cache;
 pub mod hertz;
 pub mod iso6336;
 pub mod ltca;

@@ -103,7 +103,7 @@ impl SeparationTable {
 /// Separation tables of one mesh, both indexed by the position `s` on the
 /// drive line of action of one gear-1 tooth's drive-flank contact point
 /// (with the drive flanks touching); the next tooth of gear 1 is at s − p_b.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MeshSeparation {
     /// The path of contact.
     pub path: PathOfContact,
@@ -121,8 +121,10 @@ pub struct MeshSeparation {
     pub back_mirror: f64,
     /// Drive positions \[m\] beyond which the drive flanks are relieved (a
     /// tip chamfer whose edge carries no load); ±∞ without relief.
+    #[serde(with = "float_pair_bits")]
     pub drive_window: (f64, f64),
     /// Drive positions \[m\] beyond which the back flanks are relieved.
+    #[serde(with = "float_pair_bits")]
     pub back_window: (f64, f64),
     /// Reliefs before and after the drive window
     /// ([`crate::model::gear::ToothForm::edge_relief`] of gear 2 and
@@ -354,5 +356,22 @@ impl MeshSeparation {
             drive_relief: (e2, e1),
             back_relief: (e1, e2),
         }
+    }
+}
+
+/// Serde for a pair of floats that may be infinite (JSON has no infinity):
+/// written as their bit patterns.
+mod float_pair_bits {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    /// Writes the pair as two u64 bit patterns.
+    pub fn serialize<S: Serializer>(v: &(f64, f64), s: S) -> Result<S::Ok, S::Error> {
+        (v.0.to_bits(), v.1.to_bits()).serialize(s)
+    }
+
+    /// Reads the pair from two u64 bit patterns.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<(f64, f64), D::Error> {
+        let (a, b) = <(u64, u64)>::deserialize(d)?;
+        Ok((f64::from_bits(a), f64::from_bits(b)))
     }
 }

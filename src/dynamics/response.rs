@@ -297,6 +297,45 @@ pub fn steady_state_observed(
     run: &RunSettings,
     omega: f64,
     start: Option<&State>,
+    observe: impl FnMut(usize, &PlanetaryDynamics),
+) -> Result<SteadyState, ResponseError> {
+    steady_state_windowed(model, set, run, omega, start, Window::Fixed, observe)
+}
+
+/// How long the measured window of a steady state is.
+#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "window", rename_all = "snake_case")]
+pub enum Window {
+    /// The run settings' measured revolutions, always (the default).
+    #[default]
+    Fixed,
+    /// `cycles` mesh cycles when the run-in reaches a state periodic in one
+    /// mesh cycle: the mesh forces at three successive cycle boundaries
+    /// agree to `tolerance` of the mean tooth force (the run settings' own
+    /// test also compares the approach rates, which carry the integrator's
+    /// error in the absolute velocities and rarely settle below 1e-5 at the
+    /// default tolerance), the run settings' window otherwise. The
+    /// mesh-order harmonics of a signal with the mesh period are the same
+    /// over one mesh cycle as over many, so this only cuts the cost of a
+    /// periodic point; a point whose run-in did not settle keeps the whole
+    /// window.
+    Periodic {
+        /// Mesh cycles measured at a periodic point (at least 1).
+        cycles: usize,
+        /// Agreement of successive cycles, as a fraction of the mean tooth
+        /// force \[1\].
+        tolerance: f64,
+    },
+}
+
+/// [`steady_state_observed`] with the window chosen by `window`.
+pub fn steady_state_windowed(
+    model: &mut PlanetaryDynamics,
+    set: &GearSet,
+    run: &RunSettings,
+    omega: f64,
+    start: Option<&State>,
+    window: Window,
     mut observe: impl FnMut(usize, &PlanetaryDynamics),
 ) -> Result<SteadyState, ResponseError> {
     let fm = model.mesh_frequency_per_input_speed * omega.abs();
@@ -311,7 +350,7 @@ pub fn steady_state_observed(
     let period = 1.0 / fm;
     let cycles_per_rev = model.mesh_frequency_per_input_speed * 2.0 * std::f64::consts::PI;
     let run_in_cycles = (d.run_in_revolutions * cycles_per_rev).ceil() as u64;
-    let cycles = ((d.measured_revolutions * cycles_per_rev).round() as usize).max(1);
+    let mut cycles = ((d.measured_revolutions * cycles_per_rev).round() as usize).max(1);
     let samples = d.samples_per_mesh_cycle;
     let steps_per_sample = (d.steps_per_mesh_cycle as u64).div_ceil(samples as u64).max(1);
     let err = |source| ResponseError::Integration { speed: omega, source };
@@ -344,6 +383,7 @@ pub fn steady_state_observed(
         model.lumped.sun_mesh.max(model.lumped.ring_mesh) * period / (2.0 * std::f64::consts::PI);
     let mut previous: Option<Vec<f64>> = None;
     let mut agreeing = 0;
+    let mut forces_agreeing = 0;
     let mut t_run = 0.0;
     for c in 1..=run_in_cycles {
         t_run = c as f64 * period;
@@ -358,8 +398,20 @@ pub fn steady_state_observed(
         if let Some(p) = &previous {
             let change = p.iter().zip(&signature).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             agreeing = if change <= tolerance { agreeing + 1 } else { 0 };
+            if let Window::Periodic { tolerance: periodic, .. } = window {
+                let forces =
+                    p.iter().zip(&signature).step_by(2).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+                let limit = periodic * set.mesh_load_per_planet().max(f64::MIN_POSITIVE);
+                forces_agreeing = if forces <= limit { forces_agreeing + 1 } else { 0 };
+            }
         }
         previous = Some(signature);
+        if forces_agreeing >= 2 && c >= 4 {
+            if let Window::Periodic { cycles: short, .. } = window {
+                cycles = cycles.min(short.max(1));
+            }
+            break;
+        }
         if agreeing >= 2 && c >= 4 {
             break;
         }
@@ -462,12 +514,27 @@ pub fn sweep(
     direction: Direction,
     speeds: &[f64],
     keep_histories: &[f64],
+    progress: impl FnMut(usize),
+) -> Result<Sweep, ResponseError> {
+    sweep_windowed(set, run, model, direction, speeds, keep_histories, Window::Fixed, progress)
+}
+
+/// [`sweep`] with the window of every point chosen by `window`.
+#[allow(clippy::too_many_arguments)]
+pub fn sweep_windowed(
+    set: &GearSet,
+    run: &RunSettings,
+    model: &mut PlanetaryDynamics,
+    direction: Direction,
+    speeds: &[f64],
+    keep_histories: &[f64],
+    window: Window,
     mut progress: impl FnMut(usize),
 ) -> Result<Sweep, ResponseError> {
     let mut points = Vec::with_capacity(speeds.len());
     let mut state: Option<State> = None;
     for (i, omega) in speeds.iter().enumerate() {
-        let mut ss = steady_state(model, set, run, *omega, state.as_ref())?;
+        let mut ss = steady_state_windowed(model, set, run, *omega, state.as_ref(), window, |_, _| {})?;
         state = Some(ss.end.clone());
         if !keep_histories.iter().any(|k| (k - omega).abs() <= 1e-9 * omega.abs().max(1.0)) {
             ss.time = Vec::new();

@@ -69,7 +69,7 @@ pub struct Chamfer {
 /// How the flank of a gear whose chamfer edge carries no load recedes
 /// beyond the involute's end, in travel d along the line of action:
 /// r = m·d²/(2·d₀) over the rounded edge (d < d₀), then m·(d − d₀/2).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EdgeRelief {
     /// Slope m of the relief past the rounding [-].
     pub slope: f64,

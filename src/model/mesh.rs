@@ -6,10 +6,12 @@
 //! external pair ρ1 = s, ρ2 = L − s; internal pair (planet 1, ring 2)
 //! ρ1 = s, ρ2 = s + L. The roll angle of gear i at the contact is ρi / r_bi.
 
+use serde::{Deserialize, Serialize};
+
 use crate::model::gear::{GearKind, GearSet, MeshKind, ToothForm};
 
 /// The path of contact of one mesh.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PathOfContact {
     /// Which mesh.
     pub mesh: MeshKind,
