@@ -116,7 +116,7 @@ struct SpeedDrive {
     index: usize,
     /// Lever of the driven rotation, u = lever·θ \[m\].
     lever: f64,
-    /// Source speed on u per rad/s of input speed [m]: the driven member's
+    /// Source speed on u per rad/s of input speed \[m\]: the driven member's
     /// rigid-body speed (its lever for the input member).
     rate: f64,
     /// Shaft stiffness on u [N/m].
