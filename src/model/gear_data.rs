@@ -141,20 +141,20 @@ pub fn resolve(scene: &Scene) -> (Scene, Vec<Problem>) {
     let mut problems = Vec::new();
     if let Some(gd) = scene.sun.gear_data {
         check_data("sun", &gd, scene.sun.module_mm, &mut problems);
-        conflicts("sun", &scene.sun_derived_fields(), &mut problems);
+        conflicts("sun", &external_derived_fields(&scene.sun), &mut problems);
         let d = external_radii(scene.sun.teeth, scene.sun.module_mm, scene.sun.pressure_angle_deg, &gd);
         fill_external(&mut s.sun, &d);
     }
     if let Some(gd) = scene.planet.gear_data {
         check_data("planet", &gd, scene.planet.module_mm, &mut problems);
-        conflicts("planet", &scene.planet_derived_fields(), &mut problems);
+        conflicts("planet", &external_derived_fields(&scene.planet), &mut problems);
         let d =
             external_radii(scene.planet.teeth, scene.planet.module_mm, scene.planet.pressure_angle_deg, &gd);
         fill_external(&mut s.planet, &d);
     }
     if let Some(gd) = scene.ring.gear_data {
         check_data("ring", &gd, scene.ring.module_mm, &mut problems);
-        conflicts("ring", &scene.ring_derived_fields(), &mut problems);
+        conflicts("ring", &ring_derived_fields(&scene.ring), &mut problems);
         let d = ring_radii(scene.ring.teeth, scene.ring.module_mm, scene.ring.pressure_angle_deg, &gd);
         s.ring.tooth_thickness_mm = d.tooth_thickness_mm;
         s.ring.minor_radius_mm = d.tip_radius_mm;
@@ -174,36 +174,24 @@ fn fill_external(g: &mut crate::scene::ExternalGearSpec, d: &DerivedRadii) {
     g.hob_tip_radius_mm = d.tool_tip_radius_mm;
 }
 
-impl Scene {
-    fn sun_derived_fields(&self) -> [(&'static str, f64); 4] {
-        let g = &self.sun;
-        [
-            ("tooth_thickness_mm", g.tooth_thickness_mm),
-            ("tip_radius_mm", g.tip_radius_mm),
-            ("root_radius_mm", g.root_radius_mm),
-            ("hob_tip_radius_mm", g.hob_tip_radius_mm),
-        ]
-    }
+/// The fields of an external gear that its gear data derive, by key.
+fn external_derived_fields(g: &crate::scene::ExternalGearSpec) -> [(&'static str, f64); 4] {
+    [
+        ("tooth_thickness_mm", g.tooth_thickness_mm),
+        ("tip_radius_mm", g.tip_radius_mm),
+        ("root_radius_mm", g.root_radius_mm),
+        ("hob_tip_radius_mm", g.hob_tip_radius_mm),
+    ]
+}
 
-    fn planet_derived_fields(&self) -> [(&'static str, f64); 4] {
-        let g = &self.planet;
-        [
-            ("tooth_thickness_mm", g.tooth_thickness_mm),
-            ("tip_radius_mm", g.tip_radius_mm),
-            ("root_radius_mm", g.root_radius_mm),
-            ("hob_tip_radius_mm", g.hob_tip_radius_mm),
-        ]
-    }
-
-    fn ring_derived_fields(&self) -> [(&'static str, f64); 4] {
-        let g = &self.ring;
-        [
-            ("tooth_thickness_mm", g.tooth_thickness_mm),
-            ("minor_radius_mm", g.minor_radius_mm),
-            ("root_radius_mm", g.root_radius_mm),
-            ("fillet_radius_mm", g.fillet_radius_mm),
-        ]
-    }
+/// The fields of the ring that its gear data derive, by key.
+fn ring_derived_fields(g: &crate::scene::RingGearSpec) -> [(&'static str, f64); 4] {
+    [
+        ("tooth_thickness_mm", g.tooth_thickness_mm),
+        ("minor_radius_mm", g.minor_radius_mm),
+        ("root_radius_mm", g.root_radius_mm),
+        ("fillet_radius_mm", g.fillet_radius_mm),
+    ]
 }
 
 /// A radius field set beside gear data would be ignored: refuse it.
