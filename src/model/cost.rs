@@ -207,7 +207,8 @@ pub fn problems(scene: &Scene) -> Vec<Problem> {
 /// [`SWEEP_STEP_BUDGET`] with the figure: the internal steps it plans for.
 /// `key` names where the user set the grid.
 pub fn sweep(scene: &Scene, speeds: usize, directions: usize, key: &str) -> Result<f64, Problem> {
-    let steps = estimate(scene).internal_steps * speeds as f64 * directions as f64;
+    let per_steady_state = estimate(scene).internal_steps;
+    let steps = per_steady_state * speeds as f64 * directions as f64;
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(steps <= SWEEP_STEP_BUDGET) {
         return Err(Problem {
@@ -216,7 +217,7 @@ pub fn sweep(scene: &Scene, speeds: usize, directions: usize, key: &str) -> Resu
             reason: format!(
                 "the sweep would take about {steps:.3e} internal steps ({:.3e} per steady state), more than \
                  the budget of {SWEEP_STEP_BUDGET:.0e} (docs/LIMITS.md); use a larger step or fewer revolutions",
-                estimate(scene).internal_steps
+                per_steady_state
             ),
         });
     }
