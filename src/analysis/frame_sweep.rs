@@ -78,13 +78,7 @@ impl FrameSweepSettings {
     /// Refuses settings that cannot work, naming the setting and the range
     /// (the flow's settings are checked by [`PeriodicProblem::new`]).
     pub fn check(&self) -> Result<(), PeriodicError> {
-        let bad = |name: &str, value: f64, reason: &str| {
-            Err(PeriodicError::InvalidRequest {
-                name: name.into(),
-                value: value.to_string(),
-                reason: reason.into(),
-            })
-        };
+        let bad = |name: &str, value: f64, reason: &str| Err(PeriodicError::invalid(name, value, reason));
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
             return bad("frame sweep tolerance", self.tolerance, "must be positive and finite");
         }

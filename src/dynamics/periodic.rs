@@ -78,13 +78,7 @@ impl Default for ShootingSettings {
 impl ShootingSettings {
     /// Refuses settings that cannot work, naming the setting and the range.
     pub fn check(&self) -> Result<(), PeriodicError> {
-        let bad = |name: &str, value: f64, reason: &str| {
-            Err(PeriodicError::InvalidRequest {
-                name: name.into(),
-                value: value.to_string(),
-                reason: reason.into(),
-            })
-        };
+        let bad = |name: &str, value: f64, reason: &str| Err(PeriodicError::invalid(name, value, reason));
         let t = self.relative_tolerance;
         if !(t.is_finite() && (1e-13..=1e-3).contains(&t)) {
             return bad("shooting relative tolerance", t, "must lie in 1e-13 ..= 1e-3");
@@ -152,6 +146,13 @@ pub enum PeriodicError {
         /// What is allowed.
         reason: String,
     },
+}
+
+impl PeriodicError {
+    /// A setting that cannot work: its name, its value and what is allowed.
+    pub fn invalid(name: &str, value: f64, reason: &str) -> Self {
+        PeriodicError::InvalidRequest { name: name.into(), value: value.to_string(), reason: reason.into() }
+    }
 }
 
 /// A Floquet multiplier (real and imaginary part).
