@@ -19,10 +19,12 @@ comes back as `ringTorque` (counter-clockwise positive; the shaft's reaction
 on the ring is minus the torque it passes to the vehicle); the road load is
 viscous and steps up by 20 % at t_step.
 
-Read every step besides the speeds: the carrier support's `reactionTorque`
-and the largest sun–planet mesh force within the step
+Read every step besides the speeds: the carrier support's `reactionTorque`,
+the largest sun–planet mesh force within the step
 (`planet[1].sunMeshForceMax`), which a sample at the communication points
-alone would alias (the mesh frequency is 1.7 kHz at 3000 rpm).
+alone would alias (the mesh frequency is 1.7 kHz at 3000 rpm), and the
+largest force one tooth pair of that mesh carried within the step
+(`planet[1].sunToothForceMax`).
 
 The coupling is explicit (inputs held over a step), so the step must be
 short against the loops it closes: the motor's droop loop is unstable at
@@ -76,13 +78,13 @@ def run(fmu_path, stop=0.05, h=2e-5, t_step=0.02, droop=2.0, shaft=(2.0e4, 20.0)
     theta_v = theta_r + t0 * ratio / k_s  # shaft pre-wound to carry the balancing torque
 
     names = ["sun.speed", "ring.speed", "ring.angle", "planet[1].sunMeshForce", "planet[1].ringMeshForce",
-             "reactionTorque", "planet[1].sunMeshForceMax", "inputShaftTorque"]
+             "reactionTorque", "planet[1].sunMeshForceMax", "inputShaftTorque", "planet[1].sunToothForceMax"]
     refs = [vr[n] for n in names]
     rows = []
     n = int(round(stop / h))
     for k in range(n):
         t = k * h
-        w_s, w_r, theta_r, f_s, f_r, t_react, f_s_max, t_in = fmu.getReal(refs)
+        w_s, w_r, theta_r, f_s, f_r, t_react, f_s_max, t_in, f_tooth = fmu.getReal(refs)
         t_motor = t0 + k_m * (w_set - (w_m if coupling == "speed" else w_s))
         t_shaft = k_s * (theta_r - theta_v) + c_s * (w_r - w_v)   # torque the shaft passes to the vehicle
         load = c_road * (1.2 if t >= t_step else 1.0) * w_v
@@ -97,7 +99,7 @@ def run(fmu_path, stop=0.05, h=2e-5, t_step=0.02, droop=2.0, shaft=(2.0e4, 20.0)
         # Vehicle side: semi-implicit Euler over the same step.
         w_v += h * (t_shaft - load) / j_v
         theta_v += h * w_v
-        rows.append((t + h, w_s, w_r, w_v, t_motor, t_shaft, f_s, f_r, t_react, f_s_max, w_m))
+        rows.append((t + h, w_s, w_r, w_v, t_motor, t_shaft, f_s, f_r, t_react, f_s_max, w_m, f_tooth))
     fmu.terminate()
     fmu.freeInstance()
     return np.array(rows)
@@ -119,6 +121,7 @@ def plot(rows, out):
     ax[1].set_ylabel("torque (N·m)")
     ax[1].plot(t, rows[:, 8], label="carrier reaction torque")
     ax[2].plot(t, rows[:, 9] / 30, label="planet 1 sun-planet, largest within each step", lw=0.8)
+    ax[2].plot(t, rows[:, 11] / 30, label="planet 1 sun-planet, largest tooth-pair force within each step", lw=0.8)
     ax[2].plot(t, rows[:, 6] / 30, label="planet 1 sun-planet")
     ax[2].plot(t, rows[:, 7] / 30, label="planet 1 ring-planet")
     ax[2].set_ylabel("mesh force (N/mm)")
@@ -149,6 +152,7 @@ def main():
           f"{rows[-1, 1] * 30 / math.pi:.1f} rpm, vehicle side {rows[-1, 3] * 30 / math.pi:.1f} rpm; second half: "
           f"mean sun mesh force {last[:, 6].mean() / 30:.1f} N/mm, largest within a step "
           f"{last[:, 9].max() / 30:.1f} N/mm (at the communication points {last[:, 6].max() / 30:.1f}), "
+          f"largest tooth-pair force {last[:, 11].max() / 30:.1f} N/mm, "
           f"mean carrier reaction torque {last[:, 8].mean():.1f} N·m; wrote {a.out}")
 
 

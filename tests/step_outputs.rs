@@ -40,7 +40,8 @@ fn the_step_extremes_bound_the_endpoint_and_every_sub_sample() {
     let (mut above, mut below) = (0.0f64, 0.0f64);
     for k in 0..5 {
         long.do_step(long.time(), h).unwrap();
-        let e = long.step_extremes();
+        let e = long.step_extremes().clone();
+        let (sun, ring) = (e.mesh(0, MeshKind::SunPlanet).unwrap(), e.mesh(0, MeshKind::RingPlanet).unwrap());
         let (mut sub_min, mut sub_max) = (f64::INFINITY, f64::NEG_INFINITY);
         for j in 0..10 {
             short.do_step(short.time(), h / 10.0).unwrap();
@@ -51,23 +52,22 @@ fn the_step_extremes_bound_the_endpoint_and_every_sub_sample() {
                 assert!((f - long.mesh_force(0, MeshKind::SunPlanet)).abs() < tol);
             }
         }
-        for (mesh, (min, max)) in [(MeshKind::SunPlanet, e.sun), (MeshKind::RingPlanet, e.ring)] {
-            let end = long.mesh_force(0, mesh);
-            assert!(min <= end && end <= max, "step {k} {mesh:?}: {min} ≤ {end} ≤ {max}");
+        for p in 0..long.gear_set().planet_angles().len() {
+            for mesh in [MeshKind::SunPlanet, MeshKind::RingPlanet] {
+                let x = e.mesh(p, mesh).unwrap();
+                let end = long.mesh_force(p, mesh);
+                assert!(x.min <= end && end <= x.max, "step {k} planet {p} {mesh:?}: {x:?}, endpoint {end}");
+                assert!(e.any_max(mesh) >= x.max);
+            }
         }
         assert!(
-            e.sun.1 >= sub_max - tol && e.sun.0 <= sub_min + tol,
-            "step {k}: {:?} vs sub-samples [{sub_min}, {sub_max}]",
-            e.sun
+            sun.max >= sub_max - tol && sun.min <= sub_min + tol,
+            "step {k}: {sun:?} vs sub-samples [{sub_min}, {sub_max}]",
         );
-        for p in 0..long.gear_set().planet_angles().len() {
-            assert!(e.sun_any_max >= long.mesh_force(p, MeshKind::SunPlanet));
-            assert!(e.ring_any_max >= long.mesh_force(p, MeshKind::RingPlanet));
-        }
-        assert!(e.sun_any_max >= e.sun.1 && e.ring_any_max >= e.ring.1);
+        assert!(e.any_max(MeshKind::SunPlanet) >= sun.max && e.any_max(MeshKind::RingPlanet) >= ring.max);
         let end = long.mesh_force(0, MeshKind::SunPlanet);
-        above = above.max((e.sun.1 - end) / scale);
-        below = below.max((end - e.sun.0) / scale);
+        above = above.max((sun.max - end) / scale);
+        below = below.max((end - sun.min) / scale);
     }
     println!("peak above the endpoint up to {above:.3} F0, minimum below it up to {below:.3} F0");
 }
@@ -90,19 +90,40 @@ fn at_steps_of_many_mesh_cycles_the_peak_sees_what_the_endpoint_misses() {
     for _ in 0..10 {
         sim.do_step(sim.time(), h).unwrap();
         let e = sim.step_extremes();
+        let sun = e.mesh(0, MeshKind::SunPlanet).unwrap();
         let end = sim.mesh_force(0, MeshKind::SunPlanet);
         println!(
             "t = {:.3} s: sun mesh endpoint {end:.0} N, step min {:.0} N, peak {:.0} N (all planets {:.0} N); \
              separated {}",
             sim.time(),
-            e.sun.0,
-            e.sun.1,
-            e.sun_any_max,
-            e.sun_any_separated
+            sun.min,
+            sun.max,
+            e.any_max(MeshKind::SunPlanet),
+            e.any_separated(MeshKind::SunPlanet)
         );
-        smallest_excess = smallest_excess.min((e.sun.1 - e.sun.0) / f0);
-        assert!(e.sun.1 > end, "peak {} not above endpoint {end}", e.sun.1);
-        assert!(!e.sun_separated && !e.ring_separated, "no separation at the nominal load");
+        println!(
+            "  peak tooth-pair force: sun mesh {:.0} N, ring mesh {:.0} N",
+            sun.peak_pair,
+            e.mesh(0, MeshKind::RingPlanet).unwrap().peak_pair
+        );
+        smallest_excess = smallest_excess.min((sun.max - sun.min) / f0);
+        assert!(sun.max > end, "peak {} not above endpoint {end}", sun.max);
+        for p in 0..sim.gear_set().planet_angles().len() {
+            for mesh in [MeshKind::SunPlanet, MeshKind::RingPlanet] {
+                let x = e.mesh(p, mesh).unwrap();
+                assert!(!x.separated, "no separation at the nominal load: planet {p} {mesh:?}");
+                let end = sim.mesh_force(p, mesh);
+                assert!(x.max > end, "planet {p} {mesh:?}: peak {} not above endpoint {end}", x.max);
+                // The tooth pairs push on the drive flanks only: none
+                // carries more than the whole mesh. Each step spans a
+                // stretch of single-pair contact, where the pair carries
+                // the mesh force, so the peak pair force reaches at least
+                // the step's smallest mesh force.
+                assert!(x.peak_pair <= x.max * (1.0 + 1e-12), "planet {p} {mesh:?}: {x:?}");
+                assert!(x.peak_pair >= x.min, "planet {p} {mesh:?}: {x:?}");
+                assert!(e.any_peak_pair(mesh) >= x.peak_pair);
+            }
+        }
     }
     // The example's sun-mesh force fluctuates by about a tenth of its mean
     // within each mesh cycle (double- to single-pair contact).
@@ -120,8 +141,9 @@ fn an_unloaded_set_reports_separated_meshes() {
         sim.do_step(sim.time(), 1e-3).unwrap();
     }
     let e = sim.step_extremes();
-    assert!(e.sun_any_separated && e.ring_any_separated, "{e:?}");
-    assert_eq!(e.sun.0, 0.0);
+    assert!(e.any_separated(MeshKind::SunPlanet) && e.any_separated(MeshKind::RingPlanet), "{e:?}");
+    assert_eq!(e.mesh(0, MeshKind::SunPlanet).unwrap().min, 0.0);
+    assert!(e.mesh(sim.gear_set().planet_angles().len(), MeshKind::SunPlanet).is_none());
 }
 
 /// Means over whole mesh cycles of the member torques: sun, ring, carrier

@@ -25,6 +25,7 @@ pub(crate) fn simulate_command(
     let mut sim =
         planetwear::dynamics::simulation::Simulation::new(&set, &run, model, 0.0, run.input_speed())?;
     let n = (stop / step).round() as u64;
+    use planetwear::model::gear::MeshKind;
     for k in 0..n {
         // Communication points on the integer grid t_k = k·step, each
         // step t_{k+1} − t_k (as fmpy and most importers call doStep):
@@ -35,20 +36,29 @@ pub(crate) fn simulate_command(
         // The extremes over the step and the torques, named as the FMU's
         // outputs (docs/FMU.md).
         let e = sim.step_extremes();
-        let row = serde_json::json!({
+        let mut row = serde_json::json!({
             "time": sim.time(),
             "sun.speed": sim.speed(planetwear::model::gear::Member::Sun),
-            "planet[1].sunMeshForce": sim.mesh_force(0, planetwear::model::gear::MeshKind::SunPlanet),
-            "planet[1].ringMeshForce": sim.mesh_force(0, planetwear::model::gear::MeshKind::RingPlanet),
-            "planet[1].sunMeshForceMin": e.sun.0,
-            "planet[1].sunMeshForceMax": e.sun.1,
-            "planet[1].ringMeshForceMin": e.ring.0,
-            "planet[1].ringMeshForceMax": e.ring.1,
-            "sunMeshSeparated": u8::from(e.sun_any_separated),
-            "ringMeshSeparated": u8::from(e.ring_any_separated),
             "reactionTorque": sim.reaction_torque(),
             "balancingTorque": sim.balancing_torque(),
+            "sunMeshForceMax": e.any_max(MeshKind::SunPlanet),
+            "ringMeshForceMax": e.any_max(MeshKind::RingPlanet),
+            "sunToothForceMax": e.any_peak_pair(MeshKind::SunPlanet),
+            "ringToothForceMax": e.any_peak_pair(MeshKind::RingPlanet),
+            "sunMeshSeparated": u8::from(e.any_separated(MeshKind::SunPlanet)),
+            "ringMeshSeparated": u8::from(e.any_separated(MeshKind::RingPlanet)),
         });
+        for p in 0..set.planet_angles().len() {
+            for (kind, name) in [(MeshKind::SunPlanet, "sun"), (MeshKind::RingPlanet, "ring")] {
+                let Some(x) = e.mesh(p, kind) else { continue };
+                let planet = format!("planet[{}].{name}", p + 1);
+                row[format!("{planet}MeshForce")] = sim.mesh_force(p, kind).into();
+                row[format!("{planet}MeshForceMin")] = x.min.into();
+                row[format!("{planet}MeshForceMax")] = x.max.into();
+                row[format!("{planet}ToothForceMax")] = x.peak_pair.into();
+                row[format!("{planet}Separated")] = u8::from(x.separated).into();
+            }
+        }
         println!("{row}");
     }
     Ok(())

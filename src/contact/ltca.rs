@@ -76,6 +76,21 @@ struct PairLaw {
     event_back: f64,
 }
 
+/// The mesh force and its derivatives at one state of a mesh
+/// ([`MeshModel::force_with_derivatives`], [`MeshModel::force_tangents`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MeshLaw {
+    /// Mesh force, the sum of the tooth-pair forces \[N\].
+    pub force: f64,
+    /// ∂F/∂δ [N/m].
+    pub approach_stiffness: f64,
+    /// ∂F/∂s [N/m].
+    pub position_derivative: f64,
+    /// The largest tooth-pair force of the mesh in magnitude, on either
+    /// flank \[N\] (0 when no pair touches).
+    pub peak_pair_force: f64,
+}
+
 /// Samples per base pitch of the contact tables.
 pub const TABLE_SAMPLES_PER_PITCH: usize = 400;
 
@@ -286,18 +301,19 @@ impl MeshModel {
     /// must hold `2·slots` values; slots of pairs outside the tables read
     /// −[`NO_CONTACT`]. Each slot's value is continuous in s because pairs
     /// enter and leave the tables out of contact.
-    pub fn force_with_derivatives(&self, s: f64, delta: f64, events: &mut [f64]) -> (f64, f64, f64) {
+    pub fn force_with_derivatives(&self, s: f64, delta: f64, events: &mut [f64]) -> MeshLaw {
         let pb = self.path().base_pitch;
         let slots = events.len() / 2;
         for e in events.iter_mut() {
             *e = -NO_CONTACT;
         }
-        let (mut f, mut kd, mut ks) = (0.0, 0.0, 0.0);
+        let mut out = MeshLaw::default();
         for index in self.pair_range(s) {
             let law = self.pair(s + f64::from(index) * pb, delta);
-            f += law.force;
-            kd += law.stiffness;
-            ks += law.position_derivative;
+            out.force += law.force;
+            out.approach_stiffness += law.stiffness;
+            out.position_derivative += law.position_derivative;
+            out.peak_pair_force = out.peak_pair_force.max(law.force.abs());
             // No slots (the hot path of a face cut in slices) asks for no
             // event values.
             if slots > 0 {
@@ -306,14 +322,14 @@ impl MeshModel {
                 events[slot + 1] = law.event_back;
             }
         }
-        (f, kd, ks)
+        out
     }
 
     /// Mesh force \[N\] and its derivatives ∂F/∂δ [N/m] and ∂F/∂s [N/m], as
     /// [`Self::force_with_derivatives`] without the event values: the
     /// dynamic model's hot path, with a single face slice read from the
     /// interleaved tables.
-    pub fn force_tangents(&self, s: f64, delta: f64) -> (f64, f64, f64) {
+    pub fn force_tangents(&self, s: f64, delta: f64) -> MeshLaw {
         let g = &self.packed;
         if g.len() < 2 {
             return self.force_with_derivatives(s, delta, &mut []);
@@ -332,7 +348,7 @@ impl MeshModel {
         let pairs = if k_hi >= k_lo { ((k_hi - k_lo) as usize + 1).min(last as usize + 2) } else { 0 };
         let sep = &self.separation;
         let pb = self.path().base_pitch;
-        let (mut f, mut kd, mut ks) = (0.0, 0.0, 0.0);
+        let mut out = MeshLaw::default();
         for j in 0..pairs {
             let k = k_lo + j as f64;
             let x = (x0 + k * per_pitch).clamp(0.0, last);
@@ -365,11 +381,13 @@ impl MeshModel {
                     continue;
                 }
             };
-            f += sign * kk * pen;
-            kd += kk;
-            ks += sign * (dk * pen - kk * dg);
+            let pair = kk * pen;
+            out.force += sign * pair;
+            out.approach_stiffness += kk;
+            out.position_derivative += sign * (dk * pen - kk * dg);
+            out.peak_pair_force = out.peak_pair_force.max(pair);
         }
-        (f, kd, ks)
+        out
     }
 
     /// Elastic energy stored in the mesh's pairs, V = Σ ½k(s_k)(δ − g(s_k))²

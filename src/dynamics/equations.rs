@@ -63,6 +63,8 @@ pub struct MeshState {
     pub position_derivative: f64,
     /// Damping force \[N\] (zero out of contact).
     pub damping_force: f64,
+    /// The largest tooth-pair force in magnitude \[N\].
+    pub peak_pair_force: f64,
 }
 
 /// The dynamic model of a gear set.
@@ -770,7 +772,7 @@ impl PlanetaryDynamics {
             let delta: f64 = link.b_nz.iter().map(|(j, b)| b * q[*j]).sum();
             let rate: f64 = link.b_nz.iter().map(|(j, b)| b * v[*j]).sum();
             let s: f64 = link.p_nz.iter().map(|(j, p)| p * q[*j]).sum::<f64>() + link.s0;
-            let (f, kd, ks) = if with_events {
+            let law = if with_events {
                 let slots = self.slots[if link.kind == MeshKind::SunPlanet { 0 } else { 1 }];
                 let start = events.len();
                 events.resize(start + 2 * slots, 0.0);
@@ -778,15 +780,16 @@ impl PlanetaryDynamics {
             } else {
                 self.model(link.kind).force_tangents(s, delta)
             };
-            let damping_force = if kd > 0.0 { link.damping * rate } else { 0.0 };
+            let damping_force = if law.approach_stiffness > 0.0 { link.damping * rate } else { 0.0 };
             self.meshes[i] = MeshState {
                 position: s,
                 approach: delta,
                 approach_rate: rate,
-                force: f,
-                stiffness: kd,
-                position_derivative: ks,
+                force: law.force,
+                stiffness: law.approach_stiffness,
+                position_derivative: law.position_derivative,
                 damping_force,
+                peak_pair_force: law.peak_pair_force,
             };
         }
         self.events_scratch = events;

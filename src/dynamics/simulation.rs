@@ -163,90 +163,90 @@ impl Window {
     }
 }
 
+/// The extremes of one mesh's forces over a communication step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshExtremes {
+    /// Smallest mesh force \[N\] (0 if the mesh separated).
+    pub min: f64,
+    /// Largest mesh force \[N\].
+    pub max: f64,
+    /// Largest tooth-pair force in magnitude, on either flank \[N\].
+    pub peak_pair: f64,
+    /// Whether the mesh had no tooth pair in contact (a zero mesh force: the
+    /// mesh separated) at one of the points.
+    pub separated: bool,
+}
+
+impl MeshExtremes {
+    fn at(m: &crate::dynamics::equations::MeshState) -> Self {
+        Self { min: m.force, max: m.force, peak_pair: m.peak_pair_force, separated: m.force == 0.0 }
+    }
+
+    fn observe(&mut self, m: &crate::dynamics::equations::MeshState) {
+        self.min = self.min.min(m.force);
+        self.max = self.max.max(m.force);
+        self.peak_pair = self.peak_pair.max(m.peak_pair_force);
+        self.separated |= m.force == 0.0;
+    }
+}
+
 /// The extremes of the mesh forces over one communication step, at every
 /// point the step's integration passed through: the step's start, each
 /// internal step end (the fixed-step integrator's steps; for the adaptive
 /// one the internal grid points read from its dense output, both
 /// `stepsPerMeshCycle` points per mesh cycle at the nominal speed) and the
 /// step's end.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct StepExtremes {
-    /// Smallest and largest sun–planet mesh force of planet 1 \[N\].
-    pub sun: (f64, f64),
-    /// Smallest and largest ring–planet mesh force of planet 1 \[N\].
-    pub ring: (f64, f64),
-    /// Largest sun–planet mesh force of any planet \[N\].
-    pub sun_any_max: f64,
-    /// Largest ring–planet mesh force of any planet \[N\].
-    pub ring_any_max: f64,
-    /// Whether planet 1's sun–planet mesh had no tooth pair in contact (a
-    /// zero mesh force: the mesh separated) at one of the points.
-    pub sun_separated: bool,
-    /// The same for planet 1's ring–planet mesh.
-    pub ring_separated: bool,
-    /// Whether any planet's sun–planet mesh separated at one of the points.
-    pub sun_any_separated: bool,
-    /// Whether any planet's ring–planet mesh separated at one of the points.
-    pub ring_any_separated: bool,
+    /// Per mesh, planet-major: planet 1's sun–planet mesh, its ring–planet
+    /// mesh, planet 2's, …
+    meshes: Vec<MeshExtremes>,
 }
 
 impl StepExtremes {
     /// The extremes of a single state's mesh forces (planet-major: sun, ring).
     fn at(meshes: &[crate::dynamics::equations::MeshState]) -> Self {
-        let mut e = Self {
-            sun: (f64::INFINITY, f64::NEG_INFINITY),
-            ring: (f64::INFINITY, f64::NEG_INFINITY),
-            sun_any_max: f64::NEG_INFINITY,
-            ring_any_max: f64::NEG_INFINITY,
-            sun_separated: false,
-            ring_separated: false,
-            sun_any_separated: false,
-            ring_any_separated: false,
-        };
-        e.observe(meshes);
-        e
+        Self { meshes: meshes.iter().map(MeshExtremes::at).collect() }
+    }
+
+    /// Starts again from a single state, keeping the allocation.
+    fn reset(&mut self, meshes: &[crate::dynamics::equations::MeshState]) {
+        self.meshes.clear();
+        self.meshes.extend(meshes.iter().map(MeshExtremes::at));
     }
 
     fn observe(&mut self, meshes: &[crate::dynamics::equations::MeshState]) {
-        for (i, m) in meshes.iter().enumerate() {
-            let f = m.force;
-            let separated = f == 0.0;
-            if i % 2 == 0 {
-                self.sun_any_max = self.sun_any_max.max(f);
-                self.sun_any_separated |= separated;
-            } else {
-                self.ring_any_max = self.ring_any_max.max(f);
-                self.ring_any_separated |= separated;
-            }
-            match i {
-                0 => {
-                    self.sun = (self.sun.0.min(f), self.sun.1.max(f));
-                    self.sun_separated |= separated;
-                }
-                1 => {
-                    self.ring = (self.ring.0.min(f), self.ring.1.max(f));
-                    self.ring_separated |= separated;
-                }
-                _ => {}
-            }
+        for (e, m) in self.meshes.iter_mut().zip(meshes) {
+            e.observe(m);
         }
     }
 
-    /// Finite values only (0 where no mesh was observed).
-    fn finite(mut self) -> Self {
-        for x in [
-            &mut self.sun.0,
-            &mut self.sun.1,
-            &mut self.ring.0,
-            &mut self.ring.1,
-            &mut self.sun_any_max,
-            &mut self.ring_any_max,
-        ] {
-            if !x.is_finite() {
-                *x = 0.0;
-            }
-        }
-        self
+    /// The extremes of planet `p`'s (0-based) mesh of kind `kind`; `None`
+    /// beyond the number of planets.
+    pub fn mesh(&self, p: usize, kind: MeshKind) -> Option<MeshExtremes> {
+        let offset = usize::from(kind == MeshKind::RingPlanet);
+        self.meshes.get(2 * p + offset).copied()
+    }
+
+    fn of_kind(&self, kind: MeshKind) -> impl Iterator<Item = &MeshExtremes> {
+        let offset = usize::from(kind == MeshKind::RingPlanet);
+        self.meshes.iter().skip(offset).step_by(2)
+    }
+
+    /// The largest mesh force of any planet's mesh of kind `kind` \[N\] (0
+    /// without planets).
+    pub fn any_max(&self, kind: MeshKind) -> f64 {
+        self.of_kind(kind).map(|e| e.max).fold(0.0, f64::max)
+    }
+
+    /// The largest tooth-pair force of any planet's mesh of kind `kind` \[N\].
+    pub fn any_peak_pair(&self, kind: MeshKind) -> f64 {
+        self.of_kind(kind).map(|e| e.peak_pair).fold(0.0, f64::max)
+    }
+
+    /// Whether any planet's mesh of kind `kind` separated at one of the points.
+    pub fn any_separated(&self, kind: MeshKind) -> bool {
+        self.of_kind(kind).any(|e| e.separated)
     }
 }
 
@@ -528,7 +528,7 @@ impl Simulation {
                 * self.run.steps_per_mesh_cycle() as f64
                 * self.model.mesh_frequency_per_input_speed);
         // The extremes start from the state at t (the last accepted one).
-        self.extremes = StepExtremes::at(&self.model.meshes);
+        self.extremes.reset(&self.model.meshes);
         let work_start = match &self.stepper {
             Stepper::Rk(r) => r.stats().rhs_evaluations,
             Stepper::Alpha(_) => 0,
@@ -627,9 +627,9 @@ impl Simulation {
 
     /// The extremes of the mesh forces over the last communication step
     /// ([`StepExtremes`]; before the first step, and after a restore until
-    /// the next step, those of the current state alone). Always finite.
-    pub fn step_extremes(&self) -> StepExtremes {
-        self.extremes.finite()
+    /// the next step, those of the current state alone).
+    pub fn step_extremes(&self) -> &StepExtremes {
+        &self.extremes
     }
 
     /// Torque the support exerts on the held member [N·m], counter-clockwise

@@ -297,3 +297,40 @@ def test_the_window_is_order_tracked_and_its_time_sampled_counterpart_is_the_nat
           f"FMU sampled at equal times vs native: {same_model_gap:.2e} of F1")
     assert measure_gap > 2 * case.budget["fraction_of_f1"]
     assert same_model_gap < 1e-5
+
+
+def test_fmu_pack_with_a_scene_ships_it_and_references_its_fmu_reproduces(tmp_path):
+    """`planetwear fmu pack --scene FILE` (docs/REGRESSION.md): the packed
+    FMU starts at the given scene (here the example at 500 instead of
+    750 N·m) and carries that scene's references, which the FMU reproduces
+    within their tolerance and the example's references do not pass."""
+    exe = os.environ.get("PLANETWEAR_BIN", str(REPO / "target" / "release" / "planetwear"))
+    library = REPO / "target" / "x86_64-unknown-linux-gnu" / "fmu" / "libplanetwear.so"
+    scene = subprocess.run([exe, "scene", "show", "example-2004"], capture_output=True, text=True,
+                           check=True).stdout
+    scene = re.sub(r'(?m)^name = ".*"$', 'name = "lighter-load"', scene, count=1)
+    scene, n = re.subn(r"(?m)^input_torque_nm = .*$", "input_torque_nm = 500.0", scene)
+    assert n == 1
+    (tmp_path / "scene.toml").write_text(scene)
+    out = tmp_path / "lighter.fmu"
+    done = subprocess.run([exe, "fmu", "pack", "--out", str(out), "--library", str(library),
+                           "--scene", str(tmp_path / "scene.toml")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "default scene 'lighter-load'" in done.stdout
+    refs = load_references(out)
+    shipped = load_references(FMU)
+    assert refs.scene == "lighter-load" and shipped.scene != "lighter-load"
+    assert refs.protocol["inputs"]["sunTorque"] == 500.0
+    case = refs.case("kappa-0/3000rpm")
+    measured = run_reference_case(str(out), case)
+    result = compare(case, measured)
+    print(f"packed scene, {case.name}: E_h {result.worst_fraction_of_f1():.2e} of F1, worst use of tolerance "
+          f"{result.worst_use_of_tolerance():.3f}")
+    result.assert_ok()
+    # At two thirds of the load the example's references are far off.
+    assert not compare(shipped.case(case.name), measured).ok
+    # A scene file that cannot be read is refused naming the option.
+    bad = subprocess.run([exe, "fmu", "pack", "--out", str(tmp_path / "x.fmu"), "--library", str(library),
+                          "--scene", str(tmp_path / "missing.toml")], capture_output=True, text=True)
+    assert bad.returncode == 2 and "--scene" in bad.stderr, bad.stderr
+    assert not (tmp_path / "x.fmu").exists()

@@ -43,7 +43,7 @@ use std::path::PathBuf;
 
 use crate::contact::ltca::SetModel;
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::dynamics::simulation::{Bearing, Simulation, Snapshot, StepExtremes};
+use crate::dynamics::simulation::{Bearing, MeshExtremes, Simulation, Snapshot};
 use crate::dynamics::spectrum::Harmonics;
 use crate::dynamics::state_format;
 use crate::fmi::variables::{vr, Causality, Kind, Settable, Start, Variable, GUID, VARIABLES};
@@ -627,6 +627,66 @@ impl Instance {
             | V::Planet1RingSeparated
             | V::SunMeshSeparated
             | V::RingMeshSeparated
+            | V::Planet2SunMeshForceMax
+            | V::Planet2SunMeshForceMin
+            | V::Planet2RingMeshForceMax
+            | V::Planet2RingMeshForceMin
+            | V::Planet3SunMeshForceMax
+            | V::Planet3SunMeshForceMin
+            | V::Planet3RingMeshForceMax
+            | V::Planet3RingMeshForceMin
+            | V::Planet4SunMeshForceMax
+            | V::Planet4SunMeshForceMin
+            | V::Planet4RingMeshForceMax
+            | V::Planet4RingMeshForceMin
+            | V::Planet5SunMeshForceMax
+            | V::Planet5SunMeshForceMin
+            | V::Planet5RingMeshForceMax
+            | V::Planet5RingMeshForceMin
+            | V::Planet6SunMeshForceMax
+            | V::Planet6SunMeshForceMin
+            | V::Planet6RingMeshForceMax
+            | V::Planet6RingMeshForceMin
+            | V::Planet7SunMeshForceMax
+            | V::Planet7SunMeshForceMin
+            | V::Planet7RingMeshForceMax
+            | V::Planet7RingMeshForceMin
+            | V::Planet8SunMeshForceMax
+            | V::Planet8SunMeshForceMin
+            | V::Planet8RingMeshForceMax
+            | V::Planet8RingMeshForceMin
+            | V::Planet2SunSeparated
+            | V::Planet2RingSeparated
+            | V::Planet3SunSeparated
+            | V::Planet3RingSeparated
+            | V::Planet4SunSeparated
+            | V::Planet4RingSeparated
+            | V::Planet5SunSeparated
+            | V::Planet5RingSeparated
+            | V::Planet6SunSeparated
+            | V::Planet6RingSeparated
+            | V::Planet7SunSeparated
+            | V::Planet7RingSeparated
+            | V::Planet8SunSeparated
+            | V::Planet8RingSeparated
+            | V::Planet1SunToothForceMax
+            | V::Planet1RingToothForceMax
+            | V::Planet2SunToothForceMax
+            | V::Planet2RingToothForceMax
+            | V::Planet3SunToothForceMax
+            | V::Planet3RingToothForceMax
+            | V::Planet4SunToothForceMax
+            | V::Planet4RingToothForceMax
+            | V::Planet5SunToothForceMax
+            | V::Planet5RingToothForceMax
+            | V::Planet6SunToothForceMax
+            | V::Planet6RingToothForceMax
+            | V::Planet7SunToothForceMax
+            | V::Planet7RingToothForceMax
+            | V::Planet8SunToothForceMax
+            | V::Planet8RingToothForceMax
+            | V::SunToothForceMax
+            | V::RingToothForceMax
             | V::ReactionTorque
             | V::BalancingTorque => {
                 Err(Refusal::error(format!("{} is an output and cannot be set", variable.name())))
@@ -686,8 +746,16 @@ impl Instance {
             real(&|s| s.window_harmonics(m).map_or(0.0, |(h, sep)| read(&h, sep)))
         };
         let pairs = |p: usize, m: MeshKind| Ok(Value::Integer(sim()?.pairs_in_contact(p, m) as i32));
-        let flag = |read: fn(&StepExtremes) -> bool| {
-            Ok::<_, Refusal>(Value::Integer(i32::from(read(&sim()?.step_extremes()))))
+        // Over the last communication step; 0 beyond the number of planets.
+        let extreme = |p: usize, m: MeshKind, read: fn(&MeshExtremes) -> f64| {
+            real(&|s| s.step_extremes().mesh(p, m).as_ref().map_or(0.0, read))
+        };
+        let flag = |p: usize, m: MeshKind| {
+            let separated = sim()?.step_extremes().mesh(p, m).is_some_and(|e| e.separated);
+            Ok::<_, Refusal>(Value::Integer(i32::from(separated)))
+        };
+        let any_flag = |m: MeshKind| {
+            Ok::<_, Refusal>(Value::Integer(i32::from(sim()?.step_extremes().any_separated(m))))
         };
         Ok(match variable {
             V::SceneFile | V::WearStateFile | V::WearStateAccept => {
@@ -841,16 +909,76 @@ impl Instance {
             V::Planet8SunPairsInContact => pairs(7, Sun)?,
             V::Planet8RingPairsInContact => pairs(7, Ring)?,
             V::WindowCycles => Value::Integer(sim()?.window_cycles() as i32),
-            V::Planet1SunMeshForceMax => real(&|s| s.step_extremes().sun.1)?,
-            V::Planet1SunMeshForceMin => real(&|s| s.step_extremes().sun.0)?,
-            V::Planet1RingMeshForceMax => real(&|s| s.step_extremes().ring.1)?,
-            V::Planet1RingMeshForceMin => real(&|s| s.step_extremes().ring.0)?,
-            V::SunMeshForceMax => real(&|s| s.step_extremes().sun_any_max)?,
-            V::RingMeshForceMax => real(&|s| s.step_extremes().ring_any_max)?,
-            V::Planet1SunSeparated => flag(|e| e.sun_separated)?,
-            V::Planet1RingSeparated => flag(|e| e.ring_separated)?,
-            V::SunMeshSeparated => flag(|e| e.sun_any_separated)?,
-            V::RingMeshSeparated => flag(|e| e.ring_any_separated)?,
+            V::Planet1SunMeshForceMax => extreme(0, Sun, |e| e.max)?,
+            V::Planet1SunMeshForceMin => extreme(0, Sun, |e| e.min)?,
+            V::Planet1RingMeshForceMax => extreme(0, Ring, |e| e.max)?,
+            V::Planet1RingMeshForceMin => extreme(0, Ring, |e| e.min)?,
+            V::Planet2SunMeshForceMax => extreme(1, Sun, |e| e.max)?,
+            V::Planet2SunMeshForceMin => extreme(1, Sun, |e| e.min)?,
+            V::Planet2RingMeshForceMax => extreme(1, Ring, |e| e.max)?,
+            V::Planet2RingMeshForceMin => extreme(1, Ring, |e| e.min)?,
+            V::Planet3SunMeshForceMax => extreme(2, Sun, |e| e.max)?,
+            V::Planet3SunMeshForceMin => extreme(2, Sun, |e| e.min)?,
+            V::Planet3RingMeshForceMax => extreme(2, Ring, |e| e.max)?,
+            V::Planet3RingMeshForceMin => extreme(2, Ring, |e| e.min)?,
+            V::Planet4SunMeshForceMax => extreme(3, Sun, |e| e.max)?,
+            V::Planet4SunMeshForceMin => extreme(3, Sun, |e| e.min)?,
+            V::Planet4RingMeshForceMax => extreme(3, Ring, |e| e.max)?,
+            V::Planet4RingMeshForceMin => extreme(3, Ring, |e| e.min)?,
+            V::Planet5SunMeshForceMax => extreme(4, Sun, |e| e.max)?,
+            V::Planet5SunMeshForceMin => extreme(4, Sun, |e| e.min)?,
+            V::Planet5RingMeshForceMax => extreme(4, Ring, |e| e.max)?,
+            V::Planet5RingMeshForceMin => extreme(4, Ring, |e| e.min)?,
+            V::Planet6SunMeshForceMax => extreme(5, Sun, |e| e.max)?,
+            V::Planet6SunMeshForceMin => extreme(5, Sun, |e| e.min)?,
+            V::Planet6RingMeshForceMax => extreme(5, Ring, |e| e.max)?,
+            V::Planet6RingMeshForceMin => extreme(5, Ring, |e| e.min)?,
+            V::Planet7SunMeshForceMax => extreme(6, Sun, |e| e.max)?,
+            V::Planet7SunMeshForceMin => extreme(6, Sun, |e| e.min)?,
+            V::Planet7RingMeshForceMax => extreme(6, Ring, |e| e.max)?,
+            V::Planet7RingMeshForceMin => extreme(6, Ring, |e| e.min)?,
+            V::Planet8SunMeshForceMax => extreme(7, Sun, |e| e.max)?,
+            V::Planet8SunMeshForceMin => extreme(7, Sun, |e| e.min)?,
+            V::Planet8RingMeshForceMax => extreme(7, Ring, |e| e.max)?,
+            V::Planet8RingMeshForceMin => extreme(7, Ring, |e| e.min)?,
+            V::Planet1SunToothForceMax => extreme(0, Sun, |e| e.peak_pair)?,
+            V::Planet1RingToothForceMax => extreme(0, Ring, |e| e.peak_pair)?,
+            V::Planet2SunToothForceMax => extreme(1, Sun, |e| e.peak_pair)?,
+            V::Planet2RingToothForceMax => extreme(1, Ring, |e| e.peak_pair)?,
+            V::Planet3SunToothForceMax => extreme(2, Sun, |e| e.peak_pair)?,
+            V::Planet3RingToothForceMax => extreme(2, Ring, |e| e.peak_pair)?,
+            V::Planet4SunToothForceMax => extreme(3, Sun, |e| e.peak_pair)?,
+            V::Planet4RingToothForceMax => extreme(3, Ring, |e| e.peak_pair)?,
+            V::Planet5SunToothForceMax => extreme(4, Sun, |e| e.peak_pair)?,
+            V::Planet5RingToothForceMax => extreme(4, Ring, |e| e.peak_pair)?,
+            V::Planet6SunToothForceMax => extreme(5, Sun, |e| e.peak_pair)?,
+            V::Planet6RingToothForceMax => extreme(5, Ring, |e| e.peak_pair)?,
+            V::Planet7SunToothForceMax => extreme(6, Sun, |e| e.peak_pair)?,
+            V::Planet7RingToothForceMax => extreme(6, Ring, |e| e.peak_pair)?,
+            V::Planet8SunToothForceMax => extreme(7, Sun, |e| e.peak_pair)?,
+            V::Planet8RingToothForceMax => extreme(7, Ring, |e| e.peak_pair)?,
+            V::SunMeshForceMax => real(&|s| s.step_extremes().any_max(Sun))?,
+            V::RingMeshForceMax => real(&|s| s.step_extremes().any_max(Ring))?,
+            V::SunToothForceMax => real(&|s| s.step_extremes().any_peak_pair(Sun))?,
+            V::RingToothForceMax => real(&|s| s.step_extremes().any_peak_pair(Ring))?,
+            V::Planet1SunSeparated => flag(0, Sun)?,
+            V::Planet1RingSeparated => flag(0, Ring)?,
+            V::Planet2SunSeparated => flag(1, Sun)?,
+            V::Planet2RingSeparated => flag(1, Ring)?,
+            V::Planet3SunSeparated => flag(2, Sun)?,
+            V::Planet3RingSeparated => flag(2, Ring)?,
+            V::Planet4SunSeparated => flag(3, Sun)?,
+            V::Planet4RingSeparated => flag(3, Ring)?,
+            V::Planet5SunSeparated => flag(4, Sun)?,
+            V::Planet5RingSeparated => flag(4, Ring)?,
+            V::Planet6SunSeparated => flag(5, Sun)?,
+            V::Planet6RingSeparated => flag(5, Ring)?,
+            V::Planet7SunSeparated => flag(6, Sun)?,
+            V::Planet7RingSeparated => flag(6, Ring)?,
+            V::Planet8SunSeparated => flag(7, Sun)?,
+            V::Planet8RingSeparated => flag(7, Ring)?,
+            V::SunMeshSeparated => any_flag(Sun)?,
+            V::RingMeshSeparated => any_flag(Ring)?,
             V::ReactionTorque => real(&|s| s.reaction_torque())?,
             V::BalancingTorque => real(&|s| s.balancing_torque())?,
         })
