@@ -328,13 +328,25 @@ impl Instance {
             crate::scene::SceneError::Invalid { problems } => {
                 let file = self.strings.get(&vr::SCENE_FILE).cloned().unwrap_or_default();
                 let values = self.values();
-                let lines: Vec<String> = problems
-                    .iter()
-                    .map(|p| {
-                        format!(
-                            "  - {}",
-                            parameters::describe_problem(p, &values, |s| self.applies(s), &file)
-                        )
+                // One variable that sets several scene keys (`module` sets
+                // the three gears' modules) is named once, with each key.
+                let mut merged: Vec<(String, Vec<String>)> = Vec::new();
+                for p in &problems {
+                    let line = parameters::describe_problem(p, &values, |s| self.applies(s), &file);
+                    let (head, key) = match line.split_once(" (the scene's ") {
+                        Some((head, key)) => (head.to_string(), Some(key.trim_end_matches(')').to_string())),
+                        None => (line, None),
+                    };
+                    match merged.iter_mut().find(|(h, _)| *h == head) {
+                        Some((_, keys)) => keys.extend(key),
+                        None => merged.push((head, key.into_iter().collect())),
+                    }
+                }
+                let lines: Vec<String> = merged
+                    .into_iter()
+                    .map(|(head, keys)| match keys.is_empty() {
+                        true => format!("  - {head}"),
+                        false => format!("  - {head} (the scene's {})", keys.join(", ")),
                     })
                     .collect();
                 Refusal::error(format!("the parameters describe an invalid gear set:\n{}", lines.join("\n")))
@@ -1229,6 +1241,13 @@ mod tests {
         assert!(m.contains("(the scene's sun.tip_radius_mm = -20)"), "{m}");
         assert!(m.contains("  - module = 0 m: must be a finite number greater than zero"), "{m}");
         assert!(!m.contains("  - sun.tip_radius_mm"), "{m}");
+        // `module` sets the three gears' modules: one line names it, with
+        // the three scene keys.
+        assert_eq!(m.matches("  - module = 0 m").count(), 1, "{m}");
+        assert!(
+            m.contains("(the scene's sun.module_mm = 0, planet.module_mm = 0, ring.module_mm = 0)"),
+            "{m}"
+        );
     }
 
     /// A refused initial speed is named by its variable, with its value and unit.
