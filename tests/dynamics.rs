@@ -4,7 +4,9 @@
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::response::{static_state, steady_state, sweep, Direction};
-use planetwear::dynamics::solver::{GeneralizedAlpha, GeneralizedAlphaSettings, SecondOrderSystem};
+use planetwear::dynamics::solver::{
+    GeneralizedAlpha, GeneralizedAlphaSettings, SecondOrderSystem, TangentSystem,
+};
 use planetwear::dynamics::spectrum::mesh_harmonics;
 use planetwear::model::gear::{GearSet, MeshKind};
 use planetwear::model::run::RunSettings;
@@ -297,12 +299,17 @@ impl SecondOrderSystem for Dense {
     fn dim(&self) -> usize {
         self.0.dim()
     }
+
     fn mass(&self) -> &[f64] {
         self.0.mass()
     }
+
     fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
         self.0.force(t, q, v, f)
     }
+}
+
+impl TangentSystem for Dense {
     fn jacobian(
         &mut self,
         t: f64,

@@ -10,7 +10,7 @@ use planetwear::analysis::modes::{natural_modes, rotating_modes, ModeClass};
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::response::static_state;
-use planetwear::dynamics::solver::SecondOrderSystem;
+use planetwear::dynamics::solver::{SecondOrderSystem, TangentSystem};
 use planetwear::model::carrier_frame::CarrierFrame;
 use planetwear::model::gear::Member;
 use planetwear::model::lumped::{Coordinate, Fidelity, LumpedSet};

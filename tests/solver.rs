@@ -3,7 +3,7 @@
 use nalgebra::DMatrix;
 use planetwear::dynamics::solver::{
     AlphaParameters, GeneralizedAlpha, GeneralizedAlphaSettings, Rk45, Rk45Settings, SecondOrderSystem,
-    SolverError, StepController,
+    SolverError, StepController, TangentSystem,
 };
 use std::f64::consts::PI;
 
@@ -53,12 +53,17 @@ impl SecondOrderSystem for Forced {
     fn dim(&self) -> usize {
         1
     }
+
     fn mass(&self) -> &[f64] {
         &self.m
     }
+
     fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
         f[0] = self.f0 * (self.w * t).cos() - self.c * v[0] - self.k * q[0];
     }
+}
+
+impl TangentSystem for Forced {
     fn jacobian(&mut self, _t: f64, _q: &[f64], _v: &[f64], k: &mut DMatrix<f64>, c: &mut DMatrix<f64>) {
         k[(0, 0)] = self.k;
         c[(0, 0)] = self.c;
@@ -105,9 +110,11 @@ impl SecondOrderSystem for Linear {
     fn dim(&self) -> usize {
         self.m.len()
     }
+
     fn mass(&self) -> &[f64] {
         &self.m
     }
+
     fn force(&mut self, _t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
         let n = self.m.len();
         for (i, fi) in f.iter_mut().enumerate().take(n) {
@@ -118,6 +125,9 @@ impl SecondOrderSystem for Linear {
             *fi = -s;
         }
     }
+}
+
+impl TangentSystem for Linear {
     fn jacobian(&mut self, _t: f64, _q: &[f64], _v: &[f64], k: &mut DMatrix<f64>, c: &mut DMatrix<f64>) {
         k.copy_from(&self.k);
         c.copy_from(&self.c);
@@ -217,18 +227,24 @@ impl SecondOrderSystem for Gap {
     fn dim(&self) -> usize {
         1
     }
+
     fn mass(&self) -> &[f64] {
         &self.m
     }
+
     fn force(&mut self, _t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
         f[0] = -self.c * v[0] - self.k1 * q[0] - self.k2 * (q[0] - self.g).max(0.0);
     }
+
+    fn events(&mut self, _t: f64, q: &[f64], _v: &[f64], out: &mut Vec<f64>) {
+        out.push(q[0] - self.g);
+    }
+}
+
+impl TangentSystem for Gap {
     fn jacobian(&mut self, _t: f64, q: &[f64], _v: &[f64], k: &mut DMatrix<f64>, c: &mut DMatrix<f64>) {
         k[(0, 0)] = self.k1 + if q[0] > self.g { self.k2 } else { 0.0 };
         c[(0, 0)] = self.c;
-    }
-    fn events(&mut self, _t: f64, q: &[f64], _v: &[f64], out: &mut Vec<f64>) {
-        out.push(q[0] - self.g);
     }
 }
 
@@ -246,14 +262,19 @@ impl SecondOrderSystem for Cubic {
     fn dim(&self) -> usize {
         1
     }
+
     fn mass(&self) -> &[f64] {
         &self.m
     }
+
     fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
         let x = q[0];
         f[0] =
             self.f0 * (1.0 + 0.5 * (2.0 * PI * t).sin()) - self.c * v[0] - self.k * x - self.k3 * x * x * x;
     }
+}
+
+impl TangentSystem for Cubic {
     fn jacobian(&mut self, _t: f64, q: &[f64], _v: &[f64], k: &mut DMatrix<f64>, c: &mut DMatrix<f64>) {
         k[(0, 0)] = self.k + 3.0 * self.k3 * q[0] * q[0];
         c[(0, 0)] = self.c;
@@ -270,12 +291,17 @@ impl SecondOrderSystem for NanAfter {
     fn dim(&self) -> usize {
         1
     }
+
     fn mass(&self) -> &[f64] {
         &self.m
     }
+
     fn force(&mut self, t: f64, q: &[f64], _v: &[f64], f: &mut [f64]) {
         f[0] = if t > self.t_bad { f64::NAN } else { -q[0] };
     }
+}
+
+impl TangentSystem for NanAfter {
     fn jacobian(&mut self, _t: f64, _q: &[f64], _v: &[f64], k: &mut DMatrix<f64>, _c: &mut DMatrix<f64>) {
         k[(0, 0)] = 1.0;
     }
@@ -291,13 +317,18 @@ impl SecondOrderSystem for Recorder {
     fn dim(&self) -> usize {
         1
     }
+
     fn mass(&self) -> &[f64] {
         &self.m
     }
+
     fn force(&mut self, t: f64, q: &[f64], _v: &[f64], f: &mut [f64]) {
         self.times.push(t);
         f[0] = -q[0];
     }
+}
+
+impl TangentSystem for Recorder {
     fn jacobian(&mut self, _t: f64, _q: &[f64], _v: &[f64], k: &mut DMatrix<f64>, _c: &mut DMatrix<f64>) {
         k[(0, 0)] = 1.0;
     }
@@ -602,12 +633,17 @@ fn rk45_gap_oscillator_matches_stitched_solution() {
         fn dim(&self) -> usize {
             1
         }
+
         fn mass(&self) -> &[f64] {
             &self.0.m
         }
+
         fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
             self.0.force(t, q, v, f);
         }
+    }
+
+    impl TangentSystem for Blind {
         fn jacobian(&mut self, t: f64, q: &[f64], v: &[f64], k: &mut DMatrix<f64>, c: &mut DMatrix<f64>) {
             self.0.jacobian(t, q, v, k, c);
         }
@@ -897,22 +933,28 @@ fn rk45_simultaneous_events_are_all_counted() {
         fn dim(&self) -> usize {
             2
         }
+
         fn mass(&self) -> &[f64] {
             &self.1
         }
+
         fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
             for i in 0..2 {
                 self.0.force(t, &q[i..=i], &v[i..=i], &mut f[i..=i]);
             }
         }
+
+        fn events(&mut self, _t: f64, q: &[f64], _v: &[f64], out: &mut Vec<f64>) {
+            out.extend(q.iter().map(|x| x - self.0.g));
+        }
+    }
+
+    impl TangentSystem for Twin {
         fn jacobian(&mut self, _t: f64, q: &[f64], _v: &[f64], k: &mut DMatrix<f64>, c: &mut DMatrix<f64>) {
             for i in 0..2 {
                 k[(i, i)] = self.0.k1 + if q[i] > self.0.g { self.0.k2 } else { 0.0 };
                 c[(i, i)] = self.0.c;
             }
-        }
-        fn events(&mut self, _t: f64, q: &[f64], _v: &[f64], out: &mut Vec<f64>) {
-            out.extend(q.iter().map(|x| x - self.0.g));
         }
     }
     let gap = Gap::standard();
@@ -945,10 +987,15 @@ fn zero_dimensional_system_is_harmless() {
         fn dim(&self) -> usize {
             0
         }
+
         fn mass(&self) -> &[f64] {
             &[]
         }
+
         fn force(&mut self, _t: f64, _q: &[f64], _v: &[f64], _f: &mut [f64]) {}
+    }
+
+    impl TangentSystem for Empty {
         fn jacobian(
             &mut self,
             _t: f64,

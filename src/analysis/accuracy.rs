@@ -51,7 +51,7 @@ use serde::{Deserialize, Serialize};
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{static_state, Stepper, Work};
 use crate::dynamics::rigid_frame::RigidFrame;
-use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError};
+use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError, TangentSystem};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics, SpectrumError};
 use crate::model::gear::{GearSet, IntegratorKind};
 use crate::model::lumped::Fidelity;
@@ -353,7 +353,7 @@ struct Samples {
 
 /// Runs one stepper on `sys` from (0, q0, v0) to the window's end, sampling
 /// its interpolant at the protocol's sample times.
-fn integrate<S: SecondOrderSystem>(
+fn integrate<S: TangentSystem>(
     sys: &mut S,
     mut stepper: Stepper,
     steps_per_cycle: u32,

@@ -24,7 +24,9 @@
 use nalgebra::DMatrix;
 
 use crate::contact::ltca::{CycleStats, SetModel};
-use crate::dynamics::solver::{LowRankJacobian, RankOneTerm, SecondOrderSystem, TermCoefficients};
+use crate::dynamics::solver::{
+    LowRankJacobian, RankOneTerm, SecondOrderSystem, TangentSystem, TermCoefficients,
+};
 use crate::model::carrier_frame::CarrierFrame;
 use crate::model::gear::{Drive, GearSet, Member, MeshKind};
 use crate::model::lumped::{
@@ -829,6 +831,14 @@ impl SecondOrderSystem for PlanetaryDynamics {
         }
     }
 
+    fn events(&mut self, _t: f64, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
+        self.evaluate_meshes(q, v, true);
+        out.clear();
+        out.extend_from_slice(&self.events_scratch);
+    }
+}
+
+impl TangentSystem for PlanetaryDynamics {
     fn jacobian(&mut self, _t: f64, q: &[f64], v: &[f64], k: &mut DMatrix<f64>, c: &mut DMatrix<f64>) {
         self.evaluate_meshes(q, v, false);
         k.copy_from(&self.k_support);
@@ -897,11 +907,5 @@ impl SecondOrderSystem for PlanetaryDynamics {
                 }
             };
         }
-    }
-
-    fn events(&mut self, _t: f64, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
-        self.evaluate_meshes(q, v, true);
-        out.clear();
-        out.extend_from_slice(&self.events_scratch);
     }
 }

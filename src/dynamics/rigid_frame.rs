@@ -3,7 +3,7 @@
 //! integrate in.
 
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::dynamics::solver::SecondOrderSystem;
+use crate::dynamics::solver::{SecondOrderSystem, TangentSystem};
 
 /// The model in coordinates relative to its rigid-body motion: q = q_e +
 /// r t, q̇ = q̇_e + r with r the rigid-body velocity at the speed. The same
@@ -53,6 +53,13 @@ impl SecondOrderSystem for RigidFrame<'_> {
         self.model.force(t, &self.q, &self.v, f);
     }
 
+    fn events(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
+        self.absolute(t, q, v);
+        self.model.events(t, &self.q, &self.v, out);
+    }
+}
+
+impl TangentSystem for RigidFrame<'_> {
     fn jacobian(
         &mut self,
         t: f64,
@@ -63,10 +70,5 @@ impl SecondOrderSystem for RigidFrame<'_> {
     ) {
         self.absolute(t, q, v);
         self.model.jacobian(t, &self.q, &self.v, k, c);
-    }
-
-    fn events(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
-        self.absolute(t, q, v);
-        self.model.events(t, &self.q, &self.v, out);
     }
 }

@@ -41,7 +41,7 @@
 //!
 //! which is β h² times the usual displacement-form effective matrix
 //! M(1 − α_m)/(β h²) + C(1 − α_f)γ/(β h) + K(1 − α_f); K and C come from
-//! [`SecondOrderSystem::jacobian`] at the current iterate (exact piecewise Jacobian) and S is
+//! [`TangentSystem::jacobian`] at the current iterate (exact piecewise Jacobian) and S is
 //! factorised by nalgebra's LU with partial pivoting at every iteration. At least one correction is
 //! always made (the bare predictor is never accepted). After each correction the force is evaluated
 //! at the new iterate, and the size of the next correction is estimated with the last factorisation,
@@ -76,7 +76,7 @@ use nalgebra::{DMatrix, DVector, Dyn, LU};
 use super::low_rank::{LowRankSolver, TermCoefficients};
 
 use super::{
-    check_dim, check_initial_state, check_range, first_non_finite, SecondOrderSystem, SolverError, Stats,
+    check_dim, check_initial_state, check_range, first_non_finite, SolverError, Stats, TangentSystem,
 };
 
 /// The deepest halving level of one step (2⁴⁰ sub-steps), a guard independent of `min_step`.
@@ -330,7 +330,7 @@ impl GeneralizedAlpha {
     /// Sets the initial time `t0` \[s\], displacements `q0` [m or rad] and velocities `v0`
     /// [m/s or rad/s], and the consistent initial acceleration from M a0 = f(t0, q0, v0).
     /// The counters are kept; see [`GeneralizedAlpha::reset_stats`].
-    pub fn init<S: SecondOrderSystem + ?Sized>(
+    pub fn init<S: TangentSystem + ?Sized>(
         &mut self,
         sys: &mut S,
         t0: f64,
@@ -377,7 +377,7 @@ impl GeneralizedAlpha {
     /// Restarts from time `t` \[s\], displacements `q` [m or rad] and velocities `v`
     /// [m/s or rad/s]; the acceleration is recomputed from M a = f(t, q, v). Same as
     /// [`GeneralizedAlpha::init`].
-    pub fn set_state<S: SecondOrderSystem + ?Sized>(
+    pub fn set_state<S: TangentSystem + ?Sized>(
         &mut self,
         sys: &mut S,
         t: f64,
@@ -391,7 +391,7 @@ impl GeneralizedAlpha {
     /// [`GeneralizedAlpha::v`] and [`GeneralizedAlpha::a`]: the algorithmic acceleration is
     /// taken as given (it differs from M⁻¹f unless α_m = α_f), so the continuation is
     /// bit-identical to the run the state was saved from.
-    pub fn restore<S: SecondOrderSystem + ?Sized>(
+    pub fn restore<S: TangentSystem + ?Sized>(
         &mut self,
         sys: &mut S,
         t: f64,
@@ -421,7 +421,7 @@ impl GeneralizedAlpha {
     ///
     /// On error the integrator keeps the last successfully reached state, so the caller can
     /// inspect it or restart with [`GeneralizedAlpha::set_state`].
-    pub fn advance<S: SecondOrderSystem + ?Sized>(
+    pub fn advance<S: TangentSystem + ?Sized>(
         &mut self,
         sys: &mut S,
         t_end: f64,
@@ -474,7 +474,7 @@ impl GeneralizedAlpha {
     }
 
     /// Advances from the current time to `tb`, halving on failure.
-    fn step_with_halving<S: SecondOrderSystem + ?Sized>(
+    fn step_with_halving<S: TangentSystem + ?Sized>(
         &mut self,
         sys: &mut S,
         tb: f64,
@@ -536,7 +536,7 @@ impl GeneralizedAlpha {
 
     /// One generalized-α step from the committed state to `t1`, leaving the result in the
     /// `*_new` buffers.
-    fn try_step<S: SecondOrderSystem + ?Sized>(
+    fn try_step<S: TangentSystem + ?Sized>(
         &mut self,
         sys: &mut S,
         t1: f64,

@@ -58,6 +58,15 @@ pub trait SecondOrderSystem {
     fn mass(&self) -> &[f64];
     /// Total generalised force f(t, q, v) (external minus internal minus damping) into `f`.
     fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]);
+    /// Event functions: their zero crossings mark switches of the piecewise force
+    /// (a tooth pair starting or ending contact). Default: none.
+    fn events(&mut self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut Vec<f64>) {}
+}
+
+/// A [`SecondOrderSystem`] that also gives its tangent matrices: what the
+/// implicit generalized-α method needs (the explicit Runge–Kutta method
+/// needs only the force).
+pub trait TangentSystem: SecondOrderSystem {
     /// Tangent stiffness K = −∂f/∂q and damping C = −∂f/∂v at (t, q, v), with the
     /// piecewise (contact) status taken at (t, q, v) and frozen (exact piecewise Jacobian).
     fn jacobian(
@@ -68,9 +77,6 @@ pub trait SecondOrderSystem {
         k: &mut nalgebra::DMatrix<f64>,
         c: &mut nalgebra::DMatrix<f64>,
     );
-    /// Event functions: their zero crossings mark switches of the piecewise force
-    /// (a tooth pair starting or ending contact). Default: none.
-    fn events(&mut self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut Vec<f64>) {}
     /// The Jacobian's structure when it is a constant matrix plus rank-one terms
     /// ([`LowRankJacobian`]); the generalized-α method then solves its Newton systems by the
     /// Woodbury identity instead of factorising the n × n matrix. Read once at initialisation;
