@@ -276,7 +276,7 @@ pub fn continue_branch(
         let chord = if refresh {
             match problem.linearize(predicted[m] * unit, &predicted[..m], &mut work) {
                 Ok(l) => {
-                    step_flows += m + 2;
+                    step_flows += problem.linearization_flows();
                     bordered(&l, unit, &constraint)
                 }
                 Err(_) => bordered(&lin, unit, &constraint),
@@ -336,7 +336,7 @@ pub fn continue_branch(
                 break;
             }
         };
-        flows += m + 2;
+        flows += problem.linearization_flows();
         add(&mut total, &work);
         let new_t = tangent(&new_lin, unit, &t);
         let multipliers = floquet_multipliers(&new_lin.monodromy, m);
@@ -348,7 +348,7 @@ pub fn continue_branch(
             residual: new_lin.residual.iter().fold(0.0_f64, |a, b| a.max(b.abs())),
             newton_iterations: corrections,
             multipliers,
-            flows: step_flows + m + 2,
+            flows: step_flows + problem.linearization_flows(),
             work,
         };
         let prev = (&previous_orbit, segment);

@@ -3,7 +3,7 @@
 //! integrate in.
 
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::dynamics::solver::{SecondOrderSystem, TangentSystem};
+use crate::dynamics::solver::{LowRankJacobian, SecondOrderSystem, TangentSystem, TermCoefficients};
 
 /// The model in coordinates relative to its rigid-body motion: q = q_e +
 /// r t, q̇ = q̇_e + r with r the rigid-body velocity at the speed. The same
@@ -70,5 +70,14 @@ impl TangentSystem for RigidFrame<'_> {
     ) {
         self.absolute(t, q, v);
         self.model.jacobian(t, &self.q, &self.v, k, c);
+    }
+
+    fn low_rank_jacobian(&self) -> Option<LowRankJacobian> {
+        self.model.low_rank_jacobian()
+    }
+
+    fn jacobian_coefficients(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut [TermCoefficients]) {
+        self.absolute(t, q, v);
+        self.model.jacobian_coefficients(t, &self.q, &self.v, out);
     }
 }

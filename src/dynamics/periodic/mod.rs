@@ -24,14 +24,18 @@
 //! source and all coordinates take part.
 //!
 //! Newton's method with a backtracking line search solves G = 0; its
-//! Jacobian is M − I with M the monodromy matrix, whose columns are forward
-//! differences of the flow (the contact force is piecewise smooth: the
-//! integrator locates every contact switch, so the flow is differentiable
-//! between switches and the differences follow the switching times; the jump
-//! of the mesh damping force when a mesh separates is carried the same way,
-//! with no saltation matrix to derive). The eigenvalues of M (faer's
-//! non-symmetric eigensolver) are the Floquet multipliers; the orbit is
-//! stable when all lie inside the unit circle.
+//! Jacobian is M − I with M the monodromy matrix ([`MonodromyMethod`]):
+//! by default from the variational equations integrated with the flow, one
+//! augmented flow (`variational`); or with columns that are forward
+//! differences of the flow, one flow per unknown (the contact force is
+//! piecewise smooth: the integrator locates every contact switch, so the
+//! flow is differentiable between switches and the differences follow the
+//! switching times; the jump of the mesh damping force when a mesh
+//! separates is carried the same way, with no saltation matrix to derive).
+//! The eigenvalues of M (faer's non-symmetric eigensolver) are the Floquet
+//! multipliers; the orbit is stable when all lie inside the unit circle.
+
+mod variational;
 
 use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
@@ -41,6 +45,7 @@ use crate::dynamics::response::{static_state, MeshResponse, State, SteadyState, 
 use crate::dynamics::rigid_frame::RigidFrame;
 use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, SpectrumError};
+use variational::Variational;
 
 /// Settings of the shooting method.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -60,6 +65,24 @@ pub struct ShootingSettings {
     pub samples_per_mesh_cycle: usize,
     /// Periods run from the static state before Newton starts (a cold start).
     pub run_in_periods: usize,
+    /// How the monodromy matrix is computed.
+    #[serde(default)]
+    pub monodromy: MonodromyMethod,
+}
+
+/// How [`PeriodicProblem::linearize`] computes the monodromy matrix.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MonodromyMethod {
+    /// The variational equations M Ẍ = −K X − C Ẋ integrated with the flow
+    /// in one augmented flow (the module `variational`): exact for an orbit
+    /// whose meshes keep a pair in contact; without the saltation term of the
+    /// mesh damping's jump where a whole mesh separates.
+    #[default]
+    Variational,
+    /// Forward differences of the flow, one flow per unknown, with the step
+    /// [`ShootingSettings::difference_step`].
+    Differences,
 }
 
 impl Default for ShootingSettings {
@@ -71,6 +94,7 @@ impl Default for ShootingSettings {
             difference_step: 1e-3,
             samples_per_mesh_cycle: 64,
             run_in_periods: 4,
+            monodromy: MonodromyMethod::Variational,
         }
     }
 }
@@ -440,32 +464,121 @@ impl PeriodicProblem {
         Ok(end.iter().zip(z).map(|(a, b)| a - b).collect())
     }
 
-    /// The monodromy matrix (forward differences of the flow, one column per
-    /// unknown) and ∂G/∂ω (a forward difference in speed) at `z`.
+    /// Flows one linearization costs with the settings' monodromy method:
+    /// m + 2 by differences (the base flow, one per unknown, one in speed),
+    /// 2 by the variational equations (the augmented flow, whose steps cost
+    /// more, and one in speed).
+    pub fn linearization_flows(&self) -> usize {
+        match self.settings.monodromy {
+            MonodromyMethod::Variational => 2,
+            MonodromyMethod::Differences => self.unknowns() + 2,
+        }
+    }
+
+    /// The monodromy matrix ([`MonodromyMethod`]) and ∂G/∂ω (a forward
+    /// difference in speed) at `z`.
     pub fn linearize(
         &mut self,
         omega: f64,
         z: &[f64],
         work: &mut Work,
     ) -> Result<Linearization, PeriodicError> {
+        self.linearize_with(omega, z, work, true)
+    }
+
+    /// [`Self::linearize`]; without the flow in speed (∂G/∂ω left empty)
+    /// when `speed` is false.
+    fn linearize_with(
+        &mut self,
+        omega: f64,
+        z: &[f64],
+        work: &mut Work,
+        speed: bool,
+    ) -> Result<Linearization, PeriodicError> {
         let m = z.len();
-        let h = self.settings.difference_step;
-        let base = self.flow(omega, z, work, None)?;
-        let mut monodromy = vec![0.0; m * m];
-        let mut zp = z.to_vec();
-        for j in 0..m {
-            zp[j] = z[j] + h;
-            let end = self.flow(omega, &zp, work, None)?;
-            zp[j] = z[j];
-            for i in 0..m {
-                monodromy[i + m * j] = (end[i] - base[i]) / h;
+        let (base, monodromy) = match self.settings.monodromy {
+            MonodromyMethod::Variational => self.variational_flow(omega, z, work)?,
+            MonodromyMethod::Differences => {
+                let h = self.settings.difference_step;
+                let base = self.flow(omega, z, work, None)?;
+                let mut monodromy = vec![0.0; m * m];
+                let mut zp = z.to_vec();
+                for j in 0..m {
+                    zp[j] = z[j] + h;
+                    let end = self.flow(omega, &zp, work, None)?;
+                    zp[j] = z[j];
+                    for i in 0..m {
+                        monodromy[i + m * j] = (end[i] - base[i]) / h;
+                    }
+                }
+                (base, monodromy)
             }
-        }
-        let dw = omega.abs() * h.sqrt().max(1e-6) * 1e-2;
-        let end = self.flow(omega + dw, z, work, None)?;
-        let speed_derivative = end.iter().zip(&base).map(|(a, b)| (a - b) / dw).collect();
+        };
+        let speed_derivative = if speed {
+            let dw = omega.abs() * self.settings.difference_step.sqrt().max(1e-6) * 1e-2;
+            let end = self.flow(omega + dw, z, work, None)?;
+            end.iter().zip(&base).map(|(a, b)| (a - b) / dw).collect()
+        } else {
+            Vec::new()
+        };
         let residual = base.iter().zip(z).map(|(a, b)| a - b).collect();
         Ok(Linearization { dim: m, monodromy, speed_derivative, residual })
+    }
+
+    /// The flow over one period from `z` with its derivative: the end
+    /// unknowns and the monodromy matrix (column-major m × m), from the
+    /// variational equations integrated with the flow (the module
+    /// `variational`), each column started at the relative state of one
+    /// unknown's unit change.
+    fn variational_flow(
+        &mut self,
+        omega: f64,
+        z: &[f64],
+        work: &mut Work,
+    ) -> Result<(Vec<f64>, Vec<f64>), PeriodicError> {
+        let period = self.period(omega);
+        let err = |source| PeriodicError::Integration { speed: omega, source };
+        let m = z.len();
+        let (q0, v0) = self.expand(z);
+        let n = q0.len();
+        let mut unit = vec![0.0; m];
+        let units: Vec<(Vec<f64>, Vec<f64>)> = (0..m)
+            .map(|j| {
+                unit[j] = 1.0;
+                let column = self.expand(&unit);
+                unit[j] = 0.0;
+                column
+            })
+            .collect();
+        // Every column enters the step control: a column starts as a unit
+        // change of one coordinate and so carries every mode of the set,
+        // the fastest included, which the orbit itself hardly excites.
+        let mut rk = self.integrator(period).map_err(err)?;
+        self.model.set_drive_speed(omega);
+        let rigid = self.model.rigid_velocity_at(omega);
+        let mut frame = RigidFrame::new(&mut self.model, rigid);
+        let Some(mut system) = Variational::new(&mut frame, m) else {
+            return Err(PeriodicError::InvalidRequest {
+                name: "shooting monodromy".into(),
+                value: "variational".into(),
+                reason: "the model gives no tangent structure; use differences".into(),
+            });
+        };
+        let (qa, va) = system.initial_state(&q0, &v0, &units);
+        rk.init(&mut system, 0.0, &qa, &va).map_err(err)?;
+        rk.advance_to(&mut system, period).map_err(err)?;
+        let columns: Vec<(Vec<f64>, Vec<f64>)> = (0..m).map(|j| system.column(rk.q(), rk.v(), j)).collect();
+        let s = Work::from(*rk.stats());
+        work.steps += s.steps;
+        work.rejected_steps += s.rejected_steps;
+        work.rhs_evaluations += s.rhs_evaluations;
+        work.events_located += s.events_located;
+        let end = self.reduce(&rk.q()[..n], &rk.v()[..n]);
+        let mut monodromy = Vec::with_capacity(m * m);
+        for (x, y) in &columns {
+            monodromy.extend(self.reduce(x, y));
+        }
+        Ok((end, monodromy))
     }
 
     /// The unknowns of a cold start at `omega`: the static deflection of the
@@ -485,7 +598,7 @@ impl PeriodicProblem {
     /// backtracking line search from `guess` (a cold start when `None`),
     /// with its Floquet multipliers.
     pub fn solve(&mut self, omega: f64, guess: Option<&[f64]>) -> Result<PeriodicOrbit, PeriodicError> {
-        self.solve_linearized(omega, guess).map(|(orbit, _)| orbit)
+        self.solve_with(omega, guess, false).map(|(orbit, _)| orbit)
     }
 
     /// [`Self::solve`], also returning the linearization at the solution
@@ -495,6 +608,17 @@ impl PeriodicProblem {
         omega: f64,
         guess: Option<&[f64]>,
     ) -> Result<(PeriodicOrbit, Linearization), PeriodicError> {
+        self.solve_with(omega, guess, true)
+    }
+
+    /// Newton's method; the linearizations carry ∂G/∂ω when `speed` is true.
+    fn solve_with(
+        &mut self,
+        omega: f64,
+        guess: Option<&[f64]>,
+        speed: bool,
+    ) -> Result<(PeriodicOrbit, Linearization), PeriodicError> {
+        let flows_per_linearization = self.linearization_flows() - usize::from(!speed);
         let mut work = Work::default();
         let mut flows = 0usize;
         let mut z = match guess {
@@ -506,8 +630,8 @@ impl PeriodicProblem {
         };
         let m = z.len();
         let tol = self.settings.newton_tolerance;
-        let mut lin = self.linearize(omega, &z, &mut work)?;
-        flows += m + 2;
+        let mut lin = self.linearize_with(omega, &z, &mut work, speed)?;
+        flows += flows_per_linearization;
         let mut lin_at = z.clone();
         let mut r = lin.residual.clone();
         let mut iterations = 0;
@@ -537,8 +661,8 @@ impl PeriodicProblem {
             r = r_new;
             // Chord iterations while they contract well; a fresh monodromy otherwise.
             if contraction > 0.25 && max_abs(&r) > tol * max_abs(&z).max(1.0) {
-                lin = self.linearize(omega, &z, &mut work)?;
-                flows += m + 2;
+                lin = self.linearize_with(omega, &z, &mut work, speed)?;
+                flows += flows_per_linearization;
                 lin_at = z.clone();
                 r = lin.residual.clone();
             }
@@ -546,8 +670,8 @@ impl PeriodicProblem {
         // The multipliers at the solution: the last monodromy unless Newton moved far from it.
         let moved = lin_at.iter().zip(&z).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         if moved > 1e-3 {
-            lin = self.linearize(omega, &z, &mut work)?;
-            flows += m + 2;
+            lin = self.linearize_with(omega, &z, &mut work, speed)?;
+            flows += flows_per_linearization;
         }
         let multipliers = floquet_multipliers(&lin.monodromy, m);
         let orbit = PeriodicOrbit {
