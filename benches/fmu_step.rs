@@ -2,7 +2,8 @@
 //! of 1 ms, the overhead of the FMI layer against the native `Simulation`,
 //! and the real-time factor, for both fidelity levels and both integrators
 //! (the default RK 5(4) at its tolerance, and generalized-α at its steps per
-//! mesh cycle).
+//! mesh cycle), and the error E_h of the default's windowed mesh-force
+//! harmonics (the FMU's harmonic outputs) against a tight-tolerance run.
 //! Run: `cargo bench --bench fmu_step` (docs/PERFORMANCE.md records the figures).
 
 use std::ffi::CString;
@@ -14,6 +15,7 @@ use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::simulation::Simulation;
 use planetwear::fmi::export::*;
 use planetwear::fmi::variables::{vr, GUID};
+use planetwear::model::gear::MeshKind;
 use planetwear::scene::{Fidelity, IntegratorKind, Scene};
 
 fn fmu_run(fidelity: i32, integrator: i32, h: f64, span: f64) -> f64 {
@@ -51,6 +53,40 @@ fn fmu_run(fidelity: i32, integrator: i32, h: f64, span: f64) -> f64 {
         fmi2FreeInstance(c);
         wall / n as f64
     }
+}
+
+/// The harmonics of planet 1's two mesh forces over the window (34 mesh
+/// cycles) after 34 cycles of run-in, at `rpm`, one mesh cycle per
+/// communication step, RK 5(4) at relative tolerance `rtol`.
+fn window_harmonics(fidelity: Fidelity, rpm: f64, rtol: f64) -> Vec<Vec<f64>> {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = fidelity;
+    s.dynamics.integrator = IntegratorKind::Rk45;
+    s.dynamics.relative_tolerance = rtol;
+    let (set, run) = s.validate_with_run().expect("valid");
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
+    let omega = rpm * std::f64::consts::PI / 30.0;
+    let h = 1.0 / (model.mesh_frequency_per_input_speed * omega);
+    let mut sim = Simulation::new(&set, &run, model, 0.0, omega).expect("sim");
+    for k in 0..68 {
+        sim.do_step(k as f64 * h, h).expect("step");
+    }
+    [MeshKind::SunPlanet, MeshKind::RingPlanet]
+        .iter()
+        .map(|m| sim.window_harmonics(*m).expect("full window").0.amplitude)
+        .collect()
+}
+
+/// E_h (docs/ACCURACY.md) of the window's harmonics 1..6 at relative
+/// tolerance `rtol` against the run at 1e-10: the largest error relative to
+/// the reference's first harmonic, over both meshes.
+fn harmonic_error(fidelity: Fidelity, rpm: f64, rtol: f64) -> f64 {
+    let reference = window_harmonics(fidelity, rpm, 1e-10);
+    let run = window_harmonics(fidelity, rpm, rtol);
+    run.iter()
+        .zip(&reference)
+        .map(|(a, r)| a.iter().zip(r).map(|(x, y)| (x - y).abs() / r[0]).fold(0.0, f64::max))
+        .fold(0.0, f64::max)
 }
 
 fn native_run(fidelity: Fidelity, integrator: IntegratorKind, h: f64, span: f64) -> f64 {
@@ -109,6 +145,20 @@ fn main() {
                     h / f
                 );
             }
+        }
+    }
+    println!(
+        "E_h of the default (RK 5(4) at {:e}) against 1e-10: window of 34 mesh cycles after 34",
+        d.relative_tolerance
+    );
+    for (name, fidelity) in
+        [("torsional", Fidelity::Torsional), ("transverse-torsional", Fidelity::TransverseTorsional)]
+    {
+        for rpm in [3000.0, 8000.0] {
+            println!(
+                "  {name:<22} {rpm:>6} rpm  E_h {:.2e}",
+                harmonic_error(fidelity, rpm, d.relative_tolerance)
+            );
         }
     }
 }

@@ -14,9 +14,9 @@ use std::collections::VecDeque;
 
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{static_state, Stepper};
-use crate::dynamics::solver::{SecondOrderSystem, SolverError};
+use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
-use crate::model::gear::{Drive, GearSet, Member, MeshKind};
+use crate::model::gear::{Drive, GearSet, IntegratorKind, Member, MeshKind};
 use crate::model::lumped::{full_index, planet_bearing_vectors, Coordinate, Fidelity};
 use crate::model::run::RunSettings;
 
@@ -268,6 +268,9 @@ pub struct Simulation {
     run: RunSettings,
     time: f64,
     nominal_step: f64,
+    /// Scale of the elastic coordinates: the largest static mesh deflection
+    /// \[m\] ([`stepper_for`]).
+    deflection: f64,
     torques: [f64; 3],
     speed_reference: f64,
     window: Window,
@@ -275,6 +278,37 @@ pub struct Simulation {
 }
 
 const TIME_TOLERANCE: f64 = 1e-9;
+
+/// The integrator of a simulation at mesh frequency `fm` \[Hz\]:
+/// generalized-α as [`Stepper::new`] sets it; the adaptive method at the
+/// run's relative tolerance with absolute tolerances that relative
+/// tolerance times the elastic state's scales, the static mesh deflection
+/// `deflection` \[m\] for coordinates and that times the mesh angular
+/// frequency for velocities (as the periodic solver scales them), its
+/// largest step a quarter of a mesh cycle. The rotations and their rates
+/// are controlled by the relative part (the rigid-body speed); the
+/// translations of the transverse–torsional model, as small as the
+/// deflections, by the absolute part, which fixed absolute tolerances of
+/// 1e-6 m and 1e-3 m/s per unit of relative tolerance made some 20 times
+/// tighter than the deflection needs (twice the steps at 3000 rpm for no
+/// accuracy that shows in the mesh forces: docs/PERFORMANCE.md).
+fn stepper_for(run: &RunSettings, fm: f64, deflection: f64) -> Result<Stepper, SolverError> {
+    let d = run.values();
+    match d.integrator {
+        IntegratorKind::Rk45 => {
+            let rtol = d.relative_tolerance;
+            let settings = Rk45Settings {
+                rtol,
+                atol_q: rtol * deflection,
+                atol_v: rtol * deflection * 2.0 * std::f64::consts::PI * fm,
+                max_step: 0.25 / fm,
+                ..Rk45Settings::default()
+            };
+            Ok(Stepper::Rk(Box::new(Rk45::new(settings)?)))
+        }
+        IntegratorKind::GeneralizedAlpha => Stepper::new(run, 1.0 / fm),
+    }
+}
 
 /// Most internal steps one communication step may take: about a minute of
 /// work at the default settings, hundreds of thousands of mesh cycles. A
@@ -313,11 +347,14 @@ impl Simulation {
         model.set_drive_speed(input_speed);
         model.rebase_drive(&start.q);
         let err = |source| SimulationError::Integration { t: t0, source };
-        let mut stepper = Stepper::new(run, 1.0 / fm).map_err(err)?;
+        let mut f = vec![0.0; model.dim()];
+        model.force(t0, &start.q, &start.v, &mut f);
+        let deflection = model.meshes.iter().fold(0.0_f64, |a, m| a.max(m.approach.abs()));
+        let deflection = if deflection > 0.0 { deflection } else { 1e-6 };
+        let mut stepper = stepper_for(run, fm, deflection).map_err(err)?;
         stepper.init(&mut model, t0, &start.q, &start.v).map_err(err)?;
         // The outputs at t0 are the initial state's, not a trial state's of
         // the integrator's start.
-        let mut f = vec![0.0; model.dim()];
         model.force(t0, &start.q, &start.v, &mut f);
         let extremes = StepExtremes::at(&model.meshes);
         Ok(Self {
@@ -328,6 +365,7 @@ impl Simulation {
             run: *run,
             time: t0,
             nominal_step,
+            deflection,
             torques,
             speed_reference: input_speed,
             window: Window {
@@ -478,7 +516,7 @@ impl Simulation {
         }
         self.nominal_step = 1.0 / (fm * self.run.steps_per_mesh_cycle() as f64);
         let t = self.time;
-        Stepper::new(&self.run, 1.0 / fm)
+        stepper_for(&self.run, fm, self.deflection)
             .map(Some)
             .map_err(|source| SimulationError::Integration { t, source })
     }
