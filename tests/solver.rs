@@ -1036,4 +1036,3 @@ proptest::proptest! {
         proptest::prop_assert_eq!(r.time().to_bits(), (t0 + 0.5 * span.min(2.0)).to_bits());
     }
 }
-
