@@ -43,17 +43,6 @@ impl SecondOrderSystem for Counted<'_> {
         self.forces += 1;
     }
 
-    fn jacobian(
-        &mut self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-        k: &mut nalgebra::DMatrix<f64>,
-        c: &mut nalgebra::DMatrix<f64>,
-    ) {
-        self.model.jacobian(t, q, v, k, c)
-    }
-
     fn events(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut Vec<f64>) {
         let start = Instant::now();
         self.model.events(t, q, v, out);
