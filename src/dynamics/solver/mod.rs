@@ -103,7 +103,7 @@ pub struct Stats {
     pub newton_iterations: u64,
     /// Number of calls to [`SecondOrderSystem::force`].
     pub rhs_evaluations: u64,
-    /// Number of calls to [`SecondOrderSystem::jacobian`].
+    /// Number of calls to [`TangentSystem::jacobian`].
     pub jacobian_evaluations: u64,
     /// Number of LU factorisations of the iteration matrix.
     pub lu_factorizations: u64,
