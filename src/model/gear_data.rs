@@ -54,31 +54,30 @@ pub struct DerivedRadii {
 /// `module_mm` \[mm\] and pressure angle `pressure_angle_deg` \[deg\] from its
 /// gear data.
 pub fn external_radii(teeth: u32, module_mm: f64, pressure_angle_deg: f64, gd: &GearData) -> DerivedRadii {
-    let (m, a) = (module_mm, pressure_angle_deg.to_radians());
-    let r = m * f64::from(teeth) / 2.0;
-    let x = gd.profile_shift;
-    DerivedRadii {
-        reference_radius_mm: r,
-        base_radius_mm: r * a.cos(),
-        tip_radius_mm: gd.tip_diameter_mm.map_or(r + (gd.addendum_factor + x) * m, |d| d / 2.0),
-        root_radius_mm: gd.root_diameter_mm.map_or(r - (gd.dedendum_factor - x) * m, |d| d / 2.0),
-        tooth_thickness_mm: (PI / 2.0 + 2.0 * x * a.tan()) * m + gd.tooth_thickness_allowance_mm,
-        tool_tip_radius_mm: gd.tool_tip_radius_factor * m,
-    }
+    radii(1.0, teeth, module_mm, pressure_angle_deg, gd)
 }
 
 /// The radii of an internal gear (the ring) from its gear data: the tip
 /// radius is the minor radius, the tool tip radius the root fillet's.
 pub fn ring_radii(teeth: u32, module_mm: f64, pressure_angle_deg: f64, gd: &GearData) -> DerivedRadii {
+    radii(-1.0, teeth, module_mm, pressure_angle_deg, gd)
+}
+
+/// ISO 21771's radii of a gear whose teeth stand outward (`side` = 1,
+/// external) or inward (`side` = −1, internal): the addendum and dedendum
+/// point the other way on an internal gear, while a positive profile shift
+/// moves both circles outward on either and thickens an external tooth but
+/// thins an internal one.
+fn radii(side: f64, teeth: u32, module_mm: f64, pressure_angle_deg: f64, gd: &GearData) -> DerivedRadii {
     let (m, a) = (module_mm, pressure_angle_deg.to_radians());
     let r = m * f64::from(teeth) / 2.0;
     let x = gd.profile_shift;
     DerivedRadii {
         reference_radius_mm: r,
         base_radius_mm: r * a.cos(),
-        tip_radius_mm: gd.tip_diameter_mm.map_or(r - (gd.addendum_factor - x) * m, |d| d / 2.0),
-        root_radius_mm: gd.root_diameter_mm.map_or(r + (gd.dedendum_factor + x) * m, |d| d / 2.0),
-        tooth_thickness_mm: (PI / 2.0 - 2.0 * x * a.tan()) * m + gd.tooth_thickness_allowance_mm,
+        tip_radius_mm: gd.tip_diameter_mm.map_or(r + (side * gd.addendum_factor + x) * m, |d| d / 2.0),
+        root_radius_mm: gd.root_diameter_mm.map_or(r + (x - side * gd.dedendum_factor) * m, |d| d / 2.0),
+        tooth_thickness_mm: (PI / 2.0 + side * (2.0 * x * a.tan())) * m + gd.tooth_thickness_allowance_mm,
         tool_tip_radius_mm: gd.tool_tip_radius_factor * m,
     }
 }
