@@ -16,29 +16,16 @@ use planetwear::model::gear::Member;
 use planetwear::model::lumped::{Coordinate, Fidelity, LumpedSet};
 use planetwear::scene::Scene;
 
+#[path = "support/lin_parker.rs"]
+mod lin_parker;
+
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 /// Centre distance (planet radius on the carrier) of the test sets \[m\].
 const RC: f64 = 0.039;
 
-/// Lin & Parker (1999)-like set, sun held: the carrier turns.
+/// The Lin & Parker (1999)-like set, sun held: the carrier turns.
 fn set(n: usize, fidelity: Fidelity) -> LumpedSet {
-    LumpedSet {
-        central_mass: [5.43, 2.35, 0.4],
-        central_rotational_mass: [6.29, 3.0, 0.39],
-        planet_mass: 0.66,
-        planet_rotational_mass: 0.61,
-        central_bearing: [1e8, 1e8, 1e8],
-        central_torsional: [0.0, 1e9, 0.0],
-        planet_bearing: 1e8,
-        planet_bearings: Vec::new(),
-        sun_mesh: 5e8,
-        ring_mesh: 5e8,
-        sun_pressure_angle: 24.6f64.to_radians(),
-        ring_pressure_angle: 24.6f64.to_radians(),
-        planet_angles: (0..n).map(|i| TWO_PI * i as f64 / n as f64).collect(),
-        held: Some(Member::Sun),
-        fidelity,
-    }
+    lin_parker::lin_parker_set(n, fidelity, Some(Member::Sun))
 }
 
 /// One planet on its bearing (k_p, m_p), nearly decoupled from the rest:
