@@ -145,10 +145,14 @@ impl Watch {
             let fraction = sim.window_harmonics(mesh).map(|(_, sep)| sep);
             let finding = fraction.and_then(|f| check::separation(1, mesh, f, self.margin(c))).map(at);
             self.note(c, finding, &mut out);
-            // The most loaded planet of the mesh.
+            // The most loaded planet of the mesh, at the largest force its
+            // integration passed through within the step (a force sampled
+            // at the step's end would clear and re-arm the condition as it
+            // oscillates through the step).
+            let extremes = sim.step_extremes();
             let worst = (0..set.planet_angles().len())
-                .map(|p| (p, sim.mesh_force(p, mesh)))
-                .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
+                .filter_map(|p| extremes.mesh(p, mesh).map(|e| (p, e.max.abs().max(e.min.abs()))))
+                .max_by(|a, b| a.1.total_cmp(&b.1));
             let c = Condition::Pressure(mesh_index(mesh));
             let margin = self.margin(c);
             let finding =
