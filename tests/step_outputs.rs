@@ -73,8 +73,11 @@ fn the_step_extremes_bound_the_endpoint_and_every_sub_sample() {
 }
 
 /// At communication steps of many mesh cycles the endpoint alone aliases the
-/// mesh-frequency content: the peak within the step is above the endpoint
-/// value in every step, by at least the mesh force's fluctuation.
+/// mesh-frequency content: the peak within the step is never below the
+/// endpoint and is above it in all but a few of the 80 mesh-steps (the
+/// endpoint is the step's largest sampled point only when it falls on the
+/// force's crest, about one time in the 120 points of a mesh cycle), and
+/// every step spans the whole fluctuation of the mesh force.
 #[test]
 fn at_steps_of_many_mesh_cycles_the_peak_sees_what_the_endpoint_misses() {
     let scene = Scene::example_2004();
@@ -87,6 +90,7 @@ fn at_steps_of_many_mesh_cycles_the_peak_sees_what_the_endpoint_misses() {
         sim.do_step(sim.time(), h).unwrap();
     }
     let mut smallest_excess = f64::INFINITY;
+    let (mut checked, mut missed) = (0, 0);
     for _ in 0..10 {
         sim.do_step(sim.time(), h).unwrap();
         let e = sim.step_extremes();
@@ -107,13 +111,17 @@ fn at_steps_of_many_mesh_cycles_the_peak_sees_what_the_endpoint_misses() {
             e.mesh(0, MeshKind::RingPlanet).unwrap().peak_pair
         );
         smallest_excess = smallest_excess.min((sun.max - sun.min) / f0);
-        assert!(sun.max > end, "peak {} not above endpoint {end}", sun.max);
+        assert!(sun.max >= end, "peak {} below endpoint {end}", sun.max);
         for p in 0..sim.gear_set().planet_angles().len() {
             for mesh in [MeshKind::SunPlanet, MeshKind::RingPlanet] {
                 let x = e.mesh(p, mesh).unwrap();
                 assert!(!x.separated, "no separation at the nominal load: planet {p} {mesh:?}");
                 let end = sim.mesh_force(p, mesh);
-                assert!(x.max > end, "planet {p} {mesh:?}: peak {} not above endpoint {end}", x.max);
+                assert!(x.max >= end, "planet {p} {mesh:?}: peak {} below endpoint {end}", x.max);
+                checked += 1;
+                if x.max > end + 1e-9 * f0 {
+                    missed += 1;
+                }
                 // The tooth pairs push on the drive flanks only: none
                 // carries more than the whole mesh. Each step spans a
                 // stretch of single-pair contact, where the pair carries
@@ -128,6 +136,7 @@ fn at_steps_of_many_mesh_cycles_the_peak_sees_what_the_endpoint_misses() {
     // The example's sun-mesh force fluctuates by about a tenth of its mean
     // within each mesh cycle (double- to single-pair contact).
     assert!(smallest_excess > 0.05, "peak-to-peak within a step {smallest_excess} F0");
+    assert!(missed + 3 >= checked, "the endpoint missed the step's peak in {missed} of {checked} mesh-steps");
 }
 
 /// Without load the meshes separate: the flags say so.
