@@ -421,6 +421,10 @@ fn a_periodic_point_measured_over_one_mesh_cycle_has_the_whole_windows_harmonics
     use planetwear::dynamics::response::{steady_state_windowed, Window};
     let mut scene = Scene::example_2004();
     scene.dynamics.fidelity = Fidelity::Torsional;
+    // A point whose run-in settles within the revolution: at the example's
+    // ζ_m = 0.02 the absolute coordinates' error allowance keeps successive
+    // cycles from agreeing to 1e-5 (docs/PERFORMANCE.md, "The route").
+    scene.dynamics.mesh_damping_ratio = 0.03;
     let (set, run, model) = build(&scene);
     let whole = steady_state(&mut model.clone(), &set, &run, 3000.0 * RPM, None).unwrap();
     let window = Window::Periodic { cycles: 1, tolerance: 1e-5 };

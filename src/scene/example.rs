@@ -16,7 +16,7 @@ impl Scene {
     /// inertias and the chamfer height fitted to the study's torsional
     /// natural frequencies and its loaded sun–planet double contact of about
     /// 1/5, chamfer edges that carry no load, the ring with its output drum,
-    /// rigid planet pins and mesh damping 0.03 (each choice and its reason:
+    /// rigid planet pins and mesh damping 0.02 (each choice and its reason:
     /// docs/PARAMETERS.md).
     pub fn example_2004() -> Self {
         let mut s = Self::example_2004_annulus();
@@ -30,7 +30,7 @@ impl Scene {
         s.inertia.planet_inertia_kg_m2 = Some(9.7655e-6);
         s.inertia.ring_inertia_kg_m2 = Some(1.8193e-2);
         s.supports.planet_bearing_n_per_m = 3.0e10;
-        s.dynamics.mesh_damping_ratio = 0.03;
+        s.dynamics.mesh_damping_ratio = 0.02;
         s
     }
 
