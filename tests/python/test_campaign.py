@@ -173,7 +173,8 @@ def test_a_killed_campaign_resumes_without_recomputing_a_point(tmp_path, client,
     proc = subprocess.Popen([sys.executable, "-m", "planetwear_fmu.campaign", "run", str(tmp_path / "c.toml"),
                              "--workers", "1", "--no-progress", "--no-plots"], env=env, start_new_session=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    deadline = time.monotonic() + 120
+    # The cluster's start-up alone can take a minute on a loaded machine.
+    deadline = time.monotonic() + 300
     try:
         while time.monotonic() < deadline and proc.poll() is None and len(point_files(out) if out.exists() else []) < 3:
             time.sleep(0.01)
