@@ -321,7 +321,11 @@ def test_fmu_pack_with_a_scene_ships_it_and_references_its_fmu_reproduces(tmp_pa
     shipped = load_references(FMU)
     assert refs.scene == "lighter-load" and shipped.scene != "lighter-load"
     assert refs.protocol["inputs"]["sunTorque"] == 500.0
-    case = refs.case("kappa-0/3000rpm")
+    # 1500 rpm: at 500 N·m and the example's mesh damping 0.02 the 3000 rpm
+    # case is start-sensitive (a start speed changed by 1e-10 of itself moves
+    # its window by 2e-3 of F1, between two settled states), so the FMU
+    # reproduces it only by chance (docs/REGRESSION.md, "Open points").
+    case = refs.case("kappa-0/1500rpm")
     measured = run_reference_case(str(out), case)
     result = compare(case, measured)
     print(f"packed scene, {case.name}: E_h {result.worst_fraction_of_f1():.2e} of F1, worst use of tolerance "
