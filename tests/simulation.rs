@@ -398,7 +398,7 @@ fn window_amplitudes(fidelity: Fidelity, rtol: f64) -> Vec<Vec<f64>> {
 /// (docs/ACCURACY.md's measure: the largest error of harmonics 1..6 over
 /// both meshes, relative to the first harmonic) of the same simulation at
 /// relative tolerance 1e-10, at both fidelity levels
-/// (docs/PERFORMANCE.md: 1.4e-4 torsional, 8.8e-6 transverse–torsional).
+/// (docs/PERFORMANCE.md: 7.3e-5 torsional, 3.5e-5 transverse–torsional).
 #[test]
 fn the_default_s_windowed_harmonics_are_within_1e_3_of_a_tight_run_at_3000_rpm() {
     let default_rtol = Scene::example_2004().dynamics.simulation_relative_tolerance;
@@ -441,12 +441,13 @@ fn torsional_window_after(rpm: f64, cycles: usize, rtol: f64) -> Vec<Vec<f64>> {
 }
 
 /// The FMU's default tolerance holds E_h ≤ 1e-3 against a run at 1e-9 at
-/// 8000 rpm, torsional, after many communication steps (a quarter of a
-/// second, some 1100 mesh cycles): the error weight's relative part is
-/// measured from the rigid-body motion of each communication step, so its
-/// allowance does not grow with the angle turned. Measured from zero (as
-/// before), the rotations' allowance rtol·|q| grew through the run and the
-/// default 3e-6 gave E_h 2.1e-3 here already after 68 mesh cycles.
+/// 8000 rpm, torsional, after many communication steps (1 ms each, some
+/// 1100 mesh cycles, a quarter of a second): the error weight's relative
+/// part is measured from the rigid-body motion of each communication step,
+/// so its allowance does not grow with the angle turned. Measured from zero
+/// (before 2026-11-26), the rotations' allowance rtol·|q| grew through the
+/// run, and the FMU's window at the former default 3e-6 had E_h 2.1e-3 at
+/// this speed (docs/PERFORMANCE.md).
 #[test]
 fn the_default_holds_e_h_1e_3_at_8000_rpm_torsional_over_a_long_run() {
     let default_rtol = Scene::example_2004().dynamics.simulation_relative_tolerance;

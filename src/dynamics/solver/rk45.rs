@@ -1225,7 +1225,6 @@ mod tests {
         for n in &with {
             assert!(100 * n.abs_diff(with[0]) <= with[0], "with the origin: {with:?}");
         }
-        println!("with the origin {with:?}, without {without:?}");
         assert!(without[1] < without[0] && without[2] <= without[1], "without: {without:?}");
         assert!(without[2] < with[2], "with {with:?}, without {without:?}");
     }
