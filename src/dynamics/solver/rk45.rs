@@ -16,7 +16,9 @@
 //! The last stage of a step is the first of the next (FSAL), so an accepted step costs six force
 //! evaluations. The error is measured as
 //! `‖err‖ = (Σ_i (err_i / sk_i)² / 2n)^{1/2}`, `sk_i = atol_i + rtol · max(|y_{n,i}|, |y_{n+1,i}|)`,
-//! with `atol_i` = `atol_q` for displacements and `atol_v` for velocities. A step is accepted when
+//! with `atol_i` = `atol_q` for displacements and `atol_v` for velocities; with a relative origin
+//! ([`Rk45::set_relative_origin`], a rigid motion o(t)) the relative part is measured from it,
+//! `rtol · max(|y_{n,i} − o_i(t_n)|, |y_{n+1,i} − o_i(t_{n+1})|)`. A step is accepted when
 //! ‖err‖ ≤ 1. The next step is h·fac with fac clamped to [`min_ratio`, `max_ratio`] (and to at
 //! most 1 right after a rejection), where
 //!
