@@ -62,7 +62,7 @@ fn window_harmonics(fidelity: Fidelity, rpm: f64, rtol: f64) -> Vec<Vec<f64>> {
     let mut s = Scene::example_2004();
     s.dynamics.fidelity = fidelity;
     s.dynamics.integrator = IntegratorKind::Rk45;
-    s.dynamics.relative_tolerance = rtol;
+    s.dynamics.simulation_relative_tolerance = rtol;
     let (set, run) = s.validate_with_run().expect("valid");
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
     let omega = rpm * std::f64::consts::PI / 30.0;
@@ -122,7 +122,9 @@ fn main() {
                     d.rho_infinity, d.steps_per_mesh_cycle
                 ),
             ),
-            IntegratorKind::Rk45 => (1, format!("RK 5(4) at relative tolerance {:e}", d.relative_tolerance)),
+            IntegratorKind::Rk45 => {
+                (1, format!("RK 5(4) at relative tolerance {:e}", d.simulation_relative_tolerance))
+            }
         };
         let default = if kind == d.integrator { " (the default)" } else { "" };
         println!("integrator {code}: {integrator}{default}");
@@ -149,7 +151,7 @@ fn main() {
     }
     println!(
         "E_h of the default (RK 5(4) at {:e}) against 1e-10: window of 34 mesh cycles after 34",
-        d.relative_tolerance
+        d.simulation_relative_tolerance
     );
     for (name, fidelity) in
         [("torsional", Fidelity::Torsional), ("transverse-torsional", Fidelity::TransverseTorsional)]
@@ -157,7 +159,7 @@ fn main() {
         for rpm in [3000.0, 8000.0] {
             println!(
                 "  {name:<22} {rpm:>6} rpm  E_h {:.2e}",
-                harmonic_error(fidelity, rpm, d.relative_tolerance)
+                harmonic_error(fidelity, rpm, d.simulation_relative_tolerance)
             );
         }
     }

@@ -26,6 +26,7 @@ fn scene(rtol: f64, steps: u32) -> Scene {
     s.dynamics.fidelity = Fidelity::Torsional;
     s.dynamics.integrator = IntegratorKind::Rk45;
     s.dynamics.relative_tolerance = rtol;
+    s.dynamics.simulation_relative_tolerance = rtol;
     s.dynamics.steps_per_mesh_cycle = steps;
     s
 }

@@ -30,6 +30,7 @@ fn the_scene_gives_the_gear_set_and_its_run_settings_in_si() {
     assert_eq!(run.input_speed(), rpm_to_rad_per_s(d.input_speed_rpm));
     assert_eq!(run.integrator(), d.integrator);
     assert_eq!(run.relative_tolerance(), d.relative_tolerance);
+    assert_eq!(run.simulation_relative_tolerance(), d.simulation_relative_tolerance);
     assert_eq!(run.samples_per_mesh_cycle(), d.samples_per_mesh_cycle as usize);
     assert_eq!(run.steps_per_mesh_cycle(), d.steps_per_mesh_cycle as usize);
     // The terms of the equations of motion are the gear set's.
@@ -130,4 +131,23 @@ fn studies_change_the_fidelity_through_the_scene_not_the_run_settings() {
     assert_eq!(full.fidelity(), Fidelity::TransverseTorsional);
     assert_eq!(run_t, run_f);
     assert_eq!(torsional.bodies(), full.bodies());
+}
+
+/// The simulation's own tolerance (the FMU's `relativeTolerance`) is checked
+/// by the rule of `relative_tolerance` and named by its own key; it is apart
+/// from the marching sweep's.
+#[test]
+fn the_simulation_tolerance_is_checked_under_its_own_key() {
+    for bad in [1e-17, 0.5, f64::NAN, f64::INFINITY, 0.0] {
+        let mut s = Scene::example_2004();
+        s.dynamics.simulation_relative_tolerance = bad;
+        let p = problems(s.validate_with_run().unwrap_err());
+        assert_eq!(p.len(), 1, "{p:?}");
+        assert_eq!(p[0].name, "dynamics.simulation_relative_tolerance");
+        assert!(p[0].to_string().contains("1e-14"), "{}", p[0]);
+    }
+    let run = example_run();
+    let changed = run.with(|d| d.simulation_relative_tolerance = 1e-9).unwrap();
+    assert_eq!(changed.simulation_relative_tolerance(), 1e-9);
+    assert_eq!(changed.relative_tolerance(), run.relative_tolerance());
 }

@@ -378,7 +378,7 @@ fn window_amplitudes(fidelity: Fidelity, rtol: f64) -> Vec<Vec<f64>> {
     let mut s = Scene::example_2004();
     s.dynamics.fidelity = fidelity;
     s.dynamics.integrator = IntegratorKind::Rk45;
-    s.dynamics.relative_tolerance = rtol;
+    s.dynamics.simulation_relative_tolerance = rtol;
     let (set, run) = s.validate_with_run().unwrap();
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
     let h = 1.0 / (model.mesh_frequency_per_input_speed * OMEGA);
@@ -398,10 +398,10 @@ fn window_amplitudes(fidelity: Fidelity, rtol: f64) -> Vec<Vec<f64>> {
 /// (docs/ACCURACY.md's measure: the largest error of harmonics 1..6 over
 /// both meshes, relative to the first harmonic) of the same simulation at
 /// relative tolerance 1e-10, at both fidelity levels
-/// (docs/PERFORMANCE.md: 1.4e-4 torsional, 8.8e-6 transverse–torsional).
+/// (docs/PERFORMANCE.md: 7.3e-5 torsional, 3.5e-5 transverse–torsional).
 #[test]
 fn the_default_s_windowed_harmonics_are_within_1e_3_of_a_tight_run_at_3000_rpm() {
-    let default_rtol = Scene::example_2004().dynamics.relative_tolerance;
+    let default_rtol = Scene::example_2004().dynamics.simulation_relative_tolerance;
     for fidelity in [Fidelity::Torsional, Fidelity::TransverseTorsional] {
         let reference = window_amplitudes(fidelity, 1e-10);
         let run = window_amplitudes(fidelity, default_rtol);
@@ -413,4 +413,55 @@ fn the_default_s_windowed_harmonics_are_within_1e_3_of_a_tight_run_at_3000_rpm()
         println!("{fidelity:?}: E_h {e_h:.2e}");
         assert!(e_h <= 1e-3, "{fidelity:?}: E_h {e_h:e} > 1e-3");
     }
+}
+
+/// The harmonics 1..6 of planet 1's two mesh forces over the window of the
+/// last 34 of `cycles` mesh cycles at `rpm`, communication steps of one
+/// millisecond, torsional, RK 5(4) at simulation relative tolerance `rtol`.
+fn torsional_window_after(rpm: f64, cycles: usize, rtol: f64) -> Vec<Vec<f64>> {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = Fidelity::Torsional;
+    s.dynamics.integrator = IntegratorKind::Rk45;
+    s.dynamics.simulation_relative_tolerance = rtol;
+    let (set, run) = s.validate_with_run().unwrap();
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+    let omega = rpm * std::f64::consts::PI / 30.0;
+    let period = 1.0 / (model.mesh_frequency_per_input_speed * omega);
+    let mut sim = Simulation::new(&set, &run, model, 0.0, omega).unwrap();
+    let span = cycles as f64 * period;
+    let h = 1e-3;
+    let n = (span / h).ceil() as usize;
+    for k in 0..n {
+        sim.do_step(k as f64 * h, h).unwrap();
+    }
+    [MeshKind::SunPlanet, MeshKind::RingPlanet]
+        .iter()
+        .map(|m| sim.window_harmonics(*m).expect("a full window").0.amplitude)
+        .collect()
+}
+
+/// The FMU's default tolerance holds E_h ≤ 1e-3 against a run at 1e-9 at
+/// 8000 rpm, torsional, after many communication steps (1 ms each, some
+/// 1100 mesh cycles, a quarter of a second): the error weight's relative
+/// part is measured from the rigid-body motion of each communication step,
+/// so its allowance does not grow with the angle turned. Measured from zero
+/// (before 2026-11-26), the rotations' allowance rtol·|q| grew through the
+/// run, and the FMU's window at the former default 3e-6 had E_h 2.1e-3 at
+/// this speed (docs/PERFORMANCE.md).
+#[test]
+fn the_default_holds_e_h_1e_3_at_8000_rpm_torsional_over_a_long_run() {
+    let default_rtol = Scene::example_2004().dynamics.simulation_relative_tolerance;
+    let cycles = 1100;
+    let (reference, run) = std::thread::scope(|s| {
+        let reference = s.spawn(|| torsional_window_after(8000.0, cycles, 1e-9));
+        let run = torsional_window_after(8000.0, cycles, default_rtol);
+        (reference.join().unwrap(), run)
+    });
+    let e_h = run
+        .iter()
+        .zip(&reference)
+        .map(|(a, r)| a.iter().zip(r).map(|(x, y)| (x - y).abs() / r[0]).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    println!("torsional, 8000 rpm, {cycles} mesh cycles: E_h {e_h:.2e} at {default_rtol:e}");
+    assert!(e_h <= 1e-3, "E_h {e_h:e} > 1e-3");
 }

@@ -2,7 +2,8 @@
 
 Runs the same set of sweeps (N sun torques, sweep up, unworn set, the
 native sweep's settings: the default integrator of the FMU and of the scene
-(RK 5(4) at relative tolerance 3e-6), 34 mesh cycles of run-in and 68 of
+(RK 5(4); the FMU's relativeTolerance default 1e-5, the scene's
+relative_tolerance 3e-6), 34 mesh cycles of run-in and 68 of
 window, one mesh cycle per communication step) as a campaign on a LocalCluster of each worker count asked for, and
 prints points per second, per core, and the scaling efficiency
 (points/s per core against one worker). It also times one sweep in-process

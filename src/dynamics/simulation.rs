@@ -14,7 +14,7 @@ use std::collections::VecDeque;
 
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{static_state, Stepper};
-use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError};
+use crate::dynamics::solver::{RelativeOrigin, Rk45, Rk45Settings, SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
 use crate::model::gear::{Drive, GearSet, IntegratorKind, Member, MeshKind};
 use crate::model::lumped::{full_index, planet_bearing_vectors, Coordinate, Fidelity};
@@ -281,22 +281,26 @@ const TIME_TOLERANCE: f64 = 1e-9;
 
 /// The integrator of a simulation at mesh frequency `fm` \[Hz\]:
 /// generalized-α as [`Stepper::new`] sets it; the adaptive method at the
-/// run's relative tolerance with absolute tolerances that relative
-/// tolerance times the elastic state's scales, the static mesh deflection
-/// `deflection` \[m\] for coordinates and that times the mesh angular
-/// frequency for velocities (as the periodic solver scales them), its
-/// largest step a quarter of a mesh cycle. The rotations and their rates
-/// are controlled by the relative part (the rigid-body speed); the
-/// translations of the transverse–torsional model, as small as the
-/// deflections, by the absolute part, which fixed absolute tolerances of
-/// 1e-6 m and 1e-3 m/s per unit of relative tolerance made some 20 times
-/// tighter than the deflection needs (twice the steps at 3000 rpm for no
-/// accuracy that shows in the mesh forces: docs/PERFORMANCE.md).
+/// run's simulation relative tolerance
+/// ([`RunSettings::simulation_relative_tolerance`]) with absolute
+/// tolerances that relative tolerance times the elastic state's scales,
+/// the static mesh deflection `deflection` \[m\] for coordinates and that
+/// times the mesh angular frequency for velocities (as the periodic solver
+/// scales them), its largest step a quarter of a mesh cycle. The relative
+/// part of the error weight is measured from the rigid-body motion of the
+/// communication step ([`Simulation::anchor_origin`]), so it controls the
+/// rotations' deviation from that motion, not the angle turned since the
+/// start (which grows without bound and made the allowance grow with time:
+/// docs/PERFORMANCE.md). The translations of the transverse–torsional
+/// model, as small as the deflections, are controlled by the absolute
+/// part, which fixed absolute tolerances of 1e-6 m and 1e-3 m/s per unit
+/// of relative tolerance made some 20 times tighter than the deflection
+/// needs.
 fn stepper_for(run: &RunSettings, fm: f64, deflection: f64) -> Result<Stepper, SolverError> {
     let d = run.values();
     match d.integrator {
         IntegratorKind::Rk45 => {
-            let rtol = d.relative_tolerance;
+            let rtol = d.simulation_relative_tolerance;
             let settings = Rk45Settings {
                 rtol,
                 atol_q: rtol * deflection,
@@ -307,6 +311,26 @@ fn stepper_for(run: &RunSettings, fm: f64, deflection: f64) -> Result<Stepper, S
             Ok(Stepper::Rk(Box::new(Rk45::new(settings)?)))
         }
         IntegratorKind::GeneralizedAlpha => Stepper::new(run, 1.0 / fm),
+    }
+}
+
+/// Sets the adaptive method's error-weight origin to the rigid-body motion
+/// at input speed `speed` \[rad/s\] through displacements `q` at time `t`
+/// \[s\] (see [`Simulation::anchor_origin`]); a no-op for generalized-α.
+fn anchor(
+    stepper: &mut Stepper,
+    model: &PlanetaryDynamics,
+    speed: f64,
+    t: f64,
+    q: &[f64],
+) -> Result<(), SolverError> {
+    match stepper {
+        Stepper::Rk(r) => r.set_relative_origin(Some(RelativeOrigin {
+            t_anchor: t,
+            q_anchor: q.to_vec(),
+            rate: model.rigid_velocity_at(if speed.is_finite() { speed } else { 0.0 }),
+        })),
+        Stepper::Alpha(_) => Ok(()),
     }
 }
 
@@ -352,6 +376,7 @@ impl Simulation {
         let deflection = model.meshes.iter().fold(0.0_f64, |a, m| a.max(m.approach.abs()));
         let deflection = if deflection > 0.0 { deflection } else { 1e-6 };
         let mut stepper = stepper_for(run, fm, deflection).map_err(err)?;
+        anchor(&mut stepper, &model, input_speed, t0, &start.q).map_err(err)?;
         stepper.init(&mut model, t0, &start.q, &start.v).map_err(err)?;
         // The outputs at t0 are the initial state's, not a trial state's of
         // the integrator's start.
@@ -493,8 +518,8 @@ impl Simulation {
                     self.stepper = stepper;
                 }
                 let t = self.time;
-                self.stepper
-                    .init(&mut self.model, t, &q, &v)
+                anchor(&mut self.stepper, &self.model, omega, t, &q)
+                    .and_then(|()| self.stepper.init(&mut self.model, t, &q, &v))
                     .map_err(|source| SimulationError::Integration { t, source })?;
             }
         }
@@ -567,6 +592,7 @@ impl Simulation {
                 * self.model.mesh_frequency_per_input_speed);
         // The extremes start from the state at t (the last accepted one).
         self.extremes.reset(&self.model.meshes);
+        self.anchor_origin().map_err(|source| SimulationError::Integration { t, source })?;
         let work_start = match &self.stepper {
             Stepper::Rk(r) => r.stats().rhs_evaluations,
             Stepper::Alpha(_) => 0,
@@ -636,6 +662,26 @@ impl Simulation {
         // The outputs read the accepted state at the communication point.
         self.refresh(&mut f);
         Ok(())
+    }
+
+    /// Anchors the adaptive method's error weight at the accepted state:
+    /// during the communication step its relative part measures each
+    /// coordinate's change beyond the rigid-body motion at the current speed,
+    /// o_q(t) = q(t_k) + r·ω·(t − t_k), o_v = r·ω (r the rigid-body velocity
+    /// per unit input speed, ω the speed reference, or under the plain torque
+    /// drive, which does not follow the reference, the input member's speed
+    /// at t_k). A no-op for generalized-α.
+    fn anchor_origin(&mut self) -> Result<(), SolverError> {
+        let Stepper::Rk(r) = &self.stepper else {
+            return Ok(());
+        };
+        let speed = if self.set.drive() == Drive::Torque && !self.model.has_load_balance() {
+            r.v()[self.model.input_index] / self.model.input_lever
+        } else {
+            self.speed_reference
+        };
+        let (t, q) = (r.time(), r.q().to_vec());
+        anchor(&mut self.stepper, &self.model, speed, t, &q)
     }
 
     fn stepper_time(&self) -> f64 {

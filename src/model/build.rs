@@ -502,6 +502,7 @@ fn validate_radii(given: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
         rho_infinity: d.rho_infinity,
         steps_per_mesh_cycle: d.steps_per_mesh_cycle as usize,
         relative_tolerance: d.relative_tolerance,
+        simulation_relative_tolerance: d.simulation_relative_tolerance,
         run_in_revolutions: d.run_in_revolutions,
         steady_tolerance: d.steady_tolerance,
         measured_revolutions: d.measured_revolutions,
@@ -879,6 +880,10 @@ fn check_run_settings(d: &RunValues, given_rpm: Option<f64>, c: &mut Checker) {
     }
     if !(d.relative_tolerance.is_finite() && d.relative_tolerance >= 1e-14 && d.relative_tolerance <= 1e-1) {
         c.fail("dynamics.relative_tolerance", d.relative_tolerance, "must lie between 1e-14 and 0.1");
+    }
+    let sim = d.simulation_relative_tolerance;
+    if !(sim.is_finite() && (1e-14..=1e-1).contains(&sim)) {
+        c.fail("dynamics.simulation_relative_tolerance", sim, "must lie between 1e-14 and 0.1");
     }
     if !(d.run_in_revolutions.is_finite() && d.run_in_revolutions >= 0.0) {
         c.fail("dynamics.run_in_revolutions", d.run_in_revolutions, "must be zero or more");

@@ -38,6 +38,10 @@ pub struct RunValues {
     pub steps_per_mesh_cycle: usize,
     /// Adaptive method's relative tolerance [-].
     pub relative_tolerance: f64,
+    /// Adaptive method's relative tolerance in the time-domain simulation
+    /// (the FMU, `planetwear simulate`), whose error weight measures the
+    /// state from the rigid-body motion [-].
+    pub simulation_relative_tolerance: f64,
     /// Longest run-in [input revolutions].
     pub run_in_revolutions: f64,
     /// The run-in ends early once two successive mesh cycles agree to this
@@ -86,6 +90,13 @@ impl RunSettings {
     /// Adaptive method's relative tolerance [-].
     pub fn relative_tolerance(&self) -> f64 {
         self.values.relative_tolerance
+    }
+
+    /// Adaptive method's relative tolerance in the time-domain simulation
+    /// (the FMU, `planetwear simulate`), whose error weight measures the
+    /// state from the rigid-body motion [-].
+    pub fn simulation_relative_tolerance(&self) -> f64 {
+        self.values.simulation_relative_tolerance
     }
 
     /// Longest run-in [input revolutions].

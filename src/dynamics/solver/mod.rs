@@ -46,7 +46,7 @@ mod rk45;
 
 pub use generalized_alpha::{AlphaParameters, GeneralizedAlpha, GeneralizedAlphaSettings};
 pub use low_rank::{LowRankJacobian, RankOneTerm, TermCoefficients};
-pub use rk45::{LocatedEvent, Rk45, Rk45Settings, StepController};
+pub use rk45::{LocatedEvent, RelativeOrigin, Rk45, Rk45Settings, StepController};
 
 use thiserror::Error;
 

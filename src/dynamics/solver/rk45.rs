@@ -16,7 +16,9 @@
 //! The last stage of a step is the first of the next (FSAL), so an accepted step costs six force
 //! evaluations. The error is measured as
 //! `‖err‖ = (Σ_i (err_i / sk_i)² / 2n)^{1/2}`, `sk_i = atol_i + rtol · max(|y_{n,i}|, |y_{n+1,i}|)`,
-//! with `atol_i` = `atol_q` for displacements and `atol_v` for velocities. A step is accepted when
+//! with `atol_i` = `atol_q` for displacements and `atol_v` for velocities; with a relative origin
+//! ([`Rk45::set_relative_origin`], a rigid motion o(t)) the relative part is measured from it,
+//! `rtol · max(|y_{n,i} − o_i(t_n)|, |y_{n+1,i} − o_i(t_{n+1})|)`. A step is accepted when
 //! ‖err‖ ≤ 1. The next step is h·fac with fac clamped to [`min_ratio`, `max_ratio`] (and to at
 //! most 1 right after a rejection), where
 //!
@@ -219,6 +221,33 @@ impl Rk45Settings {
     }
 }
 
+/// A rigid motion from which the relative part of the error weight is measured
+/// ([`Rk45::set_relative_origin`]): component i of the displacements is weighted by
+/// `atol_q + rtol · |q_i − o_i(t)|` with `o_i(t) = q_anchor_i + rate_i · (t − t_anchor)`, and
+/// of the velocities by `atol_v + rtol · |v_i − rate_i|`. A coordinate that grows without bound
+/// with a uniform motion (a rotation) then keeps the allowance of its deviation from that motion
+/// instead of one that grows with time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RelativeOrigin {
+    /// Time of the anchor \[s\].
+    pub t_anchor: f64,
+    /// Displacements of the rigid motion at `t_anchor` [m or rad].
+    pub q_anchor: Vec<f64>,
+    /// Velocities of the rigid motion [m/s or rad/s].
+    pub rate: Vec<f64>,
+}
+
+impl RelativeOrigin {
+    /// Component `i` of the origin of y = [q, v] at time `t`, for `n` displacements.
+    fn at(&self, i: usize, n: usize, t: f64) -> f64 {
+        if i < n {
+            self.q_anchor[i] + self.rate[i] * (t - self.t_anchor)
+        } else {
+            self.rate[i - n]
+        }
+    }
+}
+
 /// One located zero crossing of an event function.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LocatedEvent {
@@ -262,6 +291,7 @@ struct Pending {
 #[derive(Debug, Clone)]
 pub struct Rk45 {
     settings: Rk45Settings,
+    origin: Option<RelativeOrigin>,
     initialized: bool,
     n: usize,
     t: f64,
@@ -363,6 +393,7 @@ impl Rk45 {
         settings.validate()?;
         Ok(Self {
             settings,
+            origin: None,
             initialized: false,
             n: 0,
             t: 0.0,
@@ -509,6 +540,55 @@ impl Rk45 {
         Ok(())
     }
 
+    /// Sets the rigid motion from which the relative part of the error weight is measured (see
+    /// [`RelativeOrigin`]); `None` (the default) measures it from zero, `sk_i = atol_i + rtol ·
+    /// max(|y_{n,i}|, |y_{n+1,i}|)`. With an origin, `sk_i = atol_i + rtol · max(|y_{n,i} −
+    /// o_i(t_n)|, |y_{n+1,i} − o_i(t_{n+1})|)`, and the automatic first step weights the state
+    /// by its deviation in the same way. It applies to the steps from the next one on; the state
+    /// and the step controller are kept.
+    pub fn set_relative_origin(&mut self, origin: Option<RelativeOrigin>) -> Result<(), SolverError> {
+        if let Some(o) = &origin {
+            if self.initialized && (o.q_anchor.len() != self.n || o.rate.len() != self.n) {
+                return Err(SolverError::InvalidArgument {
+                    name: "relative origin",
+                    value: o.q_anchor.len().min(o.rate.len()) as f64,
+                    reason: "the origin must have as many displacements and rates as the system",
+                });
+            }
+            if let Some(index) = first_non_finite(&o.q_anchor).or(first_non_finite(&o.rate)) {
+                return Err(SolverError::InvalidArgument {
+                    name: "relative origin",
+                    value: index as f64,
+                    reason: "the origin's anchor, displacements and rates must be finite",
+                });
+            }
+            if !o.t_anchor.is_finite() {
+                return Err(SolverError::InvalidArgument {
+                    name: "relative origin",
+                    value: o.t_anchor,
+                    reason: "the origin's anchor time must be finite",
+                });
+            }
+        }
+        self.origin = origin;
+        Ok(())
+    }
+
+    /// The rigid motion of the error weight's relative part ([`Rk45::set_relative_origin`]).
+    pub fn relative_origin(&self) -> Option<&RelativeOrigin> {
+        self.origin.as_ref()
+    }
+
+    /// Magnitude of component `i` of `y` at time `t` in the relative part of the error weight:
+    /// |y_i|, or its deviation from the origin.
+    fn magnitude(&self, i: usize, t: f64, y: f64) -> f64 {
+        match &self.origin {
+            None => y.abs(),
+            Some(o) if o.q_anchor.len() == self.n && o.rate.len() == self.n => (y - o.at(i, self.n, t)).abs(),
+            Some(_) => y.abs(),
+        }
+    }
+
     /// Absolute tolerance of component `i` of y = [q, v].
     fn atol(&self, i: usize) -> f64 {
         if i < self.n {
@@ -524,7 +604,7 @@ impl Rk45 {
         let max_step = self.settings.max_step;
         let (mut dnf, mut dny) = (0.0, 0.0);
         for i in 0..2 * self.n {
-            let sk = self.atol(i) + rtol * self.y[i].abs();
+            let sk = self.atol(i) + rtol * self.magnitude(i, self.t, self.y[i]);
             dnf += (self.k1[i] / sk).powi(2);
             dny += (self.y[i] / sk).powi(2);
         }
@@ -549,7 +629,7 @@ impl Rk45 {
         }
         let mut der2 = 0.0;
         for i in 0..2 * self.n {
-            let sk = self.atol(i) + rtol * self.y[i].abs();
+            let sk = self.atol(i) + rtol * self.magnitude(i, self.t, self.y[i]);
             der2 += ((self.k2[i] - self.k1[i]) / sk).powi(2);
         }
         let der2 = der2.sqrt() / h;
@@ -601,7 +681,12 @@ impl Rk45 {
         let mut sum = 0.0;
         for i in 0..m {
             let atol = if i < n { self.settings.atol_q } else { self.settings.atol_v };
-            let sk = atol + rtol * self.y[i].abs().max(self.y_new[i].abs());
+            let sk = match &self.origin {
+                None => atol + rtol * self.y[i].abs().max(self.y_new[i].abs()),
+                Some(_) => {
+                    atol + rtol * self.magnitude(i, t, self.y[i]).max(self.magnitude(i, t_new, self.y_new[i]))
+                }
+            };
             let e = h
                 * (E1 * self.k1[i]
                     + E3 * self.k3[i]
@@ -1057,5 +1142,92 @@ impl Rk45 {
     /// Sets every work counter back to zero.
     pub fn reset_stats(&mut self) {
         self.stats.reset();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mass on a spring whose far end moves at `rate`: q = rate·t + A sin(ω t) for the start
+    /// below (a uniform drift plus a small oscillation).
+    struct Drift {
+        rate: f64,
+        omega: f64,
+        mass: [f64; 1],
+    }
+
+    impl SecondOrderSystem for Drift {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn mass(&self) -> &[f64] {
+            &self.mass
+        }
+        fn force(&mut self, t: f64, q: &[f64], _v: &[f64], f: &mut [f64]) {
+            f[0] = -self.omega * self.omega * (q[0] - self.rate * t);
+        }
+    }
+
+    const RATE: f64 = 50.0;
+    const OMEGA: f64 = 2.0 * std::f64::consts::PI * 100.0;
+    const AMPLITUDE: f64 = 1e-5;
+
+    /// Accepted steps over 20 periods of the oscillation from `t0`, with `origin` anchored at the
+    /// start (the drift) or none.
+    fn steps_from(t0: f64, origin: Option<fn(f64, f64) -> RelativeOrigin>) -> (u64, Vec<f64>) {
+        let mut sys = Drift { rate: RATE, omega: OMEGA, mass: [1.0] };
+        let settings =
+            Rk45Settings { rtol: 1e-6, atol_q: 1e-12, atol_v: 1e-12 * OMEGA, ..Rk45Settings::default() };
+        let mut rk = Rk45::new(settings).unwrap();
+        let q0 = RATE * t0 + AMPLITUDE * (OMEGA * t0).sin();
+        let v0 = RATE + AMPLITUDE * OMEGA * (OMEGA * t0).cos();
+        if let Some(make) = origin {
+            rk.set_relative_origin(Some(make(t0, q0))).unwrap();
+        }
+        rk.init(&mut sys, t0, &[q0], &[v0]).unwrap();
+        let end = t0 + 20.0 * 2.0 * std::f64::consts::PI / OMEGA;
+        let mut times = Vec::new();
+        while rk.time() < end {
+            rk.step(&mut sys, end).unwrap();
+            times.push(rk.time());
+        }
+        (rk.stats().steps, times)
+    }
+
+    fn drift_origin(t0: f64, q0: f64) -> RelativeOrigin {
+        RelativeOrigin { t_anchor: t0, q_anchor: vec![q0], rate: vec![RATE] }
+    }
+
+    fn zero_origin(t0: f64, _q0: f64) -> RelativeOrigin {
+        RelativeOrigin { t_anchor: t0, q_anchor: vec![0.0], rate: vec![0.0] }
+    }
+
+    /// Without an origin the weight is `atol + rtol · max(|y_n|, |y_{n+1}|)` as before: an origin
+    /// of zero displacement and zero rate (|y − 0| = |y|) takes bit-identical steps.
+    #[test]
+    fn no_origin_weights_from_zero() {
+        for t0 in [0.0, 3.0] {
+            let (n_none, t_none) = steps_from(t0, None);
+            let (n_zero, t_zero) = steps_from(t0, Some(zero_origin));
+            assert_eq!(n_none, n_zero);
+            assert_eq!(t_none, t_zero);
+        }
+    }
+
+    /// With the drift as origin the allowance does not grow with time: the same number of steps
+    /// (within 1 %, the first step's choice) at any time offset; without it the allowance rtol·|q| grows with the drift and
+    /// the step count falls (to where the velocities' allowance, which does not grow, sets it).
+    #[test]
+    fn an_origin_on_the_drift_keeps_the_allowance_from_growing_with_time() {
+        let period = 2.0 * std::f64::consts::PI / OMEGA;
+        let offsets = [0.0, 100.0 * period, 10_000.0 * period];
+        let with: Vec<u64> = offsets.iter().map(|t0| steps_from(*t0, Some(drift_origin)).0).collect();
+        let without: Vec<u64> = offsets.iter().map(|t0| steps_from(*t0, None).0).collect();
+        for n in &with {
+            assert!(100 * n.abs_diff(with[0]) <= with[0], "with the origin: {with:?}");
+        }
+        assert!(without[1] < without[0] && without[2] <= without[1], "without: {without:?}");
+        assert!(without[2] < with[2], "with {with:?}, without {without:?}");
     }
 }

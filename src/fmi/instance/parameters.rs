@@ -126,7 +126,7 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
         }
         Settable::StepsPerMeshCycle => scene.dynamics.steps_per_mesh_cycle = values.count(v)?,
         Settable::RhoInfinity => scene.dynamics.rho_infinity = r,
-        Settable::RelativeTolerance => scene.dynamics.relative_tolerance = r,
+        Settable::RelativeTolerance => scene.dynamics.simulation_relative_tolerance = r,
         // The order-tracking window of the outputs, read when the simulation is built.
         Settable::HarmonicWindowCycles => {}
         Settable::SamplesPerMeshCycle => scene.dynamics.samples_per_mesh_cycle = values.count(v)?,
@@ -414,7 +414,7 @@ pub fn scene_values(scene: &Scene) -> Result<BTreeMap<Settable, Start>, SceneErr
             }),
             Settable::StepsPerMeshCycle => count(d.steps_per_mesh_cycle),
             Settable::RhoInfinity => Start::Real(d.rho_infinity),
-            Settable::RelativeTolerance => Start::Real(d.relative_tolerance),
+            Settable::RelativeTolerance => Start::Real(d.simulation_relative_tolerance),
             Settable::SamplesPerMeshCycle => count(d.samples_per_mesh_cycle),
             Settable::Planets => count(scene.planets.count),
             Settable::SunTeeth => count(scene.sun.teeth),
@@ -497,7 +497,7 @@ pub(super) fn scene_keys(p: Settable) -> &'static [&'static str] {
         Settable::Integrator => &["dynamics.integrator"],
         Settable::StepsPerMeshCycle => &["dynamics.steps_per_mesh_cycle"],
         Settable::RhoInfinity => &["dynamics.rho_infinity"],
-        Settable::RelativeTolerance => &["dynamics.relative_tolerance"],
+        Settable::RelativeTolerance => &["dynamics.simulation_relative_tolerance"],
         Settable::SamplesPerMeshCycle => &["dynamics.samples_per_mesh_cycle"],
         Settable::Planets => &["planets.count", "planets.angles_deg"],
         Settable::SunTeeth => &["sun.teeth"],
