@@ -878,12 +878,13 @@ fn check_run_settings(d: &RunValues, given_rpm: Option<f64>, c: &mut Checker) {
     if !(4..=100_000).contains(&d.steps_per_mesh_cycle) {
         c.fail("dynamics.steps_per_mesh_cycle", d.steps_per_mesh_cycle, "must be between 4 and 100000");
     }
-    if !(d.relative_tolerance.is_finite() && d.relative_tolerance >= 1e-14 && d.relative_tolerance <= 1e-1) {
-        c.fail("dynamics.relative_tolerance", d.relative_tolerance, "must lie between 1e-14 and 0.1");
-    }
-    let sim = d.simulation_relative_tolerance;
-    if !(sim.is_finite() && (1e-14..=1e-1).contains(&sim)) {
-        c.fail("dynamics.simulation_relative_tolerance", sim, "must lie between 1e-14 and 0.1");
+    for (key, rtol) in [
+        ("dynamics.relative_tolerance", d.relative_tolerance),
+        ("dynamics.simulation_relative_tolerance", d.simulation_relative_tolerance),
+    ] {
+        if !(rtol.is_finite() && (1e-14..=1e-1).contains(&rtol)) {
+            c.fail(key, rtol, "must lie between 1e-14 and 0.1");
+        }
     }
     if !(d.run_in_revolutions.is_finite() && d.run_in_revolutions >= 0.0) {
         c.fail("dynamics.run_in_revolutions", d.run_in_revolutions, "must be zero or more");

@@ -238,6 +238,18 @@ pub struct RelativeOrigin {
 }
 
 impl RelativeOrigin {
+    /// Refuses an origin whose displacements or rates are not `n` long.
+    fn check_dimension(&self, n: usize) -> Result<(), SolverError> {
+        if self.q_anchor.len() != n || self.rate.len() != n {
+            return Err(SolverError::InvalidArgument {
+                name: "relative origin",
+                value: self.q_anchor.len().min(self.rate.len()) as f64,
+                reason: "the origin must have as many displacements and rates as the system",
+            });
+        }
+        Ok(())
+    }
+
     /// Component `i` of the origin of y = [q, v] at time `t`, for `n` displacements.
     fn at(&self, i: usize, n: usize, t: f64) -> f64 {
         if i < n {
@@ -436,6 +448,9 @@ impl Rk45 {
         v0: &[f64],
     ) -> Result<(), SolverError> {
         let n = check_initial_state(sys, t0, q0, v0)?;
+        if let Some(o) = &self.origin {
+            o.check_dimension(n)?;
+        }
         let mut y = Vec::with_capacity(2 * n);
         y.extend_from_slice(q0);
         y.extend_from_slice(v0);
@@ -548,12 +563,8 @@ impl Rk45 {
     /// and the step controller are kept.
     pub fn set_relative_origin(&mut self, origin: Option<RelativeOrigin>) -> Result<(), SolverError> {
         if let Some(o) = &origin {
-            if self.initialized && (o.q_anchor.len() != self.n || o.rate.len() != self.n) {
-                return Err(SolverError::InvalidArgument {
-                    name: "relative origin",
-                    value: o.q_anchor.len().min(o.rate.len()) as f64,
-                    reason: "the origin must have as many displacements and rates as the system",
-                });
+            if self.initialized {
+                o.check_dimension(self.n)?;
             }
             if let Some(index) = first_non_finite(&o.q_anchor).or(first_non_finite(&o.rate)) {
                 return Err(SolverError::InvalidArgument {
@@ -580,12 +591,12 @@ impl Rk45 {
     }
 
     /// Magnitude of component `i` of `y` at time `t` in the relative part of the error weight:
-    /// |y_i|, or its deviation from the origin.
+    /// |y_i|, or its deviation from the origin (whose dimension `init` and
+    /// [`Rk45::set_relative_origin`] have checked).
     fn magnitude(&self, i: usize, t: f64, y: f64) -> f64 {
         match &self.origin {
             None => y.abs(),
-            Some(o) if o.q_anchor.len() == self.n && o.rate.len() == self.n => (y - o.at(i, self.n, t)).abs(),
-            Some(_) => y.abs(),
+            Some(o) => (y - o.at(i, self.n, t)).abs(),
         }
     }
 
@@ -681,12 +692,8 @@ impl Rk45 {
         let mut sum = 0.0;
         for i in 0..m {
             let atol = if i < n { self.settings.atol_q } else { self.settings.atol_v };
-            let sk = match &self.origin {
-                None => atol + rtol * self.y[i].abs().max(self.y_new[i].abs()),
-                Some(_) => {
-                    atol + rtol * self.magnitude(i, t, self.y[i]).max(self.magnitude(i, t_new, self.y_new[i]))
-                }
-            };
+            let sk =
+                atol + rtol * self.magnitude(i, t, self.y[i]).max(self.magnitude(i, t_new, self.y_new[i]));
             let e = h
                 * (E1 * self.k1[i]
                     + E3 * self.k3[i]
@@ -1213,6 +1220,18 @@ mod tests {
             assert_eq!(n_none, n_zero);
             assert_eq!(t_none, t_zero);
         }
+    }
+
+    /// An origin of another dimension than the system is refused when the
+    /// integrator starts, naming the origin.
+    #[test]
+    fn an_origin_of_another_dimension_is_refused_at_init() {
+        let mut sys = Drift { rate: RATE, omega: OMEGA, mass: [1.0] };
+        let mut rk = Rk45::new(Rk45Settings::default()).unwrap();
+        let two = RelativeOrigin { t_anchor: 0.0, q_anchor: vec![0.0; 2], rate: vec![RATE; 2] };
+        rk.set_relative_origin(Some(two)).unwrap();
+        let e = rk.init(&mut sys, 0.0, &[0.0], &[RATE]).unwrap_err();
+        assert!(e.to_string().contains("relative origin"), "{e}");
     }
 
     /// With the drift as origin the allowance does not grow with time: the same number of steps
