@@ -910,6 +910,11 @@ impl Rk45 {
             if h.is_nan() || h <= tiny || (pending.is_none() && t_new < t_end && h < s.min_step) {
                 return Err(SolverError::StepTooSmall { t, h });
             }
+            // A retake that ends on a located event (`pending`) and fails the error test is not
+            // re-aimed at the crossing: that would propose the step that found it again, and
+            // when the crossing lies within 1 % of `t_end` that step reaches `t_end` and the two
+            // alternate for ever. The controller's shorter step ends before the crossing.
+            let landing = pending.is_some();
             let err = match self.attempt(sys, h, t_new) {
                 Err(failure) => {
                     self.stats.rejected_steps += 1;
@@ -927,7 +932,7 @@ impl Rk45 {
                     pending = None;
                     self.rejected_last = true;
                     self.h_next = h * (s.safety * err.powf(-0.2)).max(s.min_ratio);
-                    if self.n_events > 0 && !aimed {
+                    if self.n_events > 0 && !aimed && !landing {
                         // A switch inside the step (a kink in the force) is the likely cause of the
                         // rejection: aim the next attempt at the crossing, roughly located on the
                         // rejected step; if that attempt fails too, the controller takes over.
