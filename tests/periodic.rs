@@ -267,6 +267,34 @@ fn marching_in_the_rigid_frame_settles_on_the_shooting_solution() {
     }
 }
 
+/// A point that has not settled when its run-in ends keeps being tested
+/// through the window, and one that settles there is periodic and measured
+/// over the window's last period: with a run-in of 3 periods, 3000 rpm
+/// (torsional, from 2900 rpm; it settles after 10–20 periods at the default
+/// run-in) settles inside the window, long before its 68 periods end, and
+/// its harmonics agree with the default run-in's to E_h ≤ 2e-4 (both are
+/// within the settling tolerance, 1e-4 of the state scales, of the same
+/// periodic state).
+#[test]
+fn a_point_that_settles_inside_the_window_is_measured_over_one_period() {
+    use planetwear::analysis::frame_sweep::{frame_sweep, FrameSweepSettings};
+    let (_, _, model) = build(&torsional());
+    let speeds = [2900.0 * RPM, 3000.0 * RPM];
+    let default = frame_sweep(&model, &speeds, &FrameSweepSettings::default()).unwrap();
+    let short = FrameSweepSettings { max_periods: 3, ..FrameSweepSettings::default() };
+    let early = frame_sweep(&model, &speeds, &short).unwrap();
+    let (d, e) = (&default[1], &early[1]);
+    assert!(d.periodic && d.periods > 4, "the default run-in settles after {} periods", d.periods);
+    assert!(e.periodic, "settled inside the window");
+    assert_eq!(e.state.cycles, 1, "measured over one period");
+    assert!(e.periods > 3 && e.periods < 3 + 68, "{} periods", e.periods);
+    let h = |p: &planetwear::analysis::frame_sweep::FramePoint| -> Vec<_> {
+        p.state.meshes[..2].iter().map(|m| m.harmonics.clone()).collect()
+    };
+    let err = harmonic_error(&h(e), &h(d));
+    assert!(err <= 2e-4, "E_h {err:.2e} against the default run-in");
+}
+
 /// The frame sweep refuses settings that cannot work, naming them.
 #[test]
 fn the_frame_sweep_refuses_a_tolerance_that_cannot_work() {

@@ -15,9 +15,12 @@
 //! is at most the tolerance in the state scales: an estimate of the distance
 //! to the periodic state, not only of the last step. It is then measured over
 //! one period ([`PeriodicProblem::steady_state`]); a point that does not
-//! settle within the set number of periods is measured over the last
+//! settle within the set number of periods is measured over the next
 //! `window_periods` periods instead, as the marching sweep measures its
-//! window.
+//! window. The settling test goes on through the window: a point that
+//! settles there is periodic and measured over the window's last period
+//! (what a longer run-in would have measured), so only a point that never
+//! settles pays for the whole window.
 
 use serde::{Deserialize, Serialize};
 
@@ -110,19 +113,15 @@ pub fn frame_sweep(
             None => problem.cold_start(omega, &mut work)?,
         };
         let mut periods = 0;
-        let mut previous_change: Option<f64> = None;
+        let mut settling = Settling::new(settings.tolerance);
         let mut periodic = false;
         while periods < settings.max_periods {
             let r = problem.residual(omega, &z, &mut work)?;
             periods += 1;
-            let change = r.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
             for (zi, ri) in z.iter_mut().zip(&r) {
                 *zi += ri;
             }
-            let rho = previous_change.map_or(0.5, |p| if p > 0.0 { (change / p).min(0.99) } else { 0.0 });
-            previous_change = Some(change);
-            let size = z.iter().fold(1.0_f64, |a, x| a.max(x.abs()));
-            if periods >= 2 && change / (1.0 - rho) <= settings.tolerance * size {
+            if settling.settled(max_abs(&r), &z) {
                 periodic = true;
                 break;
             }
@@ -150,12 +149,20 @@ pub fn frame_sweep(
             let mut force: Vec<Vec<f64>> = Vec::new();
             let mut time = Vec::new();
             let mut last = None;
+            let mut settled = None;
             for k in 0..settings.window_periods.max(1) {
                 let o = orbit(z.clone(), work, periods);
                 let s = problem.steady_state(&o)?;
                 periods += 1;
                 work = s.stats;
-                z = reduce_end(&problem, &s, omega);
+                let end = reduce_end(&problem, &s, omega);
+                let change = end.iter().zip(&z).fold(0.0_f64, |a, (e, z)| a.max((e - z).abs()));
+                z = end;
+                if settling.settled(change, &z) {
+                    // Settled inside the window: the period just measured is the periodic state.
+                    settled = Some(s);
+                    break;
+                }
                 let offset = k as f64 * o.period;
                 time.extend(s.time.iter().map(|t| t + offset));
                 if force.is_empty() {
@@ -166,18 +173,12 @@ pub fn frame_sweep(
                 }
                 last = Some(s);
             }
-            let mut s = last.expect("at least one period");
-            let cycles = problem.cycles() * settings.window_periods.max(1);
-            for (m, f) in s.meshes.iter_mut().zip(&force) {
-                m.harmonics = mesh_harmonics(f, cycles, 6)
-                    .map_err(|source| PeriodicError::Spectrum { speed: omega, source })?;
-                m.separation = separation_fraction(f);
-                m.max_force = f.iter().cloned().fold(0.0, f64::max);
+            if let Some(s) = settled {
+                periodic = true;
+                s
+            } else {
+                measured_window(&problem, omega, settings, last, time, force)?
             }
-            s.cycles = cycles;
-            s.time = time;
-            s.mesh_force = force;
-            s
         };
         carried = Some(problem.expand(&z));
         let mut state = state;
@@ -196,4 +197,58 @@ fn reduce_end(problem: &PeriodicProblem, s: &SteadyState, omega: f64) -> Vec<f64
     let q: Vec<f64> = s.end.q.iter().zip(&rigid).map(|(q, r)| q - r * t).collect();
     let v: Vec<f64> = s.end.v.iter().zip(&rigid).map(|(v, r)| v - r).collect();
     problem.reduce(&q, &v)
+}
+
+/// The state of a point that did not settle, measured over the whole window:
+/// `last` is the window's last period, `time` and `force` the window's
+/// samples, one period after another.
+fn measured_window(
+    problem: &PeriodicProblem,
+    omega: f64,
+    settings: &FrameSweepSettings,
+    last: Option<SteadyState>,
+    time: Vec<f64>,
+    force: Vec<Vec<f64>>,
+) -> Result<SteadyState, PeriodicError> {
+    let mut s = last.expect("at least one period");
+    let cycles = problem.cycles() * settings.window_periods.max(1);
+    for (m, f) in s.meshes.iter_mut().zip(&force) {
+        m.harmonics = mesh_harmonics(f, cycles, 6)
+            .map_err(|source| PeriodicError::Spectrum { speed: omega, source })?;
+        m.separation = separation_fraction(f);
+        m.max_force = f.iter().cloned().fold(0.0, f64::max);
+    }
+    s.cycles = cycles;
+    s.time = time;
+    s.mesh_force = force;
+    Ok(s)
+}
+
+fn max_abs(x: &[f64]) -> f64 {
+    x.iter().fold(0.0_f64, |a, x| a.max(x.abs()))
+}
+
+/// The settling test of a point: the change over one period divided by
+/// 1 − ρ, ρ the contraction of that change from the period before (at most
+/// 0.99), at most `tolerance` times the state's size (at least 1, in state
+/// scales), once two successive changes are known.
+struct Settling {
+    tolerance: f64,
+    previous: Option<f64>,
+    changes: usize,
+}
+
+impl Settling {
+    fn new(tolerance: f64) -> Self {
+        Self { tolerance, previous: None, changes: 0 }
+    }
+
+    /// Takes the change of the period that ended in `z`; whether the point is settled.
+    fn settled(&mut self, change: f64, z: &[f64]) -> bool {
+        let rho = self.previous.map_or(0.5, |p| if p > 0.0 { (change / p).min(0.99) } else { 0.0 });
+        self.previous = Some(change);
+        self.changes += 1;
+        let size = z.iter().fold(1.0_f64, |a, x| a.max(x.abs()));
+        self.changes >= 2 && change / (1.0 - rho) <= self.tolerance * size
+    }
 }
