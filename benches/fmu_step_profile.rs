@@ -4,10 +4,14 @@
 //! cycle, a force evaluation there for the step extremes and the harmonic
 //! window) rebuilt on the public API, with the model wrapped to count and
 //! time its force and event-function evaluations. One communication step of
-//! one mesh cycle, 0.05 s simulated, for the former absolute tolerances
-//! (1e-6 m and 1e-3 m/s per unit of relative tolerance) and the
-//! simulation's (the static mesh deflection, and that times the mesh angular
-//! frequency, per unit of relative tolerance).
+//! one mesh cycle, 0.05 s simulated, in three configurations: the former
+//! absolute tolerances (1e-6 m and 1e-3 m/s per unit of relative tolerance)
+//! at the scene's relative tolerance (3e-6); the simulation's absolute
+//! tolerances (the static mesh deflection, and that times the mesh angular
+//! frequency, per unit of relative tolerance) at 3e-6; and the FMU's
+//! default, the simulation's own tolerance (`simulation_relative_tolerance`,
+//! 1e-5) with the error weight measured from the rigid-body motion anchored
+//! at the start of every communication step.
 //! Run: `cargo bench --bench fmu_step_profile` (docs/PERFORMANCE.md records the figures).
 
 use std::time::Instant;
@@ -15,7 +19,7 @@ use std::time::Instant;
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::response::static_state;
-use planetwear::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem};
+use planetwear::dynamics::solver::{RelativeOrigin, Rk45, Rk45Settings, SecondOrderSystem};
 use planetwear::scene::{Fidelity, Scene};
 
 /// The model, its evaluations counted and timed.
@@ -51,7 +55,19 @@ impl SecondOrderSystem for Counted<'_> {
     }
 }
 
-fn profile(fidelity: Fidelity, scaled: bool) {
+/// The integrator's tolerances.
+#[derive(Clone, Copy, PartialEq)]
+enum Tolerances {
+    /// The scene's relative tolerance, absolute tolerances 1e-6 m and 1e-3 m/s per unit of it.
+    FormerFixed,
+    /// The scene's relative tolerance, absolute tolerances from the static deflection.
+    DeflectionScaled,
+    /// The FMU's default: the simulation's relative tolerance, deflection-scaled absolute
+    /// tolerances, the relative part measured from the rigid-body motion.
+    Simulation,
+}
+
+fn profile(fidelity: Fidelity, tolerances: Tolerances) {
     let mut scene = Scene::example_2004();
     scene.dynamics.fidelity = fidelity;
     let (set, run) = scene.validate_with_run().expect("valid");
@@ -68,12 +84,17 @@ fn profile(fidelity: Fidelity, scaled: bool) {
     let mut f = vec![0.0; n];
     model.force(0.0, &start.q, &start.v, &mut f);
     let deflection = model.meshes.iter().fold(0.0_f64, |a, m| a.max(m.approach.abs()));
-    let rtol = run.relative_tolerance();
-    let (atol_q, atol_v) = if scaled {
-        (rtol * deflection, rtol * deflection * 2.0 * std::f64::consts::PI * fm)
+    let rtol = if tolerances == Tolerances::Simulation {
+        run.simulation_relative_tolerance()
     } else {
-        (rtol * 1e-6, rtol * 1e-3)
+        run.relative_tolerance()
     };
+    let (atol_q, atol_v) = if tolerances == Tolerances::FormerFixed {
+        (rtol * 1e-6, rtol * 1e-3)
+    } else {
+        (rtol * deflection, rtol * deflection * 2.0 * std::f64::consts::PI * fm)
+    };
+    let rigid = model.rigid_velocity_at(omega);
     let settings = Rk45Settings { rtol, atol_q, atol_v, max_step: 0.25 / fm, ..Rk45Settings::default() };
     let mut r = Rk45::new(settings).expect("settings");
     let mut sys = Counted { model: &mut model, forces: 0, events: 0, force_time: 0.0, event_time: 0.0 };
@@ -90,6 +111,11 @@ fn profile(fidelity: Fidelity, scaled: bool) {
     for c in 0..cycles {
         let t0 = c as f64 * h;
         let end = t0 + h;
+        if tolerances == Tolerances::Simulation {
+            // As `Simulation::do_step` anchors the error weight's origin.
+            let origin = RelativeOrigin { t_anchor: t0, q_anchor: r.q().to_vec(), rate: rigid.clone() };
+            r.set_relative_origin(Some(origin)).expect("origin");
+        }
         for k in 1..=points {
             let tk = if k == points { end } else { t0 + h * k as f64 / points as f64 };
             let a = Instant::now();
@@ -113,9 +139,13 @@ fn profile(fidelity: Fidelity, scaled: bool) {
     let forces = sys.forces - forces0;
     let events = sys.events - events0;
     let (force_time, event_time) = (sys.force_time - force_time0, sys.event_time - event_time0);
-    let tolerances = if scaled { "deflection-scaled" } else { "former fixed" };
+    let tolerances = match tolerances {
+        Tolerances::FormerFixed => "former fixed absolute tolerances",
+        Tolerances::DeflectionScaled => "deflection-scaled absolute tolerances",
+        Tolerances::Simulation => "the FMU's default: deflection-scaled, weight from the rigid motion,",
+    };
     println!(
-        "{fidelity:?}, rtol {rtol:e}, {tolerances} absolute tolerances ({atol_q:.1e} m, {atol_v:.1e} m/s): \
+        "{fidelity:?}, rtol {rtol:e}, {tolerances} ({atol_q:.1e} m, {atol_v:.1e} m/s): \
          {:.1} µs per mesh cycle (checksum {checksum:.3e})",
         us(total)
     );
@@ -150,8 +180,8 @@ fn profile(fidelity: Fidelity, scaled: bool) {
 
 fn main() {
     for fidelity in [Fidelity::Torsional, Fidelity::TransverseTorsional] {
-        for scaled in [false, true] {
-            profile(fidelity, scaled);
+        for tolerances in [Tolerances::FormerFixed, Tolerances::DeflectionScaled, Tolerances::Simulation] {
+            profile(fidelity, tolerances);
         }
     }
 }
