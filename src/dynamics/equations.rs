@@ -745,6 +745,34 @@ impl PlanetaryDynamics {
         full
     }
 
+    /// The mesh whose tooth pair event function `index` belongs to (the
+    /// event values are laid out mesh by mesh, each mesh's pair slots in
+    /// turn: [`SecondOrderSystem::events`]); `None` past the last.
+    pub fn event_mesh(&self, index: usize) -> Option<usize> {
+        let mut end = 0;
+        for (i, link) in self.links.iter().enumerate() {
+            end += 2 * self.slots[if link.kind == MeshKind::SunPlanet { 0 } else { 1 }];
+            if index < end {
+                return Some(i);
+            }
+        }
+        None
+    }
+
+    /// Adds to `f` the change of the generalized forces [N or N·m] when the
+    /// damping force of mesh `i` switches on (`on`: a pair starts to touch in
+    /// a mesh that had none) or off, at the state of the last evaluation: the
+    /// force c·δ̇ acts along the mesh's line while a pair touches, so it jumps
+    /// there while the elastic force does not.
+    pub fn add_damping_switch(&self, i: usize, on: bool, f: &mut [f64]) {
+        let link = &self.links[i];
+        let jump = link.damping * self.meshes[i].approach_rate;
+        let sign = if on { -1.0 } else { 1.0 };
+        for (j, b) in &link.b_nz {
+            f[*j] += sign * b * jump;
+        }
+    }
+
     fn model(&self, kind: MeshKind) -> &crate::contact::ltca::MeshModel {
         match kind {
             MeshKind::SunPlanet => &self.contact.sun_planet,

@@ -553,7 +553,9 @@ impl PeriodicProblem {
         // Every column enters the step control: a column starts as a unit
         // change of one coordinate and so carries every mode of the set,
         // the fastest included, which the orbit itself hardly excites.
-        let mut rk = self.integrator(period).map_err(err)?;
+        let settings =
+            Rk45Settings { record_events: true, ..*self.integrator(period).map_err(err)?.settings() };
+        let mut rk = Rk45::new(settings).map_err(err)?;
         self.model.set_drive_speed(omega);
         let rigid = self.model.rigid_velocity_at(omega);
         let mut frame = RigidFrame::new(&mut self.model, rigid);
@@ -566,7 +568,27 @@ impl PeriodicProblem {
         };
         let (qa, va) = system.initial_state(&q0, &v0, &units);
         rk.init(&mut system, 0.0, &qa, &va).map_err(err)?;
-        rk.advance_to(&mut system, period).map_err(err)?;
+        // Step by step: where a located event changes whether a mesh touches,
+        // its damping force jumps and the columns take the jump's saltation.
+        let mut touching = system.touching(0.0, &qa, &va);
+        while rk.time() < period {
+            rk.step(&mut system, period).map_err(err)?;
+            let events = rk.take_located_events();
+            if events.is_empty() {
+                continue;
+            }
+            let t = rk.time();
+            let (q, mut v) = (rk.q().to_vec(), rk.v().to_vec());
+            let now = system.touching(t, &q, &v);
+            if now != touching {
+                let steps = (1e-6 * period, self.q_scale);
+                if system.saltation(t, &q, &mut v, (&touching, &now), &events, steps) {
+                    let controller = rk.controller_state();
+                    rk.restore(&mut system, t, &q, &v, &controller).map_err(err)?;
+                }
+                touching = now;
+            }
+        }
         let columns: Vec<(Vec<f64>, Vec<f64>)> = (0..m).map(|j| system.column(rk.q(), rk.v(), j)).collect();
         let s = Work::from(*rk.stats());
         work.steps += s.steps;

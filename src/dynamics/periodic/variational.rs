@@ -17,16 +17,14 @@
 //! pair enters and leaves at zero penetration), so the tangent jumps but
 //! the flow's derivative does not: no saltation term arises, and the
 //! integrator's event location places the switches within its tolerance. A
-//! mesh's damping force does jump when the whole mesh separates (it acts
-//! while a pair touches); the columns miss that jump's saltation term, which
-//! a difference flow carries. The monodromy of a separating orbit is
-//! therefore approximate, and Newton's method converges on it linearly
-//! instead of quadratically ([`super::MonodromyMethod`]; tests/periodic.rs
-//! measures the difference against forward differences).
+//! mesh's damping force does jump when the whole mesh separates or touches
+//! again (it acts while a pair touches): there the columns take the
+//! saltation term of the jump ([`Variational::saltation`]), applied by the
+//! flow at the located event where a mesh's contact changes.
 
 use crate::dynamics::rigid_frame::RigidFrame;
 use crate::dynamics::solver::{
-    LowRankJacobian, RankOneTerm, SecondOrderSystem, TangentSystem, TermCoefficients,
+    LocatedEvent, LowRankJacobian, RankOneTerm, SecondOrderSystem, TangentSystem, TermCoefficients,
 };
 
 /// The model in the rigid-body frame with `columns` variational columns:
@@ -101,6 +99,88 @@ impl<'a, 'b> Variational<'a, 'b> {
             }
         }
         (qa, va)
+    }
+
+    /// Whether each mesh has a pair in contact at the augmented state (q, v)
+    /// at time `t` \[s\] (the flow's part of it decides).
+    pub(super) fn touching(&mut self, t: f64, q: &[f64], v: &[f64]) -> Vec<bool> {
+        let n = self.n;
+        let mut f = vec![0.0; n];
+        self.frame.force(t, &q[..n], &v[..n], &mut f);
+        self.frame.model().meshes.iter().map(|m| m.stiffness > 0.0).collect()
+    }
+
+    /// The saltation of the columns where a mesh's damping force switched:
+    /// at a located event at time `t` \[s\] the flow's state (q, v) lies on
+    /// the far side of the switching surface h = 0 of the tooth pair whose
+    /// event it was, and each column's velocities take
+    ///
+    /// Ẋⱼ⁺ = Ẋⱼ⁻ + M⁻¹ Δf (∂h/∂q · Xⱼ) / ḣ,
+    ///
+    /// Δf the jump of the generalized forces ([`PlanetaryDynamics::add_damping_switch`])
+    /// and ḣ the rate of h along the orbit, a difference of h over `tau` \[s\]
+    /// along (1, q̇) in time and state; ∂h/∂q · Xⱼ is a difference of h along
+    /// the column, `scale` \[m\] setting its step. `before` and `now` say which meshes
+    /// touched at the step's start and end, `events` are the step's located
+    /// events. Returns whether any column changed.
+    ///
+    /// [`PlanetaryDynamics::add_damping_switch`]: crate::dynamics::equations::PlanetaryDynamics::add_damping_switch
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn saltation(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &mut [f64],
+        (before, now): (&[bool], &[bool]),
+        events: &[LocatedEvent],
+        (tau, scale): (f64, f64),
+    ) -> bool {
+        let (n, m) = (self.n, self.columns);
+        let mut changed = false;
+        let mut g = Vec::new();
+        let mut qp = q[..n].to_vec();
+        for (i, (&was, &is)) in before.iter().zip(now).enumerate() {
+            if was == is {
+                continue;
+            }
+            let Some(e) = events.iter().rev().find(|e| self.frame.model().event_mesh(e.index) == Some(i))
+            else {
+                continue;
+            };
+            self.frame.events(t, &q[..n], &v[..n], &mut g);
+            let h1 = g[e.index];
+            for k in 0..n {
+                qp[k] = q[k] + tau * v[k];
+            }
+            self.frame.events(t + tau, &qp, &v[..n], &mut g);
+            let rate = (g[e.index] - h1) / tau;
+            if !(rate.is_finite() && rate != 0.0) {
+                continue;
+            }
+            // The model's state at the landing (the event evaluation above) gives δ̇.
+            let mut jump = vec![0.0; n];
+            self.frame.model().add_damping_switch(i, is, &mut jump);
+            for (a, mass) in jump.iter_mut().zip(&self.mass) {
+                *a /= mass;
+            }
+            for j in 0..m {
+                let size = (0..n).fold(0.0_f64, |a, k| a.max(q[n + k * m + j].abs()));
+                if size == 0.0 {
+                    continue;
+                }
+                let eps = 1e-6 * scale / size;
+                for k in 0..n {
+                    qp[k] = q[k] + eps * q[n + k * m + j];
+                }
+                self.frame.events(t, &qp, &v[..n], &mut g);
+                let factor = (g[e.index] - h1) / eps / rate;
+                for (k, a) in jump.iter().enumerate() {
+                    v[n + k * m + j] += a * factor;
+                }
+            }
+            changed = true;
+        }
+        changed
     }
 
     /// Column `j` of an augmented state (q, v): (Xⱼ, Ẋⱼ).
