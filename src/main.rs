@@ -1,6 +1,11 @@
 //! `planetwear`: the command-line tool. A thin shell over the library: it
 //! reads scenes, runs the analyses and writes reports.
 
+// Standard output is written through `out!`/`outln!` (src/cli/mod.rs), whose
+// failures are errors, never through a `print!` that panics on a closed pipe.
+#![deny(clippy::print_stdout)]
+#![forbid(unsafe_code)]
+
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -29,7 +34,7 @@ use planetwear::wear::state::{StateDifference, WornState};
 use planetwear::wear::stepper::WearModel;
 
 mod cli;
-use cli::{continuation::*, dynamics::*, fmu::*, study::*, wear::*};
+use cli::{continuation::*, dynamics::*, fmu::*, out, outln, study::*, wear::*};
 
 #[derive(Parser)]
 #[command(name = "planetwear", version, about = "Planetary gear dynamics with tooth wear")]
@@ -595,13 +600,13 @@ fn run(cli: Cli) -> Result<()> {
     check_outputs(&cli.command)?;
     match cli.command {
         Command::Scene { action: SceneAction::Show(SceneShowArgs { scene }) } => match load_any(&scene)? {
-            AnyScene::Gear(s) => print!("{}", s.to_toml()),
-            AnyScene::Lumped(s) => print!("{}", s.to_toml()),
+            AnyScene::Gear(s) => out!("{}", s.to_toml())?,
+            AnyScene::Lumped(s) => out!("{}", s.to_toml())?,
         },
         Command::Scene { action: SceneAction::Check(SceneCheckArgs { scene }) } => match load_any(&scene)? {
             AnyScene::Gear(s) => {
                 let set = validated(&s)?;
-                println!("scene '{}' is valid: {} planets", set.name(), set.planet_angles().len());
+                outln!("scene '{}' is valid: {} planets", set.name(), set.planet_angles().len())?;
                 // The radii that gear data gave (docs/GEAR_DATA.md).
                 for (key, given, g) in [
                     ("sun", s.sun.gear_data.is_some(), set.sun()),
@@ -609,7 +614,7 @@ fn run(cli: Cli) -> Result<()> {
                     ("ring", s.ring.gear_data.is_some(), set.ring()),
                 ] {
                     if given {
-                        println!(
+                        outln!(
                             "  {key} from gear data: tip radius {:.4} mm, root radius {:.4} mm, base radius {:.4} mm, \
                              tooth thickness {:.4} mm, {} {:.4} mm",
                             g.tip_radius * 1e3,
@@ -621,24 +626,24 @@ fn run(cli: Cli) -> Result<()> {
                                 planetwear::model::gear::RootForm::Hob { tip_radius: r }
                                 | planetwear::model::gear::RootForm::Fillet { radius: r } => r * 1e3,
                             }
-                        );
+                        )?;
                     }
                 }
                 // The estimate every run is held to (docs/LIMITS.md), and what
                 // a command refuses beyond the scene's rules.
-                println!("  cost: {}", planetwear::model::cost::estimate(&s).summary());
+                outln!("  cost: {}", planetwear::model::cost::estimate(&s).summary())?;
                 for w in planetwear::model::cost::warnings(&s) {
-                    println!("  warning: {w}");
+                    outln!("  warning: {w}")?;
                 }
                 if let Err(p) =
                     planetwear::model::cost::ltca_torque(set.input_torque(), "operation.input_torque_nm")
                 {
-                    println!("  warning: `ltca` will refuse it: {p}");
+                    outln!("  warning: `ltca` will refuse it: {p}")?;
                 }
             }
             AnyScene::Lumped(s) => {
                 let set = s.validate()?;
-                println!("lumped scene '{}' is valid: {} planets", s.name, set.planet_angles.len());
+                outln!("lumped scene '{}' is valid: {} planets", s.name, set.planet_angles.len())?;
             }
         },
         Command::Simulate(a) => simulate_command(a)?,
@@ -730,19 +735,14 @@ fn cache_directory() -> Option<PathBuf> {
 }
 
 fn main() -> ExitCode {
-    // A reader that closes the pipe early (`planetwear simulate … | head`)
-    // ends the process by SIGPIPE, as for any Unix filter, instead of a
-    // failed print panicking. Rust sets SIGPIPE to ignored before main.
-    // SAFETY: called once at start, before any thread is spawned; SIG_DFL
-    // is a valid disposition for SIGPIPE.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
-    }
     if let Some(dir) = cache_directory() {
         planetwear::contact::cache::enable(&dir);
     }
-    match run(Cli::parse()) {
+    // A reader that closes the pipe early (`planetwear simulate … | head`)
+    // ends the tool quietly, as any Unix filter (src/cli/mod.rs).
+    match run(Cli::parse()).and_then(|()| cli::flush_stdout()) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if cli::stdout_closed(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", error_report(&e));
             ExitCode::from(2)

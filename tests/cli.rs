@@ -211,27 +211,93 @@ fn an_error_names_each_cause_once() {
     assert!(err.starts_with("error: --wear-state "), "{err}");
 }
 
-/// A reader that closes the pipe early ends the tool quietly, as any Unix
-/// filter: killed by SIGPIPE, no panic message on stderr.
-#[test]
-fn a_closed_pipe_ends_the_tool_quietly() {
+/// Runs the tool with its standard output a pipe whose reader takes `lines`
+/// lines and closes it (at once for none); returns the lines read and the
+/// tool's status and standard error.
+fn with_a_closed_pipe(args: &[&str], lines: usize) -> (Vec<String>, std::process::Output) {
     use std::io::{BufRead, BufReader};
-    use std::os::unix::process::ExitStatusExt;
     use std::process::Stdio;
     let mut child = Command::new(env!("CARGO_BIN_EXE_planetwear"))
-        .args(["simulate", "--scene", "example-2004", "--stop", "0.05", "--step", "1e-5"])
+        .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("runs");
-    let mut first = String::new();
-    BufReader::new(child.stdout.take().unwrap()).read_line(&mut first).unwrap();
-    assert!(first.starts_with('{'), "{first}");
-    // The reader (dropped here) closed the pipe after one line.
-    let out = child.wait_with_output().unwrap();
+    let mut reader = BufReader::new(child.stdout.take().unwrap());
+    let mut read = Vec::new();
+    for _ in 0..lines {
+        let mut line = String::new();
+        reader.read_line(&mut line).unwrap();
+        read.push(line);
+    }
+    // The reader, dropped here, closes the pipe.
+    drop(reader);
+    (read, child.wait_with_output().unwrap())
+}
+
+/// The tool ended as a Unix filter whose reader went away: status 0 and
+/// nothing said (no panic of a failed print, no error, no signal).
+fn assert_ended_quietly(args: &[&str], out: &std::process::Output) {
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!err.contains("panicked") && !err.contains("Broken pipe"), "{err}");
-    assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "status {:?}", out.status);
+    assert!(
+        !err.contains("panicked") && !err.contains("Broken pipe") && !err.contains("error"),
+        "{args:?}: {err}"
+    );
+    assert!(out.status.success(), "{args:?}: status {:?}; {err}", out.status);
+}
+
+/// A reader that closes the pipe early ends the tool quietly, as any Unix
+/// filter: `simulate` writes thousands of JSON lines, and its next line after
+/// the reader has gone ends the run with status 0 and nothing on stderr.
+#[test]
+fn a_closed_pipe_ends_the_tool_quietly() {
+    let args = ["simulate", "--scene", "example-2004", "--stop", "0.05", "--step", "1e-5"];
+    let (read, out) = with_a_closed_pipe(&args, 1);
+    assert!(read[0].starts_with('{'), "{}", read[0]);
+    assert_ended_quietly(&args, &out);
+}
+
+/// The tables and documents other commands print end as quietly: `modes`
+/// with its reader gone before the table's first line (the modes take
+/// milliseconds; the pipe is closed as soon as the tool starts), and `fmu
+/// xml`, whose 80 kB are more than the pipe holds, after one line read.
+#[test]
+fn a_closed_pipe_ends_a_table_or_a_document_quietly() {
+    for (args, lines) in [
+        (&["modes", "--scene", "example-2004"][..], 0),
+        (&["fmu", "xml"][..], 1),
+        (&["scene", "show", "example-2004"][..], 0),
+    ] {
+        let (read, out) = with_a_closed_pipe(args, lines);
+        assert!(read.iter().all(|l| !l.is_empty()), "{args:?}: {read:?}");
+        assert_ended_quietly(args, &out);
+    }
+}
+
+/// Any other failure to write standard output (here a full device) is an
+/// error naming standard output, with the failing status 2.
+#[test]
+fn a_failed_write_to_standard_output_is_an_error() {
+    let full = std::path::Path::new("/dev/full");
+    if !full.exists() {
+        return;
+    }
+    for args in
+        [&["scene", "show", "example-2004"][..], &["modes", "--scene", "example-2004"], &["fmu", "xml"]]
+    {
+        let out = Command::new(env!("CARGO_BIN_EXE_planetwear"))
+            .args(args)
+            .stdout(std::fs::OpenOptions::new().write(true).open(full).unwrap())
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: writing to standard output: No space left on device"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
 }
 
 /// A speed no gear set of this kind runs at is said on stderr before the

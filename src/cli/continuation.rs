@@ -90,9 +90,9 @@ pub(crate) fn sweep_continuation(
     });
     write_atomic(&out.join("sweep.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
+        outln!("{}", serde_json::to_string_pretty(&summary)?)?;
     } else {
-        println!(
+        outln!(
             "continued {} periodic states from {from} to {to} rpm in {wall:.2} s ({} flows over one period, {} steps); {}; {} files in {}",
             branch.points.len(),
             branch.flows,
@@ -100,21 +100,21 @@ pub(crate) fn sweep_continuation(
             branch.ended,
             files.len(),
             out.display()
-        );
+        )?;
         for b in &branch.bifurcations {
             let kind = match b.kind {
                 BifurcationKind::Fold => "fold",
                 BifurcationKind::PeriodDoubling => "period doubling",
             };
-            println!(
+            outln!(
                 "  {kind} at {:.1} rpm (multipliers {:.3} and {:.3} either side)",
                 rad_per_s_to_rpm(b.speed),
                 b.multipliers.0,
                 b.multipliers.1
-            );
+            )?;
         }
         for [a, b] in &unstable {
-            println!("  unstable from {a:.1} to {b:.1} rpm");
+            outln!("  unstable from {a:.1} to {b:.1} rpm")?;
         }
     }
     Ok(())

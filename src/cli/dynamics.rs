@@ -59,7 +59,7 @@ pub(crate) fn simulate_command(
                 row[format!("{planet}Separated")] = u8::from(x.separated).into();
             }
         }
-        println!("{row}");
+        outln!("{row}")?;
     }
     Ok(())
 }
@@ -89,16 +89,16 @@ pub(crate) fn run_command(
         write_steady_state(&ss, &set, dir)?;
     }
     if json {
-        println!("{}", serde_json::to_string_pretty(&steady_state_json(&ss)?)?);
+        outln!("{}", serde_json::to_string_pretty(&steady_state_json(&ss)?)?)?;
     } else {
-        print_steady_state(&ss, set.sun().face_width * 1e3);
+        print_steady_state(&ss, set.sun().face_width * 1e3)?;
         if model.carrier_frame_speed() != 0.0 {
-            println!(
+            outln!(
                 "  carrier turning at {:.2} rad/s: steady centrifugal load {:.2} N on each planet bearing \
                  (radially outward, in the dynamics)",
                 model.carrier_frame_speed(),
                 model.planet_centrifugal_force()
-            );
+            )?;
         }
     }
     Ok(())
@@ -211,18 +211,18 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
     });
     write_atomic(&out.join("sweep.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
+        outln!("{}", serde_json::to_string_pretty(&summary)?)?;
     } else {
-        println!(
+        outln!(
             "swept {} speeds × {} directions in {wall:.2} s ({steps} steps, {:.0} steps/s); {} files in {}",
             speeds.len(),
             dirs.len(),
             steps as f64 / wall,
             files.len(),
             out.display()
-        );
+        )?;
         for p in &peaks {
-            println!(
+            outln!(
                 "  peak {:?} {} at {:.0} rpm: F(rms) {:.1} N/mm; {}×f_m = {:.0} Hz ≈ {:?} mode at {:.0} Hz ({:.1} %)",
                 p.direction,
                 p.mesh.name(),
@@ -233,7 +233,7 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
                 p.family,
                 p.natural_frequency,
                 100.0 * p.mismatch
-            );
+            )?;
         }
     }
     Ok(())
@@ -293,44 +293,54 @@ pub(crate) fn ltca_command(
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         let files = study.write_plots(dir).map_err(anyhow::Error::from)?;
         if !json {
-            println!("wrote {} plot files to {}", files.len(), dir.display());
+            outln!("wrote {} plot files to {}", files.len(), dir.display())?;
         }
     }
     if json {
-        println!("{text}");
+        outln!("{text}")?;
     } else {
-        print_summary(&doc);
+        print_summary(&doc)?;
     }
     Ok(())
 }
 
-pub(crate) fn print_steady_state(ss: &SteadyState, width_mm: f64) {
-    println!(
+pub(crate) fn print_steady_state(ss: &SteadyState, width_mm: f64) -> Result<()> {
+    outln!(
         "steady state at {:.1} rpm (mesh frequency {:.1} Hz, {} mesh cycles; {} steps, {} Newton iterations)",
         rad_per_s_to_rpm(ss.input_speed),
         ss.mesh_frequency,
         ss.cycles,
         ss.stats.steps,
         ss.stats.newton_iterations
-    );
-    println!(
+    )?;
+    outln!(
         "  {:<16} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7}",
-        "mesh", "mean", "F1", "F2", "F3", "F4", "F5", "F6", "rms", "sep"
-    );
+        "mesh",
+        "mean",
+        "F1",
+        "F2",
+        "F3",
+        "F4",
+        "F5",
+        "F6",
+        "rms",
+        "sep"
+    )?;
     for m in &ss.meshes {
         let h = &m.harmonics;
-        print!(
+        out!(
             "  planet {} {:<7} {:>9.2}",
             m.planet + 1,
             format!("{:?}", m.mesh).replace("Planet", ""),
             h.mean / width_mm
-        );
+        )?;
         for a in &h.amplitude {
-            print!(" {:>9.2}", a / width_mm);
+            out!(" {:>9.2}", a / width_mm)?;
         }
-        println!(" {:>9.2} {:>7.3}", h.rms / width_mm, m.separation);
+        outln!(" {:>9.2} {:>7.3}", h.rms / width_mm, m.separation)?;
     }
-    println!("  (forces in N/mm of face width)");
+    outln!("  (forces in N/mm of face width)")?;
+    Ok(())
 }
 
 /// Prints the natural modes of `set`; with `frame` = (Ω_c [rad/s], r_c \[m\])
@@ -356,14 +366,14 @@ pub(crate) fn report_modes(name: &str, set: &LumpedSet, frame: Option<(f64, f64)
                 "whirl_modes": whirl,
             });
         }
-        println!("{}", serde_json::to_string_pretty(&doc)?);
+        outln!("{}", serde_json::to_string_pretty(&doc)?)?;
         return Ok(());
     }
-    println!(
+    outln!(
         "natural modes of {name} ({:?}, held {:?}); mean mesh stiffness sun–planet {:.4e} N/m, ring–planet {:.4e} N/m",
         set.fidelity, set.held, set.sun_mesh, set.ring_mesh
-    );
-    println!("  {:>12}  {:<14} {:>12}", "frequency Hz", "class", "multiplicity");
+    )?;
+    outln!("  {:>12}  {:<14} {:>12}", "frequency Hz", "class", "multiplicity")?;
     let mut i = 0;
     while i < modes.len() {
         let m = &modes[i];
@@ -374,37 +384,37 @@ pub(crate) fn report_modes(name: &str, set: &LumpedSet, frame: Option<(f64, f64)
             ModeClass::Planet => "planet",
             ModeClass::Mixed => "mixed",
         };
-        println!("  {:>12.1}  {:<14} {:>12}", m.frequency, class, m.multiplicity);
+        outln!("  {:>12.1}  {:<14} {:>12}", m.frequency, class, m.multiplicity)?;
         i += m.multiplicity.max(1);
     }
     if let Some((w, load, whirl)) = &whirl {
-        println!(
+        outln!(
             "carrier turning at {w:.2} rad/s ({:.1} rpm): planet centrifugal bearing load {load:.2} N; \
              frequencies with the gyroscopic and centripetal terms:",
             rad_per_s_to_rpm(*w)
-        );
-        println!("  {:>12}  {:>14}", "frequency Hz", "growth 1/s");
+        )?;
+        outln!("  {:>12}  {:>14}", "frequency Hz", "growth 1/s")?;
         for m in whirl {
-            println!("  {:>12.1}  {:>14.3e}", m.frequency, m.growth_rate);
+            outln!("  {:>12.1}  {:>14.3e}", m.frequency, m.growth_rate)?;
         }
     }
     Ok(())
 }
 
-pub(crate) fn print_summary(doc: &serde_json::Value) {
+pub(crate) fn print_summary(doc: &serde_json::Value) -> Result<()> {
     let width_mm = doc["face_width"].as_f64().unwrap_or(1.0) * 1e3;
-    println!(
+    outln!(
         "LTCA of {} at {} N·m (κ = {})",
         doc["scene"].as_str().unwrap_or("?"),
         doc["input_torque"],
         doc["kappa"]
-    );
+    )?;
     for m in doc["meshes"].as_array().into_iter().flatten() {
         let f = |k: &str| m[k].as_f64().unwrap_or(f64::NAN);
         let g = |k: &str, s: &str| m[k][s].as_f64().unwrap_or(f64::NAN);
-        println!("  {}:", m["name"].as_str().unwrap_or("?"));
-        println!("    load {:.1} N/mm along the line of action", f("load") / width_mm);
-        println!(
+        outln!("  {}:", m["name"].as_str().unwrap_or("?"))?;
+        outln!("    load {:.1} N/mm along the line of action", f("load") / width_mm)?;
+        outln!(
             "    contact ratio: nominal {:.4}, on the involutes {:.4}, loaded {:.4} (1 pair {:.1} %, 2 pairs {:.1} %, 3 pairs {:.1} %)",
             f("contact_ratio_nominal"),
             f("contact_ratio_involute"),
@@ -412,23 +422,23 @@ pub(crate) fn print_summary(doc: &serde_json::Value) {
             100.0 * m["pairs_in_contact_fraction"]["1"].as_f64().unwrap_or(0.0),
             100.0 * m["pairs_in_contact_fraction"]["2"].as_f64().unwrap_or(0.0),
             100.0 * m["pairs_in_contact_fraction"]["3"].as_f64().unwrap_or(0.0),
-        );
+        )?;
         let k = |v: f64| v / width_mm * 1e-6;
-        println!(
+        outln!(
             "    mesh stiffness N/(mm·µm): nominal mean {:.3} p-p {:.3}; loaded mean {:.3} p-p {:.3}; ISO c_γα {:.3}",
             k(g("mesh_stiffness_nominal", "mean")),
             k(g("mesh_stiffness_nominal", "peak_to_peak")),
             k(g("mesh_stiffness_loaded", "mean")),
             k(g("mesh_stiffness_loaded", "peak_to_peak")),
             m["iso6336"]["mesh_stiffness_per_width_N_per_mm_um"].as_f64().unwrap_or(f64::NAN),
-        );
-        println!(
+        )?;
+        outln!(
             "    static TE: mean {:.3} µm, peak-to-peak {:.3} µm; peak Hertz pressure {:.0} MPa, half-width up to {:.1} µm",
             g("static_transmission_error", "mean") * 1e6,
             g("static_transmission_error", "peak_to_peak") * 1e6,
             f("peak_hertz_pressure") * 1e-6,
             f("max_hertz_half_width") * 1e6,
-        );
+        )?;
     }
     let p = &doc["planets"];
     let loads: Vec<String> = p["mean_load"]
@@ -437,12 +447,13 @@ pub(crate) fn print_summary(doc: &serde_json::Value) {
         .flatten()
         .map(|v| format!("{:.2}", v.as_f64().unwrap_or(f64::NAN) / width_mm))
         .collect();
-    println!(
+    outln!(
         "  planets: mean loads {} N/mm, load sharing factor {:.4}; sun rotation along the line of action peak-to-peak {:.3} µm",
         loads.join(", "),
         p["load_sharing_factor"].as_f64().unwrap_or(f64::NAN),
         p["sun_transmission_error"]["peak_to_peak"].as_f64().unwrap_or(f64::NAN) * 1e6
-    );
+    )?;
+    Ok(())
 }
 
 /// A steady state as JSON with its meshes' planets numbered from 1, as the

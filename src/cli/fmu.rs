@@ -20,9 +20,9 @@ pub(crate) fn fmu_pack_command(FmuPackArgs { out, library, scene }: FmuPackArgs)
     )?;
     match &scene {
         Some(s) => {
-            println!("wrote {} (library {}, default scene '{}')", out.display(), library.display(), s.name)
+            outln!("wrote {} (library {}, default scene '{}')", out.display(), library.display(), s.name)?
         }
-        None => println!("wrote {} (library {})", out.display(), library.display()),
+        None => outln!("wrote {} (library {})", out.display(), library.display())?,
     }
     Ok(())
 }
@@ -39,7 +39,7 @@ pub(crate) fn fmu_references_command(
     let refs = example_references(&texts, &CASES, relative_tolerance)?;
     write_atomic(&out, refs.to_json()?.as_bytes())?;
     for c in &refs.cases {
-        println!(
+        outln!(
             "{:<18} sun F1 {:9.3} N  ring F1 {:9.3} N  drift {:.2e}  tolerance {:.1e} of F1  ({} steps)",
             c.name,
             c.values["window.sunMeshF1"],
@@ -47,14 +47,9 @@ pub(crate) fn fmu_references_command(
             c.budget.drift,
             c.budget.fraction_of_f1,
             c.work.steps
-        );
+        )?;
     }
-    println!(
-        "wrote {} ({} cases, {:.1} s)",
-        out.display(),
-        refs.cases.len(),
-        started.elapsed().as_secs_f64()
-    );
+    outln!("wrote {} ({} cases, {:.1} s)", out.display(), refs.cases.len(), started.elapsed().as_secs_f64())?;
     Ok(())
 }
 
@@ -62,7 +57,7 @@ pub(crate) fn fmu_xml_command(FmuXmlArgs { out }: FmuXmlArgs) -> Result<()> {
     let xml = planetwear::fmi::variables::MODEL_DESCRIPTION_XML;
     match out {
         Some(path) => write_atomic(&path, xml.as_bytes())?,
-        None => print!("{xml}"),
+        None => out!("{xml}")?,
     }
     Ok(())
 }
@@ -71,7 +66,7 @@ pub(crate) fn fmu_variables_command(FmuXmlArgs { out }: FmuXmlArgs) -> Result<()
     let page = planetwear::fmi::reference::variables_markdown();
     match out {
         Some(path) => write_atomic(&path, page.as_bytes())?,
-        None => print!("{page}"),
+        None => out!("{page}")?,
     }
     Ok(())
 }

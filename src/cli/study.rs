@@ -17,21 +17,21 @@ pub(crate) fn validate_command(ValidateArgs { out, quick, scene }: ValidateArgs)
     );
     planetwear::report::validation::write_report(&v, &out, set.sun().face_width, &command)?;
     for r in &v.rows {
-        println!(
+        outln!(
             "{:<5} {:<40} ours {}",
             if r.verdict == planetwear::analysis::study::validation::Verdict::Pass { "pass" } else { "FAIL" },
             r.id,
             r.ours
-        );
+        )?;
     }
     let failing = planetwear::report::validation::failing(&v);
-    println!(
+    outln!(
         "{} of {} rows pass ({:.0} s); report {}",
         v.rows.len() - failing.len(),
         v.rows.len(),
         v.seconds,
         out.join("VALIDATION.md").display()
-    );
+    )?;
     Ok(())
 }
 
@@ -54,7 +54,7 @@ pub(crate) fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: b
         }
     };
     if show_plan {
-        print!("{text}");
+        out!("{text}")?;
         return Ok(());
     }
     let file = PlanFile::from_toml(&text).with_context(|| format!("--plan {plan}"))?;
@@ -68,9 +68,9 @@ pub(crate) fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: b
     match calibrate(&plan_value) {
         Ok(done) => {
             if json {
-                println!("{}", serde_json::to_string_pretty(&done.report)?);
+                outln!("{}", serde_json::to_string_pretty(&done.report)?)?;
             } else {
-                print_calibration(&done.report, &file.base);
+                print_calibration(&done.report, &file.base)?;
             }
             if let Some(path) = out {
                 // A scene the tool writes is one it reads back.
@@ -78,16 +78,16 @@ pub(crate) fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: b
                 planetwear::files::check_output_size(path, planetwear::files::InputKind::Scene, text.len())?;
                 write_atomic(path, text.as_bytes())?;
                 if !json {
-                    println!("wrote the calibrated scene {} to {}", done.scene.name, path.display());
+                    outln!("wrote the calibrated scene {} to {}", done.scene.name, path.display())?;
                 }
             }
             Ok(())
         }
         Err(CalibrationError::IllPosed { why, report }) => {
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                outln!("{}", serde_json::to_string_pretty(&report)?)?;
             } else {
-                print_calibration(&report, &file.base);
+                print_calibration(&report, &file.base)?;
             }
             bail!("ill-posed calibration, no scene written: {why}")
         }
@@ -95,18 +95,31 @@ pub(crate) fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: b
     }
 }
 
-pub(crate) fn print_calibration(r: &planetwear::analysis::study::calibrate::Report, base: &str) {
-    println!(
+pub(crate) fn print_calibration(
+    r: &planetwear::analysis::study::calibrate::Report,
+    base: &str,
+) -> Result<()> {
+    outln!(
         "calibration of {} from {base}: {} iterations, {} evaluations, {} contact models, {:.1} s",
-        r.name, r.iterations, r.evaluations, r.contact_models, r.seconds
-    );
-    println!("targets:");
-    println!(
+        r.name,
+        r.iterations,
+        r.evaluations,
+        r.contact_models,
+        r.seconds
+    )?;
+    outln!("targets:")?;
+    outln!(
         "  {:<3} {:<44} {:>11} {:>8} {:>11} {:>11} {:>9}  met",
-        "#", "measure", "target", "tol", "start", "reached", "residual"
-    );
+        "#",
+        "measure",
+        "target",
+        "tol",
+        "start",
+        "reached",
+        "residual"
+    )?;
     for (i, t) in r.targets.iter().enumerate() {
-        println!(
+        outln!(
             "  {:<3} {:<44} {:>11.4} {:>7.2}% {:>11.4} {:>11.4} {:>+8.3}%  {}",
             i + 1,
             t.target.measure.describe(),
@@ -116,11 +129,11 @@ pub(crate) fn print_calibration(r: &planetwear::analysis::study::calibrate::Repo
             t.reached,
             100.0 * t.residual,
             if t.met { "yes" } else { "NO" }
-        );
+        )?;
     }
-    println!("parameters (file units):");
+    outln!("parameters (file units):")?;
     for (k, p) in r.parameters.iter().enumerate() {
-        println!(
+        outln!(
             "  p{} {}: bounds [{:.4e}, {:.4e}], start {:.5e}, fitted {:.5e}, ratio {:.4}{}",
             k + 1,
             p.free.name(),
@@ -130,24 +143,25 @@ pub(crate) fn print_calibration(r: &planetwear::analysis::study::calibrate::Repo
             p.fitted,
             p.ratio,
             p.at_bound.as_ref().map(|b| format!("  AT ITS {}", b.to_uppercase())).unwrap_or_default()
-        );
+        )?;
     }
-    print!("sensitivity ∂ln(target)/∂ln(parameter) at the fit:\n  {:<3}", "#");
+    out!("sensitivity ∂ln(target)/∂ln(parameter) at the fit:\n  {:<3}", "#")?;
     for k in 0..r.parameters.len() {
-        print!(" {:>9}", format!("p{}", k + 1));
+        out!(" {:>9}", format!("p{}", k + 1))?;
     }
-    println!();
+    outln!()?;
     for (i, _) in r.targets.iter().enumerate() {
-        print!("  {:<3}", i + 1);
+        out!("  {:<3}", i + 1)?;
         for p in &r.parameters {
-            print!(" {:>+9.4}", p.sensitivity[i]);
+            out!(" {:>+9.4}", p.sensitivity[i])?;
         }
-        println!();
+        outln!()?;
     }
-    println!(
+    outln!(
         "singular values of the scaled Jacobian: {}",
         r.singular_values.iter().map(|v| format!("{v:.3e}")).collect::<Vec<_>>().join(", ")
-    );
+    )?;
+    Ok(())
 }
 
 pub(crate) fn work_precision(out: &Path, quick: bool) -> Result<()> {
@@ -174,7 +188,7 @@ pub(crate) fn work_precision(out: &Path, quick: bool) -> Result<()> {
         "independent_integrator": "none in the CLI (cargo bench --bench work_precision adds DOP853)",
     });
     let files = write_study(&study, out, context)?;
-    print!("{}", tables_markdown(&study));
-    println!("\nstudy took {:.1} s; {} files in {}", study.wall_seconds, files.len(), out.display());
+    out!("{}", tables_markdown(&study))?;
+    outln!("\nstudy took {:.1} s; {} files in {}", study.wall_seconds, files.len(), out.display())?;
     Ok(())
 }

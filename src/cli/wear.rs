@@ -80,20 +80,20 @@ pub(crate) fn wear_run(
     // Written last: its presence says the run finished (docs/LIMITS.md).
     write_atomic(&out.join("summary.json"), serde_json::to_string_pretty(&doc)?.as_bytes())?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&doc)?);
+        outln!("{}", serde_json::to_string_pretty(&doc)?)?;
         return Ok(());
     }
-    println!(
+    outln!(
         "wear of {}: {} updates, states and summary.json in {}, {} plot files",
         set.name(),
         states.len() - 1,
         out.display(),
         files.len()
-    );
-    println!("   κ  cycles sun  cycles planet   input rev   sun max µm @ roll   planet max µm @ roll   time");
+    )?;
+    outln!("   κ  cycles sun  cycles planet   input rev   sun max µm @ roll   planet max µm @ roll   time")?;
     for s in doc["states"].as_array().into_iter().flatten().skip(1) {
         let f = |m: &str, k: &str| s["flanks"][m][k].as_f64().unwrap_or(f64::NAN);
-        println!(
+        outln!(
             "  {:>2}  {:>10.4e}  {:>13.4e}  {:>10.4e}   {:>6.3} @ {:>6.2}°     {:>6.3} @ {:>6.2}°      {:.2} s",
             s["kappa"],
             s["cycles_sun"].as_f64().unwrap_or(f64::NAN),
@@ -104,10 +104,10 @@ pub(crate) fn wear_run(
             f("planet", "max_um"),
             f("planet", "max_roll_deg"),
             s["seconds"].as_f64().unwrap_or(0.0),
-        );
+        )?;
     }
     if let Some(why) = stopped {
-        println!("stopped before κ = {to_kappa}: {why}");
+        outln!("stopped before κ = {to_kappa}: {why}")?;
     }
     Ok(())
 }
@@ -151,19 +151,19 @@ pub(crate) fn wear_compare_command(
             }));
             continue;
         }
-        println!("{rpm:.0} rpm (κ = {}):", state.kappa);
+        outln!("{rpm:.0} rpm (κ = {}):", state.kappa)?;
         for m in &c.meshes {
-            println!(
+            outln!(
                 "  {}: F(rms) {:.1} N/mm; largest pair load quasi-static {:.1}, dynamic {:.1} N/mm ({:.3}×)",
                 m.mesh.name(),
                 m.rms_mesh_force / face_mm,
                 m.quasi_static_max_pair_load / face_mm,
                 m.dynamic_max_pair_load / face_mm,
                 m.dynamic_max_pair_load / m.quasi_static_max_pair_load
-            );
+            )?;
         }
         for f in &c.flanks {
-            println!(
+            outln!(
                 "  {}: largest wear per cycle quasi-static {:.4} pm at {:.2}°, dynamic {:.4} pm at {:.2}° ({:.3}×)",
                 f.flank.name(),
                 f.quasi_static_max * 1e12,
@@ -171,11 +171,11 @@ pub(crate) fn wear_compare_command(
                 f.dynamic_max * 1e12,
                 f.dynamic_max_roll.to_degrees(),
                 f.ratio
-            );
+            )?;
         }
     }
     if json {
-        println!("{}", serde_json::to_string_pretty(&docs)?);
+        outln!("{}", serde_json::to_string_pretty(&docs)?)?;
     }
     Ok(())
 }
@@ -210,15 +210,15 @@ pub(crate) fn wear_effect_command(
     write_atomic(&out.join("effect.md"), table.as_bytes())?;
     write_atomic(&out.join("effect.json"), serde_json::to_string_pretty(&results)?.as_bytes())?;
     for v in &list {
-        println!("{}: {}", v.key, v.description);
+        outln!("{}: {}", v.key, v.description)?;
     }
-    println!("\n{table}");
-    println!(
+    outln!("\n{table}")?;
+    outln!(
         "{} variants in {:.1} s; effect.md and effect.json in {}",
         results.len(),
         started.elapsed().as_secs_f64(),
         out.display()
-    );
+    )?;
     Ok(())
 }
 
@@ -256,7 +256,7 @@ pub(crate) fn wear_step_command(
     planetwear::wear::state::write_worn_state(&out, &after)?;
     let deepest = |s: &planetwear::wear::state::WornState, f| s.deepest_on(f);
     let (sun, planet) = (Flank::SunDrive, Flank::PlanetSunSide);
-    println!(
+    outln!(
         "κ {} → {}: {:.4e} input revolutions ({:.4e} in all); deepest wear sun {:.3} µm at {:.2}°, planet {:.3} µm at {:.2}°; wrote {}",
         before.kappa,
         after.kappa,
@@ -267,6 +267,6 @@ pub(crate) fn wear_step_command(
         deepest(&after, planet).depth * 1e6,
         deepest(&after, planet).roll.to_degrees(),
         out.display()
-    );
+    )?;
     Ok(())
 }
