@@ -201,3 +201,68 @@ mod deviations_and_slices {
         );
     }
 }
+
+/// The single-slice path of `force_with_derivatives` (the dynamic model's event
+/// evaluation, read from the interleaved tables) gives bit for bit what the general
+/// slice-by-slice path gives: on worn flanks with the example's relieved edges, in drive
+/// contact, in the backlash and in back contact, with pairs entering and leaving the tables.
+#[test]
+fn the_single_slice_event_path_is_the_general_path_bit_for_bit() {
+    use planetwear::geometry::profile::ProfileDeviation;
+    let set = example();
+    let w = per_planet_load(&set);
+    let wear = |a: f64, b: f64| ProfileDeviation::new(vec![0.0, 0.3, 0.7, 1.0], vec![a, 0.0, b, 0.5 * a]);
+    let worn = MeshFlanks {
+        gear1_drive: wear(4e-6, 1e-6),
+        gear1_back: wear(2e-6, 3e-6),
+        gear2_drive: wear(1e-6, 2e-6),
+        gear2_back: wear(3e-6, 0.5e-6),
+    };
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for kind in [MeshKind::SunPlanet, MeshKind::RingPlanet] {
+        for flanks in [&MeshFlanks::default(), &worn] {
+            let m = MeshModel::new(&set, kind, flanks);
+            let p = m.path().clone();
+            let backlash = m.separation.normal_backlash;
+            let slots = m.event_slots();
+            let (mut fast, mut general) = (vec![0.0; 2 * slots], vec![0.0; 2 * slots]);
+            let mut compared = [0usize; 3];
+            for i in 0..=1200 {
+                // Four base pitches around the path: pairs enter and leave the tables.
+                let s = p.start + (i as f64 / 1200.0 * 4.0 - 1.5) * p.base_pitch;
+                let d = m.approach_for(s.clamp(p.start, p.end), w);
+                for delta in [d, 0.3 * d, 0.0, -0.5 * backlash, -backlash - d, -backlash - 0.2 * d, 2.0 * d] {
+                    let a = m.force_with_derivatives(s, delta, &mut fast);
+                    let b = m.force_with_derivatives_sliced(s, delta, &mut general);
+                    let law = |l: &planetwear::contact::ltca::MeshLaw| {
+                        bits(&[l.force, l.approach_stiffness, l.position_derivative, l.peak_pair_force])
+                    };
+                    assert_eq!(law(&a), law(&b), "{kind:?} at s = {s}, δ = {delta}: {a:?} vs {b:?}");
+                    assert_eq!(bits(&fast), bits(&general), "{kind:?} events at s = {s}, δ = {delta}");
+                    // Without event slots (the hot path's fallback) the law is the same.
+                    let c = m.force_with_derivatives(s, delta, &mut []);
+                    assert_eq!(law(&a), law(&c));
+                    compared[(a.force > 0.0) as usize + 2 * (a.force < 0.0) as usize] += 1;
+                }
+            }
+            // Every regime was seen: open, drive contact, back contact.
+            assert!(compared.iter().all(|&n| n > 100), "{kind:?}: {compared:?}");
+        }
+    }
+    // Far outside the tables and at non-finite input the two paths still agree.
+    let m = MeshModel::new(&set, MeshKind::SunPlanet, &worn);
+    let slots = m.event_slots();
+    let (mut fast, mut general) = (vec![0.0; 2 * slots], vec![0.0; 2 * slots]);
+    for s in [1e20, -1e20, 1e300, f64::NAN, f64::INFINITY] {
+        for delta in [1e-5, -1e-3, f64::NAN] {
+            let a = m.force_with_derivatives(s, delta, &mut fast);
+            let b = m.force_with_derivatives_sliced(s, delta, &mut general);
+            assert_eq!(
+                [a.force, a.approach_stiffness, a.position_derivative, a.peak_pair_force].map(f64::to_bits),
+                [b.force, b.approach_stiffness, b.position_derivative, b.peak_pair_force].map(f64::to_bits),
+                "s = {s}, δ = {delta}"
+            );
+            assert_eq!(bits(&fast), bits(&general), "events at s = {s}, δ = {delta}");
+        }
+    }
+}

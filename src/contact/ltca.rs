@@ -46,6 +46,12 @@ pub struct MeshModel {
     /// drive pair stiffness, back pair stiffness), so that one pair's lookup reads one cache
     /// line; empty with more than one slice.
     packed: Vec<[f64; 4]>,
+    /// 1/step of the tables \[1/m\], p_b/step and its reciprocal, as the hot path computes them,
+    /// and 1/p_b \[1/m\].
+    inv_step: f64,
+    inv_base_pitch: f64,
+    per_pitch: f64,
+    inv_per_pitch: f64,
 }
 
 /// State of one tooth pair at one instant.
@@ -134,7 +140,14 @@ impl MeshModel {
         } else {
             Vec::new()
         };
+        let inv_step = 1.0 / separation.drive.step;
+        let per_pitch = separation.path.base_pitch * inv_step;
+        let inv_base_pitch = 1.0 / separation.path.base_pitch;
         Self {
+            inv_base_pitch,
+            inv_step,
+            per_pitch,
+            inv_per_pitch: 1.0 / per_pitch,
             separation,
             slices: tables,
             stiffness,
@@ -154,8 +167,8 @@ impl MeshModel {
     fn pair_range(&self, s: f64) -> std::ops::RangeInclusive<i32> {
         let t = &self.separation.drive;
         let pb = self.path().base_pitch;
-        let k_lo = ((t.start - s) / pb).ceil() as i32;
-        let k_hi = ((t.end() - s) / pb).floor() as i32;
+        let k_lo = (-floor_of_quotient(s - t.start, pb, self.inv_base_pitch)) as i32;
+        let k_hi = floor_of_quotient(t.end() - s, pb, self.inv_base_pitch) as i32;
         k_lo..=k_hi
     }
 
@@ -302,6 +315,73 @@ impl MeshModel {
     /// −[`NO_CONTACT`]. Each slot's value is continuous in s because pairs
     /// enter and leave the tables out of contact.
     pub fn force_with_derivatives(&self, s: f64, delta: f64, events: &mut [f64]) -> MeshLaw {
+        if self.packed.len() < 2 {
+            return self.force_with_derivatives_sliced(s, delta, events);
+        }
+        let pb = self.path().base_pitch;
+        let slots = events.len() / 2;
+        for e in events.iter_mut() {
+            *e = -NO_CONTACT;
+        }
+        // The arithmetic of `pair` with one slice (its share of the stiffness, 1/1, is exact),
+        // reading the interleaved tables: the same cell and weights, the same sums in the same
+        // order, without the energy terms.
+        let g = &self.packed;
+        let slice = &self.slices[0];
+        let grid = &self.separation.drive;
+        let inv_step = 1.0 / grid.step;
+        let last = g.len() - 1;
+        let range = self.pair_range(s);
+        let mut slot =
+            if slots > 0 { 2 * (i64::from(*range.start()).rem_euclid(slots as i64) as usize) } else { 0 };
+        let mut out = MeshLaw::default();
+        for index in range {
+            let pos = s + f64::from(index) * pb;
+            let x = ((pos - grid.start) * inv_step).clamp(0.0, last as f64);
+            // x is in [0, last] or NaN: through i64 the same index as `x as usize` (NaN gives 0),
+            // and back the same float, without the unsigned conversions baseline x86-64 lacks.
+            let i = (x as i64 as usize).min(last - 1);
+            let t = x - i as i64 as f64;
+            let (a, b) = (g[i], g[i + 1]);
+            let gd = a[0] + t * (b[0] - a[0]);
+            let gb = a[1] + t * (b[1] - a[1]);
+            let (rd, drd) = slice.drive_relief_at(pos);
+            let (rb, drb) = slice.back_relief_at(pos);
+            let (force, stiffness, position_derivative) = if gd < NO_CONTACT && delta > gd + rd {
+                let pen = delta - gd - rd;
+                let k = a[2] + t * (b[2] - a[2]);
+                let dk = (b[2] - a[2]) * inv_step;
+                let dg = (b[0] - a[0]) * inv_step + drd;
+                (0.0 + k * pen, 0.0 + k, 0.0 + (dk * pen - k * dg))
+            } else if gb < NO_CONTACT && -delta > gb + rb {
+                let pen = -delta - gb - rb;
+                let k = a[3] + t * (b[3] - a[3]);
+                let dk = (b[3] - a[3]) * inv_step;
+                let dg = (b[1] - a[1]) * inv_step + drb;
+                (0.0 + -(k * pen), 0.0 + k, 0.0 + -(dk * pen - k * dg))
+            } else {
+                (0.0, 0.0, 0.0)
+            };
+            out.force += force;
+            out.approach_stiffness += stiffness;
+            out.position_derivative += position_derivative;
+            out.peak_pair_force = out.peak_pair_force.max(force.abs());
+            if slots > 0 {
+                events[slot] = f64::NEG_INFINITY.max(delta - gd - rd);
+                events[slot + 1] = f64::NEG_INFINITY.max(-delta - gb - rb);
+                slot += 2;
+                if slot == 2 * slots {
+                    slot = 0;
+                }
+            }
+        }
+        out
+    }
+
+    /// [`Self::force_with_derivatives`] summed slice by slice over the face, whatever the
+    /// number of slices: the general path, and the reference its single-slice path (read from
+    /// the interleaved tables) is tested against; the same values.
+    pub fn force_with_derivatives_sliced(&self, s: f64, delta: f64, events: &mut [f64]) -> MeshLaw {
         let pb = self.path().base_pitch;
         let slots = events.len() / 2;
         for e in events.iter_mut() {
@@ -332,17 +412,16 @@ impl MeshModel {
     pub fn force_tangents(&self, s: f64, delta: f64) -> MeshLaw {
         let g = &self.packed;
         if g.len() < 2 {
-            return self.force_with_derivatives(s, delta, &mut []);
+            return self.force_with_derivatives_sliced(s, delta, &mut []);
         }
         let grid = &self.separation.drive;
-        let inv_step = 1.0 / grid.step;
-        let last = (g.len() - 1) as f64;
+        let (inv_step, per_pitch) = (self.inv_step, self.per_pitch);
+        let last = (g.len() - 1) as i64 as f64;
         // Pair k sits at grid coordinate x0 + k·(p_b/step); the pairs in the tables are those
         // with 0 ≤ x ≤ last.
         let x0 = (s - grid.start) * inv_step;
-        let per_pitch = self.path().base_pitch * inv_step;
-        let k_lo = -fast_floor(x0 / per_pitch);
-        let k_hi = fast_floor((last - x0) / per_pitch);
+        let k_lo = -floor_of_quotient(x0, per_pitch, self.inv_per_pitch);
+        let k_hi = floor_of_quotient(last - x0, per_pitch, self.inv_per_pitch);
         // Counted, not stepped by k += 1: at a travel beyond 2^53 pitches
         // (a diverging iterate) k + 1 == k and a stepped loop never ends.
         let pairs = if k_hi >= k_lo { ((k_hi - k_lo) as usize + 1).min(last as usize + 2) } else { 0 };
@@ -350,10 +429,12 @@ impl MeshModel {
         let pb = self.path().base_pitch;
         let mut out = MeshLaw::default();
         for j in 0..pairs {
-            let k = k_lo + j as f64;
+            // Signed conversions (the same values here) instead of the unsigned ones, which
+            // baseline x86-64 has no instruction for.
+            let k = k_lo + j as i64 as f64;
             let x = (x0 + k * per_pitch).clamp(0.0, last);
-            let i = (x as usize).min(g.len() - 2);
-            let t = x - i as f64;
+            let i = (x as i64 as usize).min(g.len() - 2);
+            let t = x - i as i64 as f64;
             let (a, b) = (g[i], g[i + 1]);
             let gd = a[0] + t * (b[0] - a[0]);
             let pos = s + k * pb;
@@ -864,6 +945,24 @@ pub fn set_ltca(set: &GearSet, model: &SetModel, samples: usize) -> SetLtca {
     out
 }
 
+/// `(a / b).floor()` for b > 0 \[-\], given `inv_b` = 1/b: mostly without the division.
+/// The product a·(1/b) is within 4e-10 of the quotient a/b while |a·(1/b)| < 1e6 (two
+/// roundings of at most 2⁻⁵³ each on the product, one on the quotient), so when it lies farther
+/// than 1e-9 from every integer both have the same floor; otherwise (and for NaN and the
+/// infinities) the quotient is taken.
+#[inline(always)]
+fn floor_of_quotient(a: f64, b: f64, inv_b: f64) -> f64 {
+    let estimate = a * inv_b;
+    if estimate.abs() < 1.0e6 {
+        let floor = fast_floor(estimate);
+        let fraction = estimate - floor;
+        if fraction > 1.0e-9 && fraction < 1.0 - 1.0e-9 {
+            return floor;
+        }
+    }
+    fast_floor(a / b)
+}
+
 /// `x.floor()` without the library call (the release build targets baseline
 /// x86-64, which has no rounding instruction): the same value for every
 /// finite x, NaN and the infinities through `floor` itself. On the dynamic
@@ -879,5 +978,39 @@ fn fast_floor(x: f64) -> f64 {
         }
     } else {
         x.floor()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The floor of a quotient without the division is the floor of the quotient, on the
+    /// example's pitch ratios, at and next to every integer, and for NaN and the infinities.
+    #[test]
+    fn floor_of_quotient_is_the_floor_of_the_quotient() {
+        let check = |a: f64, b: f64| {
+            let got = floor_of_quotient(a, b, 1.0 / b);
+            let want = (a / b).floor();
+            assert!(got == want || (got.is_nan() && want.is_nan()), "{a} / {b}: {got} vs {want}");
+        };
+        for b in [400.0, 0.0123456789, 1.0 / 3.0, 7.5e-3, 1e-300, 3.0e5] {
+            for n in -2000..2000 {
+                let a = f64::from(n) * b;
+                let mut below = a;
+                let mut above = a;
+                for _ in 0..8 {
+                    check(below, b);
+                    check(above, b);
+                    below = below.next_down();
+                    above = above.next_up();
+                }
+                check(a + 0.37 * b, b);
+            }
+            for a in [0.0, -0.0, 1e6 * b, -1e6 * b, 1e300, -1e300, f64::NAN, f64::INFINITY, f64::NEG_INFINITY]
+            {
+                check(a, b);
+            }
+        }
     }
 }

@@ -780,6 +780,15 @@ impl PlanetaryDynamics {
         }
     }
 
+    /// Index of a mesh kind's event slot count in `slots`.
+    fn slot_kind(kind: MeshKind) -> usize {
+        if kind == MeshKind::SunPlanet {
+            0
+        } else {
+            1
+        }
+    }
+
     fn evaluate_meshes(&mut self, q: &[f64], v: &[f64], with_events: bool) {
         if let Some((cq, cv, ce)) = &self.cache {
             if cq.as_slice() == q && cv.as_slice() == v && (*ce || !with_events) {
@@ -797,16 +806,30 @@ impl PlanetaryDynamics {
             None => self.cache = Some((q.to_vec(), v.to_vec(), with_events)),
         }
         let mut events = std::mem::take(&mut self.events_scratch);
-        events.clear();
+        // The event values are only read after an evaluation with events, which writes every
+        // slot: the buffer keeps its length (2·slots per mesh) between evaluations.
+        if with_events {
+            let total: usize = self.links.iter().map(|l| 2 * self.slots[Self::slot_kind(l.kind)]).sum();
+            events.resize(total, 0.0);
+        }
+        let mut start = 0;
         for (i, link) in self.links.iter().enumerate() {
-            let delta: f64 = link.b_nz.iter().map(|(j, b)| b * q[*j]).sum();
-            let rate: f64 = link.b_nz.iter().map(|(j, b)| b * v[*j]).sum();
-            let s: f64 = link.p_nz.iter().map(|(j, p)| p * q[*j]).sum::<f64>() + link.s0;
+            // The sums of `Iterator::sum` (from −0.0, in order), in one pass for δ and its rate.
+            let (mut delta, mut rate) = (-0.0, -0.0);
+            for &(j, b) in &link.b_nz {
+                delta += b * q[j];
+                rate += b * v[j];
+            }
+            let mut s = -0.0;
+            for &(j, p) in &link.p_nz {
+                s += p * q[j];
+            }
+            s += link.s0;
             let law = if with_events {
-                let slots = self.slots[if link.kind == MeshKind::SunPlanet { 0 } else { 1 }];
-                let start = events.len();
-                events.resize(start + 2 * slots, 0.0);
-                self.model(link.kind).force_with_derivatives(s, delta, &mut events[start..])
+                let end = start + 2 * self.slots[Self::slot_kind(link.kind)];
+                let law = self.model(link.kind).force_with_derivatives(s, delta, &mut events[start..end]);
+                start = end;
+                law
             } else {
                 self.model(link.kind).force_tangents(s, delta)
             };
