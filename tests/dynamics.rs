@@ -84,7 +84,7 @@ fn planet_phasing_follows_from_the_tooth_positions() {
 #[test]
 fn a_separating_set_shows_a_softening_jump_and_two_branches() {
     let (set, run, model) = build(&separating());
-    let speeds: Vec<f64> = (0..=14).map(|i| 9000.0 + 250.0 * f64::from(i)).collect();
+    let speeds: Vec<f64> = (0..=18).map(|i| 9000.0 + 250.0 * f64::from(i)).collect();
     let run = |d: Direction, grid: &[f64]| {
         let mut m = model.clone();
         let grid: Vec<f64> = grid.iter().map(|r| r * RPM).collect();
@@ -110,8 +110,11 @@ fn a_separating_set_shows_a_softening_jump_and_two_branches() {
     // The up sweep jumps: one step of 250 rpm raises F(rms) by more than 50 %.
     let jump = speeds.windows(2).map(|w| rms(&up, w[1]) / rms(&up, w[0])).fold(0.0, f64::max);
     assert!(jump > 1.5, "largest up-sweep ratio between neighbours {jump}");
-    // Above the resonance both sweeps meet on one branch.
-    assert!((rms(&up, 12500.0) / rms(&down, 12500.0) - 1.0).abs() < 1e-3);
+    // Above the band where the teeth separate both sweeps meet on one branch.
+    // At this damping the band reaches 12 750 rpm (the 3 f_m planet-mode
+    // resonance bends over: docs/PARAMETERS.md); up to there a start from
+    // above may settle on either attractor, so the sweeps run to 13 500 rpm.
+    assert!((rms(&up, 13500.0) / rms(&down, 13500.0) - 1.0).abs() < 1e-3);
 }
 
 #[test]
