@@ -30,8 +30,9 @@
 //! differences of the flow, one flow per unknown (the contact force is
 //! piecewise smooth: the integrator locates every contact switch, so the
 //! flow is differentiable between switches and the differences follow the
-//! switching times; the jump of the mesh damping force when a mesh
-//! separates is carried the same way, with no saltation matrix to derive).
+//! switching times, the jump of the mesh damping force when a mesh
+//! separates included, which the variational equations take as a saltation
+//! term).
 //! The eigenvalues of M (faer's non-symmetric eigensolver) are the Floquet
 //! multipliers; the orbit is stable when all lie inside the unit circle.
 
@@ -75,9 +76,9 @@ pub struct ShootingSettings {
 #[serde(rename_all = "snake_case")]
 pub enum MonodromyMethod {
     /// The variational equations M Ẍ = −K X − C Ẋ integrated with the flow
-    /// in one augmented flow (the module `variational`): exact for an orbit
-    /// whose meshes keep a pair in contact; without the saltation term of the
-    /// mesh damping's jump where a whole mesh separates.
+    /// in one augmented flow (the module `variational`), with the saltation
+    /// term of the mesh damping's jump where a whole mesh separates or
+    /// touches again.
     #[default]
     Variational,
     /// Forward differences of the flow, one flow per unknown, with the step
