@@ -125,7 +125,6 @@ impl<'a, 'b> Variational<'a, 'b> {
     /// events. Returns whether any column changed.
     ///
     /// [`PlanetaryDynamics::add_damping_switch`]: crate::dynamics::equations::PlanetaryDynamics::add_damping_switch
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn saltation(
         &mut self,
         t: f64,
@@ -157,7 +156,7 @@ impl<'a, 'b> Variational<'a, 'b> {
             if !(rate.is_finite() && rate != 0.0) {
                 continue;
             }
-            // The model's state at the landing (the event evaluation above) gives δ̇.
+            // δ̇ of the evaluations above, all at the landing's velocities.
             let mut jump = vec![0.0; n];
             self.frame.model().add_damping_switch(i, is, &mut jump);
             for (a, mass) in jump.iter_mut().zip(&self.mass) {
