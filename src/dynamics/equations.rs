@@ -751,7 +751,7 @@ impl PlanetaryDynamics {
     pub fn event_mesh(&self, index: usize) -> Option<usize> {
         let mut end = 0;
         for (i, link) in self.links.iter().enumerate() {
-            end += 2 * self.slots[if link.kind == MeshKind::SunPlanet { 0 } else { 1 }];
+            end += 2 * self.slots[Self::slot_kind(link.kind)];
             if index < end {
                 return Some(i);
             }

@@ -402,14 +402,19 @@ impl PeriodicProblem {
     }
 
     fn integrator(&self, period: f64) -> Result<Rk45, SolverError> {
+        Rk45::new(self.integrator_settings(period))
+    }
+
+    /// The flow's RK 5(4) settings over a period of `period` \[s\].
+    fn integrator_settings(&self, period: f64) -> Rk45Settings {
         let rtol = self.settings.relative_tolerance;
-        Rk45::new(Rk45Settings {
+        Rk45Settings {
             rtol,
             atol_q: rtol * self.q_scale,
             atol_v: rtol * self.v_scale,
             max_step: period / 16.0,
             ..Rk45Settings::default()
-        })
+        }
     }
 
     /// The flow over one period from unknowns `z` at speed `omega`: the
@@ -554,8 +559,7 @@ impl PeriodicProblem {
         // Every column enters the step control: a column starts as a unit
         // change of one coordinate and so carries every mode of the set,
         // the fastest included, which the orbit itself hardly excites.
-        let settings =
-            Rk45Settings { record_events: true, ..*self.integrator(period).map_err(err)?.settings() };
+        let settings = Rk45Settings { record_events: true, ..self.integrator_settings(period) };
         let mut rk = Rk45::new(settings).map_err(err)?;
         self.model.set_drive_speed(omega);
         let rigid = self.model.rigid_velocity_at(omega);
