@@ -235,6 +235,11 @@ struct SweepArgs {
     /// --direction does not apply, --step is the nominal step).
     #[arg(long, default_value = "march")]
     method: String,
+    /// Continuation only: how far [rpm] a branch may run back below the furthest speed reached
+    /// (and twice this is the most it may travel without reaching further) before the run
+    /// restarts past it by marching; default 10 nominal steps.
+    #[arg(long, value_name = "RPM")]
+    max_back: Option<f64>,
 }
 
 /// Work-precision study of the integrators: E_h of the mesh-force harmonics against CPU time

@@ -16,7 +16,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dynamics::periodic::{
-    floquet_multipliers, solve_dense, Linearization, PeriodicError, PeriodicOrbit, PeriodicProblem,
+    at_noise_floor, floquet_multipliers, solve_dense, Linearization, PeriodicError, PeriodicOrbit,
+    PeriodicProblem,
 };
 use crate::dynamics::response::Work;
 
@@ -27,7 +28,9 @@ pub struct ContinuationSettings {
     pub from: f64,
     /// Speed where it ends [rad/s] (either side of `from`).
     pub to: f64,
-    /// Nominal speed step [rad/s]: the unit of λ and the first arclength step.
+    /// Nominal speed step [rad/s]: the unit of λ, the first arclength step,
+    /// and the largest change of speed from one point to the next (the
+    /// curve is at least as fine as a marching sweep at this step).
     pub step: f64,
     /// Largest arclength step, in nominal steps.
     pub max_step: f64,
@@ -37,14 +40,34 @@ pub struct ContinuationSettings {
     pub max_points: usize,
     /// Most chord-Newton corrections per step.
     pub max_corrections: usize,
+    /// How far a branch may run back below the furthest speed reached, in
+    /// nominal steps; and twice this is the most speed it may travel (either
+    /// way) without reaching further. Beyond either the run restarts past
+    /// the furthest speed ([`GapKind::Restart`]), so a tangle of unstable
+    /// branches (where the teeth separate) cannot hold it.
+    #[serde(default = "default_max_back")]
+    pub max_back: f64,
+}
+
+fn default_max_back() -> f64 {
+    10.0
 }
 
 impl ContinuationSettings {
     /// From `from` to `to` at nominal step `step` [rad/s], with the default
-    /// step bounds (1/256 to 4 nominal steps), at most 20 000 points and 8
-    /// corrections per step.
+    /// step bounds (1/256 to 4 nominal steps), at most 20 000 points, 8
+    /// corrections per step, and at most 10 nominal steps back.
     pub fn new(from: f64, to: f64, step: f64) -> Self {
-        Self { from, to, step, max_step: 4.0, min_step: 1.0 / 256.0, max_points: 20_000, max_corrections: 8 }
+        Self {
+            from,
+            to,
+            step,
+            max_step: 4.0,
+            min_step: 1.0 / 256.0,
+            max_points: 20_000,
+            max_corrections: 8,
+            max_back: default_max_back(),
+        }
     }
 
     fn check(&self) -> Result<(), ContinuationError> {
@@ -67,6 +90,9 @@ impl ContinuationSettings {
         if !(self.min_step > 0.0 && self.min_step <= 1.0 && self.max_step >= 1.0 && self.max_step.is_finite())
         {
             return bad("step bounds", self.min_step, "need 0 < min_step ≤ 1 ≤ max_step");
+        }
+        if !(self.max_back.is_finite() && self.max_back > 0.0) {
+            return bad("max_back", self.max_back, "must be positive and finite (nominal steps)");
         }
         if self.max_points < 2 || self.max_corrections == 0 {
             return bad("max_points", self.max_points as f64, "need at least 2 points and 1 correction");
@@ -100,12 +126,15 @@ pub struct BranchPoint {
     pub orbit: PeriodicOrbit,
     /// All Floquet multipliers inside the unit circle.
     pub stable: bool,
-    /// Segment of the branch between folds: 0 up to the first fold, 1 to the
+    /// Segment of the branch between folds and gaps: 0 up to the first, 1 to the
     /// second, …
     pub segment: usize,
     /// dω/ds along the branch's tangent [rad/s per unit arclength]: its sign
     /// says whether the branch runs towards `to` (positive) or back.
     pub speed_slope: f64,
+    /// The first point after a gap ([`Branch::gaps`]): not joined to the point before.
+    #[serde(default)]
+    pub after_gap: bool,
 }
 
 /// What happens at a bifurcation point.
@@ -140,6 +169,9 @@ pub struct Branch {
     pub points: Vec<BranchPoint>,
     /// Folds and period doublings, in the order met.
     pub bifurcations: Vec<Bifurcation>,
+    /// Stretches not continued (leaps over non-smooth points, restarts), in the order met.
+    #[serde(default)]
+    pub gaps: Vec<Gap>,
     /// Why the run ended: "reached the last speed", or the reason it stopped early.
     pub ended: String,
     /// Work of the whole run.
@@ -218,11 +250,147 @@ fn most_negative_real(orbit: &PeriodicOrbit) -> f64 {
     orbit.multipliers.iter().filter(|m| m.is_real() && m.re < 0.0).map(|m| m.re).fold(0.0, f64::min)
 }
 
+/// The chord-Newton corrector of one continuation step: from `predicted`,
+/// with the bordered matrix `chord` and the constraint row `constraint`;
+/// the corrected point and the corrections it took, or `None`.
+struct Corrector<'a> {
+    unit: f64,
+    tol: f64,
+    max_corrections: usize,
+    work: &'a mut Work,
+    flows: &'a mut usize,
+}
+
+impl Corrector<'_> {
+    fn correct(
+        &mut self,
+        problem: &mut PeriodicProblem,
+        chord: &[f64],
+        constraint: &[f64],
+        predicted: &[f64],
+    ) -> Option<(Vec<f64>, usize)> {
+        let m = predicted.len() - 1;
+        let mut x = predicted.to_vec();
+        let mut previous_norm = f64::INFINITY;
+        for iteration in 1..=self.max_corrections {
+            let g = problem.residual(x[m] * self.unit, &x[..m], self.work).ok()?;
+            *self.flows += 1;
+            let norm = g.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
+            let size = x[..m].iter().fold(1.0_f64, |a, b| a.max(b.abs()));
+            if norm <= self.tol * size || at_noise_floor(norm, previous_norm, self.tol, size) {
+                return Some((x, iteration - 1));
+            }
+            if (norm >= previous_norm || norm.is_nan()) && iteration > 2 {
+                return None;
+            }
+            previous_norm = norm;
+            let mut rhs: Vec<f64> = g.iter().map(|v| -v).collect();
+            rhs.push(
+                -constraint.iter().zip(x.iter().zip(predicted)).map(|(c, (a, b))| c * (a - b)).sum::<f64>(),
+            );
+            let dx = solve_dense(chord, m + 1, &rhs);
+            if dx.iter().any(|v| !v.is_finite()) {
+                return None;
+            }
+            x.iter_mut().zip(&dx).for_each(|(a, d)| *a += d);
+        }
+        None
+    }
+
+    /// The chord matrix at `at` (the linearization there), or `fallback`'s
+    /// when the linearization fails.
+    fn chord_at(
+        &mut self,
+        problem: &mut PeriodicProblem,
+        at: &[f64],
+        fallback: &Linearization,
+        constraint: &[f64],
+    ) -> Vec<f64> {
+        let m = at.len() - 1;
+        match problem.linearize(at[m] * self.unit, &at[..m], self.work) {
+            Ok(l) => {
+                *self.flows += problem.linearization_flows();
+                bordered(&l, self.unit, constraint)
+            }
+            Err(_) => bordered(fallback, self.unit, constraint),
+        }
+    }
+}
+
+/// How a continuation run got past a point where the corrector failed at
+/// the smallest step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GapKind {
+    /// A step of one or two nominal steps along the tangent, corrected with
+    /// the linearization at its far end: the branch goes on beyond a
+    /// non-smooth point (a contact that starts or ends with zero rate,
+    /// where the period map has no derivative).
+    Leap,
+    /// Marching at one nominal step beyond the furthest speed reached, from
+    /// the state there, then Newton: the branch is left, as a marching sweep
+    /// leaves it at a fold, and a new one is followed.
+    Restart,
+}
+
+/// A stretch of a run that was not continued.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Gap {
+    /// How the run got past it.
+    pub kind: GapKind,
+    /// Speed of the last point before it [rad/s].
+    pub from: f64,
+    /// Speed of the first point after it [rad/s].
+    pub to: f64,
+    /// Index of the first point after it.
+    pub point: usize,
+}
+
+/// Periods marched at most before Newton when a run restarts (one input
+/// revolution of the example, as a marching sweep's run-in).
+const RESTART_PERIODS: usize = 34;
+
+/// The state of a restart at `omega`: marching from `z` until the change
+/// over a period is at most 1e-3 of the state scales (or
+/// [`RESTART_PERIODS`] periods), then Newton.
+fn restart(
+    problem: &mut PeriodicProblem,
+    omega: f64,
+    z: &[f64],
+    work: &mut Work,
+    flows: &mut usize,
+) -> Option<Vec<f64>> {
+    let mut z = z.to_vec();
+    for _ in 0..RESTART_PERIODS {
+        let r = problem.residual(omega, &z, work).ok()?;
+        *flows += 1;
+        z.iter_mut().zip(&r).for_each(|(a, b)| *a += b);
+        let size = z.iter().fold(1.0_f64, |a, b| a.max(b.abs()));
+        if r.iter().fold(0.0_f64, |a, b| a.max(b.abs())) <= 1e-3 * size {
+            break;
+        }
+    }
+    let orbit = problem.solve(omega, Some(&z)).ok()?;
+    add(work, &orbit.work);
+    *flows += orbit.flows;
+    Some(orbit.z)
+}
+
 /// Follows the branch of periodic states of `problem` from `settings.from`
 /// to `settings.to` by pseudo-arclength continuation; `progress` sees every
-/// point as it is accepted. A step that cannot be corrected even at the
-/// smallest arclength step ends the run early, keeping the points found
-/// (the reason is in [`Branch::ended`]).
+/// point as it is accepted.
+///
+/// A step that cannot be corrected even at the smallest arclength step is
+/// a non-smooth point of the period map (a contact that starts or ends
+/// with zero rate) or the end of the branch. The run then leaps one and
+/// then two nominal steps along the tangent. Failing that, and whenever the
+/// branch turns back past the first speed, runs back more than
+/// [`ContinuationSettings::max_back`] nominal steps below the furthest speed
+/// reached, or travels twice that without reaching further, it restarts by
+/// marching at one nominal step beyond the furthest speed reached (as a
+/// marching sweep jumps at a fold). Each is recorded in [`Branch::gaps`]; the points after it
+/// start a new segment. The run ends early, keeping the points found, only
+/// when a restart fails too (the reason is in [`Branch::ended`]).
 pub fn continue_branch(
     problem: &mut PeriodicProblem,
     settings: &ContinuationSettings,
@@ -242,20 +410,30 @@ pub fn continue_branch(
     seed[m] = direction;
     let mut t = tangent(&lin, unit, &seed);
     let mut y: Vec<f64> = first.z.iter().copied().chain([settings.from / unit]).collect();
+    // The point furthest towards `to`, where a restart begins.
+    let mut furthest = y.clone();
+    // Speed travelled (in nominal steps) since the furthest point last moved on.
+    let mut travel = 0.0;
     let mut previous_orbit = first.clone();
     let mut segment = 0;
-    let mut points =
-        vec![BranchPoint { stable: first.is_stable(), orbit: first, segment: 0, speed_slope: t[m] * unit }];
+    let mut points = vec![BranchPoint {
+        stable: first.is_stable(),
+        orbit: first,
+        segment: 0,
+        speed_slope: t[m] * unit,
+        after_gap: false,
+    }];
     progress(&points[0]);
     let mut bifurcations = Vec::new();
-    let mut ds = 1.0;
+    let mut gaps = Vec::new();
+    let mut ds: f64 = 1.0;
     let mut refresh = false;
     let mut ended = String::from("reached the last speed");
     while points.len() < settings.max_points {
         // The last step lands on the last speed exactly (speed fixed instead
-        // of the arclength).
+        // of the arclength); no step changes the speed by more than a nominal step.
         let mut last = false;
-        let mut h = ds;
+        let mut h = ds.min(1.0 / t[m].abs().max(f64::MIN_POSITIVE));
         if t[m] * direction > 0.0 && (y[m] + h * t[m] - lambda_end) * direction >= 0.0 {
             h = (lambda_end - y[m]) / t[m];
             last = true;
@@ -270,75 +448,100 @@ pub fn continue_branch(
         };
         let mut work = Work::default();
         let mut step_flows = 0;
+        let mut corrector = Corrector {
+            unit,
+            tol,
+            max_corrections: settings.max_corrections,
+            work: &mut work,
+            flows: &mut step_flows,
+        };
         // After a failed correction the chord matrix is taken at the
         // predicted point instead of the last accepted one (a contact that
         // starts or ends between the two changes the linearization).
         let chord = if refresh {
-            match problem.linearize(predicted[m] * unit, &predicted[..m], &mut work) {
-                Ok(l) => {
-                    step_flows += problem.linearization_flows();
-                    bordered(&l, unit, &constraint)
-                }
-                Err(_) => bordered(&lin, unit, &constraint),
-            }
+            corrector.chord_at(problem, &predicted, &lin, &constraint)
         } else {
             bordered(&lin, unit, &constraint)
         };
-        let mut x = predicted.clone();
-        let mut converged = None;
-        let mut previous_norm = f64::INFINITY;
-        for iteration in 1..=settings.max_corrections {
-            let g = match problem.residual(x[m] * unit, &x[..m], &mut work) {
-                Ok(g) => g,
-                Err(_) => break,
-            };
-            step_flows += 1;
-            let norm = g.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
-            let size = x[..m].iter().fold(1.0_f64, |a, b| a.max(b.abs()));
-            if norm <= tol * size {
-                converged = Some(iteration - 1);
-                break;
-            }
-            if (norm >= previous_norm || norm.is_nan()) && iteration > 2 {
-                break;
-            }
-            previous_norm = norm;
-            let mut rhs: Vec<f64> = g.iter().map(|v| -v).collect();
-            rhs.push(
-                -constraint.iter().zip(x.iter().zip(&predicted)).map(|(c, (a, b))| c * (a - b)).sum::<f64>(),
-            );
-            let dx = solve_dense(&chord, m + 1, &rhs);
-            if dx.iter().any(|v| !v.is_finite()) {
-                break;
-            }
-            x.iter_mut().zip(&dx).for_each(|(a, d)| *a += d);
-        }
-        add(&mut total, &work);
-        flows += step_flows;
-        let Some(corrections) = converged else {
+        let mut gap = None;
+        let mut accepted = corrector.correct(problem, &chord, &constraint, &predicted);
+        if accepted.is_none() {
             ds *= 0.5;
             refresh = true;
-            if ds < settings.min_step {
-                ended = format!(
-                    "stopped at {:.4} rad/s: no periodic state within the smallest arclength step",
-                    y[m] * unit
-                );
+            if ds >= settings.min_step {
+                add(&mut total, &work);
+                flows += step_flows;
+                continue;
+            }
+            // The leaps: along the tangent, corrected from their far end with twice the corrections.
+            corrector.max_corrections = 2 * settings.max_corrections;
+            for leap in [1.0, 2.0] {
+                let h = leap * 1.0_f64.min(1.0 / t[m].abs().max(f64::MIN_POSITIVE));
+                let far: Vec<f64> = y.iter().zip(&t).map(|(a, b)| a + h * b).collect();
+                let chord = corrector.chord_at(problem, &far, &lin, &t);
+                if let Some(found) = corrector.correct(problem, &chord, &t, &far) {
+                    accepted = Some(found);
+                    gap = Some(GapKind::Leap);
+                    break;
+                }
+            }
+            last = false;
+        }
+        // A branch that turns back past the first speed, runs back more than
+        // `max_back` below the furthest speed, or travels twice that without
+        // reaching further, is left too.
+        let left = accepted.as_ref().is_some_and(|(x, _)| {
+            (x[m] - lambda_start) * direction < 0.0
+                || (furthest[m] - x[m]) * direction > settings.max_back
+                || travel + (x[m] - y[m]).abs() > 2.0 * settings.max_back
+        });
+        if accepted.is_none() || left {
+            let lambda = furthest[m] + direction;
+            let beyond = (lambda - lambda_end) * direction >= 0.0;
+            let lambda = if beyond { lambda_end } else { lambda };
+            if (furthest[m] - lambda_end) * direction >= 0.0 {
+                ended = "reached the last speed".into();
+                add(&mut total, &work);
+                flows += step_flows;
                 break;
             }
-            continue;
-        };
+            match restart(problem, lambda * unit, &furthest[..m], &mut work, &mut step_flows) {
+                Some(z) => {
+                    accepted = Some((z.into_iter().chain([lambda]).collect(), 0));
+                    gap = Some(GapKind::Restart);
+                    last = beyond;
+                }
+                None => {
+                    ended = format!(
+                        "stopped at {:.4} rad/s: no periodic state within the smallest arclength step, and \
+                         none by marching at {:.4} rad/s",
+                        y[m] * unit,
+                        lambda * unit
+                    );
+                    add(&mut total, &work);
+                    flows += step_flows;
+                    break;
+                }
+            }
+        }
+        let Some((x, corrections)) = accepted else { unreachable!("a failed step has ended the run") };
         refresh = false;
         let omega = x[m] * unit;
         let new_lin = match problem.linearize(omega, &x[..m], &mut work) {
             Ok(l) => l,
             Err(e) => {
+                add(&mut total, &work);
+                flows += step_flows;
                 ended = format!("stopped at {omega:.4} rad/s: {e}");
                 break;
             }
         };
-        flows += problem.linearization_flows();
+        step_flows += problem.linearization_flows();
         add(&mut total, &work);
-        let new_t = tangent(&new_lin, unit, &t);
+        flows += step_flows;
+        // After a restart the tangent points towards `to`; otherwise along the branch.
+        let orient = if gap == Some(GapKind::Restart) { &seed } else { &t };
+        let new_t = tangent(&new_lin, unit, orient);
         let multipliers = floquet_multipliers(&new_lin.monodromy, m);
         let orbit = PeriodicOrbit {
             speed: omega,
@@ -348,75 +551,108 @@ pub fn continue_branch(
             residual: new_lin.residual.iter().fold(0.0_f64, |a, b| a.max(b.abs())),
             newton_iterations: corrections,
             multipliers,
-            flows: step_flows + problem.linearization_flows(),
+            flows: step_flows,
             work,
         };
-        let prev = (&previous_orbit, segment);
         let i = points.len();
-        if new_t[m] * t[m] < 0.0 {
-            let arc = y.iter().zip(&x).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
-            let speed =
-                hermite_extremum(arc, y[m], x[m], t[m], new_t[m]).map_or(0.5 * (y[m] + x[m]), |v| v) * unit;
-            let near_one = |o: &PeriodicOrbit| {
-                o.multipliers
-                    .iter()
-                    .filter(|u| u.is_real())
-                    .map(|u| u.re)
-                    .min_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()))
-                    .unwrap_or(f64::NAN)
-            };
-            bifurcations.push(Bifurcation {
-                kind: BifurcationKind::Fold,
-                speed,
-                between: (i - 1, i),
-                multipliers: (near_one(prev.0), near_one(&orbit)),
-            });
+        if let Some(kind) = gap {
+            gaps.push(Gap { kind, from: y[m] * unit, to: omega, point: i });
             segment += 1;
-        }
-        // A period doubling: a real multiplier passes −1, so the number of
-        // multipliers outside the unit circle changes by as many as the
-        // number of real ones below −1 (two real multipliers that meet and
-        // leave the real axis outside the circle are no crossing).
-        let below =
-            |o: &PeriodicOrbit| o.multipliers.iter().filter(|u| u.is_real() && u.re < -1.0).count() as i64;
-        let outside = |o: &PeriodicOrbit| o.multipliers.iter().filter(|u| u.modulus() > 1.0).count() as i64;
-        let d_below = below(&orbit) - below(prev.0);
-        if d_below != 0 && outside(&orbit) - outside(prev.0) == d_below {
-            let (a, b) = (most_negative_real(prev.0), most_negative_real(&orbit));
-            let w = if (a + 1.0) * (b + 1.0) < 0.0 { (a + 1.0) / (a - b) } else { 0.5 };
-            bifurcations.push(Bifurcation {
-                kind: BifurcationKind::PeriodDoubling,
-                speed: prev.0.speed + w * (omega - prev.0.speed),
-                between: (i - 1, i),
-                multipliers: (a, b),
-            });
+        } else {
+            detect_bifurcations(&previous_orbit, &orbit, (&y, &x), (&t, &new_t), unit, i, &mut bifurcations);
+            if new_t[m] * t[m] < 0.0 {
+                segment += 1;
+            }
         }
         previous_orbit = orbit.clone();
-        let point = BranchPoint { stable: orbit.is_stable(), orbit, segment, speed_slope: new_t[m] * unit };
+        let prev_lambda = if gap.is_some() { x[m] } else { y[m] };
+        let point = BranchPoint {
+            stable: orbit.is_stable(),
+            orbit,
+            segment,
+            speed_slope: new_t[m] * unit,
+            after_gap: gap.is_some(),
+        };
         progress(&point);
         points.push(point);
         y = x;
         t = new_t;
         lin = new_lin;
-        ds = if corrections <= 2 {
+        if (y[m] - furthest[m]) * direction > 0.0 {
+            furthest = y.clone();
+            travel = 0.0;
+        } else {
+            travel += (y[m] - prev_lambda).abs();
+        }
+        ds = if gap.is_some() {
+            1.0
+        } else if corrections <= 2 {
             (ds * 1.5).min(settings.max_step)
         } else if corrections >= 5 {
             (ds * 0.6).max(settings.min_step)
         } else {
             ds
         };
-        if last {
-            break;
-        }
-        if (y[m] - lambda_start) * direction < 0.0 {
-            ended = format!("the branch turned back below the first speed at {:.4} rad/s", y[m] * unit);
+        if last || (y[m] - lambda_end) * direction >= 0.0 {
             break;
         }
     }
     if points.len() >= settings.max_points {
         ended = format!("stopped after {} points (the most allowed)", settings.max_points);
     }
-    Ok(Branch { points, bifurcations, ended, work: total, flows })
+    Ok(Branch { points, bifurcations, gaps, ended, work: total, flows })
+}
+
+/// The folds and period doublings between two successive points of a
+/// branch (`y`, `t`: the points in (z, λ) and their tangents); `i` is the
+/// second point's index.
+fn detect_bifurcations(
+    prev: &PeriodicOrbit,
+    orbit: &PeriodicOrbit,
+    (y, x): (&[f64], &[f64]),
+    (t, new_t): (&[f64], &[f64]),
+    unit: f64,
+    i: usize,
+    bifurcations: &mut Vec<Bifurcation>,
+) {
+    let m = y.len() - 1;
+    if new_t[m] * t[m] < 0.0 {
+        let arc = y.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
+        let speed =
+            hermite_extremum(arc, y[m], x[m], t[m], new_t[m]).map_or(0.5 * (y[m] + x[m]), |v| v) * unit;
+        let near_one = |o: &PeriodicOrbit| {
+            o.multipliers
+                .iter()
+                .filter(|u| u.is_real())
+                .map(|u| u.re)
+                .min_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()))
+                .unwrap_or(f64::NAN)
+        };
+        bifurcations.push(Bifurcation {
+            kind: BifurcationKind::Fold,
+            speed,
+            between: (i - 1, i),
+            multipliers: (near_one(prev), near_one(orbit)),
+        });
+    }
+    // A period doubling: a real multiplier passes −1, so the number of
+    // multipliers outside the unit circle changes by as many as the
+    // number of real ones below −1 (two real multipliers that meet and
+    // leave the real axis outside the circle are no crossing).
+    let below =
+        |o: &PeriodicOrbit| o.multipliers.iter().filter(|u| u.is_real() && u.re < -1.0).count() as i64;
+    let outside = |o: &PeriodicOrbit| o.multipliers.iter().filter(|u| u.modulus() > 1.0).count() as i64;
+    let d_below = below(orbit) - below(prev);
+    if d_below != 0 && outside(orbit) - outside(prev) == d_below {
+        let (a, b) = (most_negative_real(prev), most_negative_real(orbit));
+        let w = if (a + 1.0) * (b + 1.0) < 0.0 { (a + 1.0) / (a - b) } else { 0.5 };
+        bifurcations.push(Bifurcation {
+            kind: BifurcationKind::PeriodDoubling,
+            speed: prev.speed + w * (orbit.speed - prev.speed),
+            between: (i - 1, i),
+            multipliers: (a, b),
+        });
+    }
 }
 
 #[cfg(test)]

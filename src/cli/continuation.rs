@@ -3,7 +3,7 @@
 //! (docs/PERIODIC.md); the CSV and charts of the marching sweep plus
 //! stability, branch segment and Floquet multipliers.
 
-use planetwear::analysis::continuation::{continue_branch, BifurcationKind, ContinuationSettings};
+use planetwear::analysis::continuation::{continue_branch, BifurcationKind, ContinuationSettings, GapKind};
 use planetwear::dynamics::periodic::{PeriodicProblem, ShootingSettings};
 use planetwear::report::continuation::{continuation_csv, write_continuation_response};
 
@@ -23,12 +23,19 @@ pub(crate) fn sweep_continuation(
         out,
         histories,
         json,
+        max_back,
         ..
     }: SweepArgs,
 ) -> Result<()> {
     let set = validated(&load_scene(&scene)?)?;
     // The grid check of the marching sweep: the same rules for the same flags.
     speed_grid(from, to, step)?;
+    if step > to - from {
+        bail!(
+            "--step {step} rpm: a continuation's nominal step must be at most the speed range \
+             (--from {from} to --to {to} rpm)"
+        );
+    }
     if !matches!(direction.as_str(), "up" | "down" | "both") {
         bail!("--direction {direction}: allowed are up, down, both");
     }
@@ -39,8 +46,14 @@ pub(crate) fn sweep_continuation(
     )?;
     let started = std::time::Instant::now();
     let mut problem = PeriodicProblem::new(model, ShootingSettings::default(), rpm_to_rad_per_s(from))?;
-    let settings =
+    let mut settings =
         ContinuationSettings::new(rpm_to_rad_per_s(from), rpm_to_rad_per_s(to), rpm_to_rad_per_s(step));
+    if let Some(back) = max_back {
+        if !(back.is_finite() && back > 0.0) {
+            bail!("--max-back {back} rpm: must be a positive, finite speed");
+        }
+        settings.max_back = back / step;
+    }
     let bar = progress_bar(((to - from).abs() / step).ceil() as u64 + 1);
     let branch = continue_branch(&mut problem, &settings, |p| {
         bar.set_position(((rad_per_s_to_rpm(p.orbit.speed) - from).abs() / step) as u64);
@@ -75,6 +88,17 @@ pub(crate) fn sweep_continuation(
             })
         })
         .collect();
+    let gaps: Vec<_> = branch
+        .gaps
+        .iter()
+        .map(|g| {
+            serde_json::json!({
+                "kind": g.kind,
+                "from_rpm": rad_per_s_to_rpm(g.from),
+                "to_rpm": rad_per_s_to_rpm(g.to),
+            })
+        })
+        .collect();
     let unstable: Vec<[f64; 2]> = unstable_ranges(&branch);
     let summary = serde_json::json!({
         "scene": set.name(),
@@ -85,6 +109,7 @@ pub(crate) fn sweep_continuation(
         "flows": branch.flows,
         "internal_steps": branch.work.steps,
         "bifurcations": bifurcations,
+        "gaps": gaps,
         "unstable_rpm": unstable,
         "files": files,
     });
@@ -116,6 +141,17 @@ pub(crate) fn sweep_continuation(
         for [a, b] in &unstable {
             outln!("  unstable from {a:.1} to {b:.1} rpm")?;
         }
+        for g in &branch.gaps {
+            let how = match g.kind {
+                GapKind::Leap => "leapt over a non-smooth point",
+                GapKind::Restart => "restarted by marching",
+            };
+            outln!(
+                "  not continued from {:.1} to {:.1} rpm: {how}",
+                rad_per_s_to_rpm(g.from),
+                rad_per_s_to_rpm(g.to)
+            )?;
+        }
     }
     Ok(())
 }
@@ -126,6 +162,9 @@ fn unstable_ranges(branch: &planetwear::analysis::continuation::Branch) -> Vec<[
     let mut ranges = Vec::new();
     let mut current: Option<[f64; 2]> = None;
     for p in &branch.points {
+        if p.after_gap {
+            ranges.extend(current.take());
+        }
         let rpm = rad_per_s_to_rpm(p.orbit.speed);
         match (&mut current, p.stable) {
             (Some(r), false) => {

@@ -44,6 +44,31 @@ pub fn continuation_csv(branch: &Branch, states: &[SteadyState], width_mm: f64) 
     out
 }
 
+/// The chart's x values and the stable and unstable pieces of `y` (NaN
+/// where a piece has no point): a stable piece ends at the first unstable
+/// point after it, so solid and dashed parts join, except across a gap
+/// (`Branch::gaps`), before whose first point both pieces get a break (an
+/// extra x value, the gap's far speed, with NaN in both).
+fn pieces(branch: &Branch, speeds: &[f64], y: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let gap_before = |i: usize| i > 0 && branch.points.get(i).is_some_and(|p| p.after_gap);
+    let (mut x, mut stable, mut unstable) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..y.len() {
+        if gap_before(i) {
+            x.push(speeds[i]);
+            stable.push(f64::NAN);
+            unstable.push(f64::NAN);
+        }
+        let joins = |want: bool| {
+            let is = |j: usize| branch.points.get(j).is_some_and(|p| p.stable == want);
+            is(i) || (i > 0 && is(i - 1) && !gap_before(i))
+        };
+        x.push(speeds[i]);
+        stable.push(if joins(true) { y[i] } else { f64::NAN });
+        unstable.push(if joins(false) { y[i] } else { f64::NAN });
+    }
+    (x, stable, unstable)
+}
+
 /// Forced-response charts (F^(rms) of planet 1's sun–planet and ring–planet
 /// mesh against speed) of a branch: stable points a solid line, unstable
 /// ones dashed, folds and period doublings as markers.
@@ -58,29 +83,16 @@ pub fn write_continuation_response(
     if states.is_empty() {
         return Ok(files);
     }
-    let rpm: Vec<f64> = states.iter().map(|s| rad_per_s_to_rpm(s.input_speed)).collect();
+    let speeds: Vec<f64> = states.iter().map(|s| rad_per_s_to_rpm(s.input_speed)).collect();
     for (mesh_index, name) in [(0usize, "sun_planet"), (1usize, "ring_planet")] {
         let y: Vec<f64> = states.iter().map(|s| s.meshes[mesh_index].harmonics.rms / width_mm).collect();
-        // A stable piece ends at the first unstable point after it, so solid
-        // and dashed parts join.
-        let piece = |want: bool| -> Vec<f64> {
-            (0..y.len())
-                .map(|i| {
-                    let is = |j: usize| branch.points.get(j).is_some_and(|p| p.stable == want);
-                    if is(i) || (i > 0 && is(i - 1)) {
-                        y[i]
-                    } else {
-                        f64::NAN
-                    }
-                })
-                .collect()
-        };
+        let (rpm, stable, unstable) = pieces(branch, &speeds, &y);
         let mut series = Vec::new();
         if branch.points.iter().any(|p| p.stable) {
-            series.push(Series::new("stable", rpm.clone(), piece(true)).with_style(SeriesStyle::Broken));
+            series.push(Series::new("stable", rpm.clone(), stable).with_style(SeriesStyle::Broken));
         }
         if branch.points.iter().any(|p| !p.stable) {
-            series.push(Series::new("unstable", rpm.clone(), piece(false)).with_style(SeriesStyle::Dashed));
+            series.push(Series::new("unstable", rpm.clone(), unstable).with_style(SeriesStyle::Dashed));
         }
         for (kind, label) in
             [(BifurcationKind::Fold, "fold"), (BifurcationKind::PeriodDoubling, "period doubling")]
@@ -111,4 +123,61 @@ pub fn write_continuation_response(
         )?);
     }
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::continuation::BranchPoint;
+    use crate::dynamics::periodic::PeriodicOrbit;
+    use crate::dynamics::response::Work;
+
+    fn point(speed: f64, stable: bool, after_gap: bool) -> BranchPoint {
+        BranchPoint {
+            orbit: PeriodicOrbit {
+                speed,
+                period: 1e-3,
+                cycles: 1,
+                z: vec![],
+                residual: 0.0,
+                newton_iterations: 0,
+                multipliers: vec![],
+                flows: 0,
+                work: Work::default(),
+            },
+            stable,
+            segment: 0,
+            speed_slope: 1.0,
+            after_gap,
+        }
+    }
+
+    #[test]
+    fn a_gap_breaks_both_pieces_and_a_change_of_stability_joins_them() {
+        let branch = Branch {
+            points: vec![
+                point(1.0, true, false),
+                point(2.0, true, false),
+                point(5.0, true, true),
+                point(6.0, false, false),
+            ],
+            bifurcations: vec![],
+            gaps: vec![],
+            ended: String::new(),
+            work: Work::default(),
+            flows: 0,
+        };
+        let (x, stable, unstable) = pieces(&branch, &[1.0, 2.0, 5.0, 6.0], &[10.0, 20.0, 50.0, 60.0]);
+        assert_eq!(x, vec![1.0, 2.0, 5.0, 5.0, 6.0]);
+        let show = |v: &[f64]| v.iter().map(|a| if a.is_nan() { -1.0 } else { *a }).collect::<Vec<_>>();
+        // Solid to the gap, broken at it, then on to the unstable point it joins.
+        assert_eq!(show(&stable), vec![10.0, 20.0, -1.0, 50.0, 60.0]);
+        assert_eq!(show(&unstable), vec![-1.0, -1.0, -1.0, -1.0, 60.0]);
+        // Without the gap the solid line runs through.
+        let mut joined = branch.clone();
+        joined.points[2].after_gap = false;
+        let (x, stable, _) = pieces(&joined, &[1.0, 2.0, 5.0, 6.0], &[10.0, 20.0, 50.0, 60.0]);
+        assert_eq!(x.len(), 4);
+        assert!(stable.iter().all(|v| v.is_finite()));
+    }
 }
