@@ -231,8 +231,8 @@ struct SweepArgs {
     json: bool,
     /// march (time marching at every speed of the grid, up and down) or
     /// continuation (periodic states by shooting, followed by pseudo-arclength
-    /// continuation from --from to --to through folds, with stability;
-    /// --direction does not apply, --step is the nominal step).
+    /// continuation through folds, with stability: up from --from to --to,
+    /// down from --to to --from, as --direction says; --step is the nominal step).
     #[arg(long, default_value = "march")]
     method: String,
     /// Continuation only: how far [rpm] a branch may run back below the furthest speed reached

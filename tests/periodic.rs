@@ -398,6 +398,71 @@ fn the_sweep_command_refuses_an_unknown_method() {
     assert!(err.contains("--method shooting") && err.contains("march, continuation"), "{err}");
 }
 
+/// `--direction both` runs the continuation up from --from and down from
+/// --to, side by side: the summary lists both runs, the CSV's `run` column
+/// tells their rows apart, and the up run's fold lies in the marching
+/// up-sweep's jump (8350–8400 rpm, `a_continuation_leaves_a_turned_back_branch_as_a_marching_sweep_jumps`).
+#[test]
+fn the_continuation_command_runs_both_directions() {
+    let dir = std::env::temp_dir().join(format!("planetwear-periodic-both-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bin = env!("CARGO_BIN_EXE_planetwear");
+    let shown = std::process::Command::new(bin).args(["scene", "show", "example-2004"]).output().unwrap();
+    let text = String::from_utf8(shown.stdout)
+        .unwrap()
+        .replace("fidelity = \"transverse_torsional\"", "fidelity = \"torsional\"");
+    assert!(text.contains("fidelity = \"torsional\""));
+    let scene = dir.join("torsional.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let run = std::process::Command::new(bin)
+        .args([
+            "sweep",
+            "--from",
+            "7800",
+            "--to",
+            "9000",
+            "--step",
+            "50",
+            "--method",
+            "continuation",
+            "--json",
+        ])
+        .arg("--scene")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let runs = summary["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    assert_eq!((runs[0]["direction"].as_str(), runs[1]["direction"].as_str()), (Some("up"), Some("down")));
+    for r in runs {
+        assert_eq!(r["ended"], "reached the last speed", "{r}");
+    }
+    let folds: Vec<f64> = runs[0]["bifurcations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|b| b["kind"] == "fold")
+        .map(|b| b["speed_rpm"].as_f64().unwrap())
+        .collect();
+    assert!(folds.iter().any(|f| (8350.0..=8400.0).contains(f)), "{folds:?}");
+    let csv = std::fs::read_to_string(out.join("sweep_continuation.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "run").unwrap();
+    let count = |want: &str| csv.lines().skip(1).filter(|l| l.split(',').nth(col) == Some(want)).count();
+    assert_eq!(count("up") as u64, runs[0]["points"].as_u64().unwrap());
+    assert_eq!(count("down") as u64, runs[1]["points"].as_u64().unwrap());
+    assert_eq!(summary["points"].as_u64().unwrap(), (count("up") + count("down")) as u64);
+    for name in ["sun_planet", "ring_planet"] {
+        assert!(out.join(format!("forced_response_{name}_continuation.svg")).exists());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The continuation's own flags are checked before any work, in rpm, naming the flag.
 #[test]
 fn the_sweep_command_refuses_continuation_flags_that_cannot_work() {

@@ -158,7 +158,9 @@ pub struct Bifurcation {
     pub speed: f64,
     /// Indices of the two branch points that bracket it.
     pub between: (usize, usize),
-    /// The real multiplier nearest the crossing value at those two points.
+    /// The real multiplier nearest the crossing value at those two points
+    /// (NaN at a point with no real multiplier: a fold at a grazing corner,
+    /// where no multiplier passes +1).
     pub multipliers: (f64, f64),
 }
 
@@ -386,9 +388,11 @@ fn restart(
 /// then two nominal steps along the tangent. Failing that, and whenever the
 /// branch turns back past the first speed, runs back more than
 /// [`ContinuationSettings::max_back`] nominal steps below the furthest speed
-/// reached, or travels twice that without reaching further, it restarts by
-/// marching at one nominal step beyond the furthest speed reached (as a
-/// marching sweep jumps at a fold). Each is recorded in [`Branch::gaps`]; the points after it
+/// reached, travels twice that without reaching further, or meets again a
+/// fold it passed (within a tenth of a nominal step: a closed loop, or back
+/// and forth between two corners), it restarts by marching at one nominal
+/// step beyond the furthest speed reached (as a marching sweep jumps at a
+/// fold). Each is recorded in [`Branch::gaps`]; the points after it
 /// start a new segment. The run ends early, keeping the points found, only
 /// when a restart fails too (the reason is in [`Branch::ended`]).
 pub fn continue_branch(
@@ -428,6 +432,8 @@ pub fn continue_branch(
     let mut gaps = Vec::new();
     let mut ds: f64 = 1.0;
     let mut refresh = false;
+    // The run has come back to a fold it passed before (see below): restart.
+    let mut retracing = false;
     let mut ended = String::from("reached the last speed");
     while points.len() < settings.max_points {
         // The last step lands on the last speed exactly (speed fixed instead
@@ -458,14 +464,18 @@ pub fn continue_branch(
         // After a failed correction the chord matrix is taken at the
         // predicted point instead of the last accepted one (a contact that
         // starts or ends between the two changes the linearization).
-        let chord = if refresh {
-            corrector.chord_at(problem, &predicted, &lin, &constraint)
-        } else {
-            bordered(&lin, unit, &constraint)
-        };
         let mut gap = None;
-        let mut accepted = corrector.correct(problem, &chord, &constraint, &predicted);
-        if accepted.is_none() {
+        let mut accepted = if retracing {
+            None
+        } else {
+            let chord = if refresh {
+                corrector.chord_at(problem, &predicted, &lin, &constraint)
+            } else {
+                bordered(&lin, unit, &constraint)
+            };
+            corrector.correct(problem, &chord, &constraint, &predicted)
+        };
+        if accepted.is_none() && !retracing {
             ds *= 0.5;
             refresh = true;
             if ds >= settings.min_step {
@@ -495,7 +505,8 @@ pub fn continue_branch(
                 || (furthest[m] - x[m]) * direction > settings.max_back
                 || travel + (x[m] - y[m]).abs() > 2.0 * settings.max_back
         });
-        if accepted.is_none() || left {
+        if accepted.is_none() || left || retracing {
+            retracing = false;
             let lambda = furthest[m] + direction;
             let beyond = (lambda - lambda_end) * direction >= 0.0;
             let lambda = if beyond { lambda_end } else { lambda };
@@ -559,7 +570,17 @@ pub fn continue_branch(
             gaps.push(Gap { kind, from: y[m] * unit, to: omega, point: i });
             segment += 1;
         } else {
+            let known = bifurcations.len();
             detect_bifurcations(&previous_orbit, &orbit, (&y, &x), (&t, &new_t), unit, i, &mut bifurcations);
+            // A fold within a tenth of a nominal step of an earlier fold of
+            // the run: the run is going round a closed loop, or back and
+            // forth between two corners where the tangent flips.
+            let (earlier, new) = bifurcations.split_at(known);
+            retracing = new.iter().filter(|b| b.kind == BifurcationKind::Fold).any(|b| {
+                earlier
+                    .iter()
+                    .any(|e| e.kind == BifurcationKind::Fold && (e.speed - b.speed).abs() <= 0.1 * unit)
+            });
             if new_t[m] * t[m] < 0.0 {
                 segment += 1;
             }

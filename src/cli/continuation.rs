@@ -3,9 +3,12 @@
 //! (docs/PERIODIC.md); the CSV and charts of the marching sweep plus
 //! stability, branch segment and Floquet multipliers.
 
-use planetwear::analysis::continuation::{continue_branch, BifurcationKind, ContinuationSettings, GapKind};
+use planetwear::analysis::continuation::{
+    continue_branch, BifurcationKind, Branch, ContinuationSettings, GapKind,
+};
 use planetwear::dynamics::periodic::{PeriodicProblem, ShootingSettings};
-use planetwear::report::continuation::{continuation_csv, write_continuation_response};
+use planetwear::dynamics::response::SteadyState;
+use planetwear::report::continuation::{continuation_csv, write_continuation_response, ContinuationRun};
 
 use crate::*;
 
@@ -39,106 +42,130 @@ pub(crate) fn sweep_continuation(
     if !matches!(direction.as_str(), "up" | "down" | "both") {
         bail!("--direction {direction}: allowed are up, down, both");
     }
+    let direction = direction.as_str();
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     let model = PlanetaryDynamics::new(
         &set,
         contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
     )?;
-    let started = std::time::Instant::now();
-    let mut problem = PeriodicProblem::new(model, ShootingSettings::default(), rpm_to_rad_per_s(from))?;
-    let mut settings =
-        ContinuationSettings::new(rpm_to_rad_per_s(from), rpm_to_rad_per_s(to), rpm_to_rad_per_s(step));
-    if let Some(back) = max_back {
-        if !(back.is_finite() && back > 0.0) {
-            bail!("--max-back {back} rpm: must be a positive, finite speed");
+    let back = match max_back {
+        Some(back) if !(back.is_finite() && back > 0.0) => {
+            bail!("--max-back {back} rpm: must be a positive, finite speed")
         }
-        settings.max_back = back / step;
-    }
-    let bar = progress_bar(((to - from).abs() / step).ceil() as u64 + 1);
-    let branch = continue_branch(&mut problem, &settings, |p| {
-        bar.set_position(((rad_per_s_to_rpm(p.orbit.speed) - from).abs() / step) as u64);
-    })?;
+        Some(back) => Some(back / step),
+        None => None,
+    };
+    // One run per direction: up from --from to --to, down from --to to --from
+    // (the continuation's counterpart of the marching sweep's two directions).
+    let ends: Vec<(&str, f64, f64)> = [("up", from, to), ("down", to, from)]
+        .into_iter()
+        .filter(|(d, _, _)| direction == "both" || direction == *d)
+        .collect();
+    let started = std::time::Instant::now();
+    let per_run = ((to - from).abs() / step).ceil() as u64 + 1;
+    let bar = progress_bar(per_run * ends.len() as u64);
+    let done: Vec<std::sync::atomic::AtomicU64> = ends.iter().map(|_| 0.into()).collect();
+    let results: Vec<Result<Run>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = ends
+            .iter()
+            .enumerate()
+            .map(|(k, &(name, a, b))| {
+                let (model, bar, done) = (model.clone(), &bar, &done);
+                scope.spawn(move || -> Result<Run> {
+                    let mut problem =
+                        PeriodicProblem::new(model, ShootingSettings::default(), rpm_to_rad_per_s(a))?;
+                    let mut settings = ContinuationSettings::new(
+                        rpm_to_rad_per_s(a),
+                        rpm_to_rad_per_s(b),
+                        rpm_to_rad_per_s(step),
+                    );
+                    if let Some(back) = back {
+                        settings.max_back = back;
+                    }
+                    let branch = continue_branch(&mut problem, &settings, |p| {
+                        let at = ((rad_per_s_to_rpm(p.orbit.speed) - a).abs() / step) as u64;
+                        done[k].store(at.min(per_run), std::sync::atomic::Ordering::Relaxed);
+                        bar.set_position(
+                            done.iter().map(|d| d.load(std::sync::atomic::Ordering::Relaxed)).sum(),
+                        );
+                    })?;
+                    let mut states = Vec::with_capacity(branch.points.len());
+                    for p in &branch.points {
+                        states.push(problem.steady_state(&p.orbit)?);
+                    }
+                    Ok(Run { direction: name, branch, states })
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|_| Err(anyhow::anyhow!("a continuation run panicked"))))
+            .collect()
+    });
     bar.finish_and_clear();
-    let mut states = Vec::with_capacity(branch.points.len());
-    for p in &branch.points {
-        states.push(problem.steady_state(&p.orbit)?);
-    }
+    let runs = results.into_iter().collect::<Result<Vec<Run>>>()?;
     let wall = started.elapsed().as_secs_f64();
     let width_mm = set.sun().face_width * 1e3;
     let mut files = Vec::new();
     let path = out.join("sweep_continuation.csv");
-    write_csv(&path, &continuation_csv(&branch, &states, width_mm))?;
+    let tables: Vec<ContinuationRun<'_>> = runs.iter().map(Run::table).collect();
+    write_csv(&path, &continuation_csv(&tables, width_mm))?;
     files.push(path);
-    for s in states
+    for s in runs
         .iter()
+        .flat_map(|r| &r.states)
         .filter(|s| histories.iter().any(|h| (h - rad_per_s_to_rpm(s.input_speed)).abs() <= 0.5 * step))
     {
         files.extend(write_steady_state(s, &set, &out)?);
     }
-    files.extend(write_continuation_response(&branch, &states, &set, &out)?);
-    let bifurcations: Vec<_> = branch
-        .bifurcations
-        .iter()
-        .map(|b| {
-            serde_json::json!({
-                "kind": b.kind,
-                "speed_rpm": rad_per_s_to_rpm(b.speed),
-                "between_rpm": [rad_per_s_to_rpm(branch.points[b.between.0].orbit.speed), rad_per_s_to_rpm(branch.points[b.between.1].orbit.speed)],
-                "multipliers": [b.multipliers.0, b.multipliers.1],
-            })
-        })
-        .collect();
-    let gaps: Vec<_> = branch
-        .gaps
-        .iter()
-        .map(|g| {
-            serde_json::json!({
-                "kind": g.kind,
-                "from_rpm": rad_per_s_to_rpm(g.from),
-                "to_rpm": rad_per_s_to_rpm(g.to),
-            })
-        })
-        .collect();
-    let unstable: Vec<[f64; 2]> = unstable_ranges(&branch);
+    files.extend(write_continuation_response(&tables, &set, &out)?);
+    let summaries: Vec<serde_json::Value> = runs.iter().map(Run::summary).collect();
     let summary = serde_json::json!({
         "scene": set.name(),
         "method": "continuation",
-        "points": branch.points.len(),
-        "ended": branch.ended,
+        "points": runs.iter().map(|r| r.branch.points.len()).sum::<usize>(),
         "wall_time_s": wall,
-        "flows": branch.flows,
-        "internal_steps": branch.work.steps,
-        "bifurcations": bifurcations,
-        "gaps": gaps,
-        "unstable_rpm": unstable,
+        "flows": runs.iter().map(|r| r.branch.flows).sum::<usize>(),
+        "internal_steps": runs.iter().map(|r| r.branch.work.steps).sum::<u64>(),
+        "runs": summaries,
         "files": files,
     });
     write_atomic(&out.join("sweep.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     if json {
         outln!("{}", serde_json::to_string_pretty(&summary)?)?;
-    } else {
+        return Ok(());
+    }
+    outln!(
+        "continuation from {from} to {to} rpm in {wall:.2} s; {} files in {}",
+        files.len(),
+        out.display()
+    )?;
+    for r in &runs {
+        let (a, b) = if r.direction == "up" { (from, to) } else { (to, from) };
+        let branch = &r.branch;
         outln!(
-            "continued {} periodic states from {from} to {to} rpm in {wall:.2} s ({} flows over one period, {} steps); {}; {} files in {}",
+            "{}: {} periodic states from {a} to {b} rpm ({} flows over one period, {} steps); {}",
+            r.direction,
             branch.points.len(),
             branch.flows,
             branch.work.steps,
             branch.ended,
-            files.len(),
-            out.display()
         )?;
         for b in &branch.bifurcations {
             let kind = match b.kind {
                 BifurcationKind::Fold => "fold",
                 BifurcationKind::PeriodDoubling => "period doubling",
             };
+            // NaN: the point has no real multiplier (a fold at a grazing corner).
+            let mu = |m: f64| if m.is_nan() { "none real".to_string() } else { format!("{m:.3}") };
             outln!(
-                "  {kind} at {:.1} rpm (multipliers {:.3} and {:.3} either side)",
+                "  {kind} at {:.1} rpm (multipliers {} and {} either side)",
                 rad_per_s_to_rpm(b.speed),
-                b.multipliers.0,
-                b.multipliers.1
+                mu(b.multipliers.0),
+                mu(b.multipliers.1)
             )?;
         }
-        for [a, b] in &unstable {
+        for [a, b] in &unstable_ranges(branch) {
             outln!("  unstable from {a:.1} to {b:.1} rpm")?;
         }
         for g in &branch.gaps {
@@ -156,9 +183,60 @@ pub(crate) fn sweep_continuation(
     Ok(())
 }
 
+/// One direction's continuation and the measures of its points.
+struct Run {
+    direction: &'static str,
+    branch: Branch,
+    states: Vec<SteadyState>,
+}
+
+impl Run {
+    fn table(&self) -> ContinuationRun<'_> {
+        ContinuationRun { direction: self.direction, branch: &self.branch, states: &self.states }
+    }
+
+    fn summary(&self) -> serde_json::Value {
+        let branch = &self.branch;
+        let rpm = |i: usize| rad_per_s_to_rpm(branch.points[i].orbit.speed);
+        let bifurcations: Vec<_> = branch
+            .bifurcations
+            .iter()
+            .map(|b| {
+                serde_json::json!({
+                    "kind": b.kind,
+                    "speed_rpm": rad_per_s_to_rpm(b.speed),
+                    "between_rpm": [rpm(b.between.0), rpm(b.between.1)],
+                    "multipliers": [b.multipliers.0, b.multipliers.1],
+                })
+            })
+            .collect();
+        let gaps: Vec<_> = branch
+            .gaps
+            .iter()
+            .map(|g| {
+                serde_json::json!({
+                    "kind": g.kind,
+                    "from_rpm": rad_per_s_to_rpm(g.from),
+                    "to_rpm": rad_per_s_to_rpm(g.to),
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "direction": self.direction,
+            "points": branch.points.len(),
+            "ended": branch.ended,
+            "flows": branch.flows,
+            "internal_steps": branch.work.steps,
+            "bifurcations": bifurcations,
+            "gaps": gaps,
+            "unstable_rpm": unstable_ranges(branch),
+        })
+    }
+}
+
 /// Speed ranges [rpm] of the branch's unstable runs of points (each run's
 /// lowest and highest speed).
-fn unstable_ranges(branch: &planetwear::analysis::continuation::Branch) -> Vec<[f64; 2]> {
+fn unstable_ranges(branch: &Branch) -> Vec<[f64; 2]> {
     let mut ranges = Vec::new();
     let mut current: Option<[f64; 2]> = None;
     for p in &branch.points {

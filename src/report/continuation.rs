@@ -13,33 +13,55 @@ use crate::dynamics::response::{Direction, SteadyState, Sweep};
 use crate::model::gear::GearSet;
 use crate::scene::units::rad_per_s_to_rpm;
 
-/// The CSV of a continuation: the columns of [`sweep_csv`] (the direction
-/// column says where the branch runs: `up` towards higher speed, `down`
-/// back), then `stable` (1 or 0), `branch` (the segment between folds, 0
-/// first), `max_abs_multiplier`, and the real and imaginary parts of the
-/// largest multiplier. `states` holds each branch point's measures in order.
-pub fn continuation_csv(branch: &Branch, states: &[SteadyState], width_mm: f64) -> String {
-    let rows = Sweep { direction: Direction::Up, points: states.to_vec() };
-    let base = sweep_csv(&rows, width_mm);
+/// One run of a continuation (`up` from the first speed to the last,
+/// `down` back) with its points' measures, in the branch's order.
+#[derive(Clone, Copy, Debug)]
+pub struct ContinuationRun<'a> {
+    /// `up` or `down`.
+    pub direction: &'a str,
+    /// The branch.
+    pub branch: &'a Branch,
+    /// Each branch point's measures.
+    pub states: &'a [SteadyState],
+}
+
+/// The CSV of a continuation's runs, one after another: the columns of
+/// [`sweep_csv`] (the direction column says where the branch runs: `up`
+/// towards higher speed, `down` towards lower), then `stable` (1 or 0),
+/// `branch` (the run's segment between folds and gaps, 0 first),
+/// `max_abs_multiplier`, the real and imaginary parts of the largest
+/// multiplier, and `run` (the run's direction: `up` from the first speed,
+/// `down` from the last).
+pub fn continuation_csv(runs: &[ContinuationRun<'_>], width_mm: f64) -> String {
     let mut out = String::new();
-    for (i, line) in base.lines().enumerate() {
-        if i == 0 {
-            let _ = writeln!(out, "{line},stable,branch,max_abs_multiplier,multiplier_1_re,multiplier_1_im");
-            continue;
+    for (k, run) in runs.iter().enumerate() {
+        let rows = Sweep { direction: Direction::Up, points: run.states.to_vec() };
+        let base = sweep_csv(&rows, width_mm);
+        for (i, line) in base.lines().enumerate() {
+            if i == 0 {
+                if k == 0 {
+                    let _ = writeln!(
+                        out,
+                        "{line},stable,branch,max_abs_multiplier,multiplier_1_re,multiplier_1_im,run"
+                    );
+                }
+                continue;
+            }
+            let Some(p) = run.branch.points.get(i - 1) else { continue };
+            let direction = if p.speed_slope >= 0.0 { "up" } else { "down" };
+            let rest = line.split_once(',').map_or("", |(_, r)| r);
+            let mu = p.orbit.multipliers.first().map_or((f64::NAN, f64::NAN), |m| (m.re, m.im));
+            let _ = writeln!(
+                out,
+                "{direction},{rest},{},{},{},{},{},{}",
+                u8::from(p.stable),
+                p.segment,
+                p.orbit.largest_multiplier(),
+                mu.0,
+                mu.1,
+                run.direction
+            );
         }
-        let Some(p) = branch.points.get(i - 1) else { continue };
-        let direction = if p.speed_slope >= 0.0 { "up" } else { "down" };
-        let rest = line.split_once(',').map_or("", |(_, r)| r);
-        let mu = p.orbit.multipliers.first().map_or((f64::NAN, f64::NAN), |m| (m.re, m.im));
-        let _ = writeln!(
-            out,
-            "{direction},{rest},{},{},{},{},{}",
-            u8::from(p.stable),
-            p.segment,
-            p.orbit.largest_multiplier(),
-            mu.0,
-            mu.1
-        );
     }
     out
 }
@@ -70,43 +92,53 @@ fn pieces(branch: &Branch, speeds: &[f64], y: &[f64]) -> (Vec<f64>, Vec<f64>, Ve
 }
 
 /// Forced-response charts (F^(rms) of planet 1's sun–planet and ring–planet
-/// mesh against speed) of a branch: stable points a solid line, unstable
-/// ones dashed, folds and period doublings as markers.
+/// mesh against speed) of a continuation's runs: stable points a solid line,
+/// unstable ones dashed, folds and period doublings as markers; the runs are
+/// drawn one after another, not joined.
 pub fn write_continuation_response(
-    branch: &Branch,
-    states: &[SteadyState],
+    runs: &[ContinuationRun<'_>],
     set: &GearSet,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let width_mm = set.sun().face_width * 1e3;
     let mut files = Vec::new();
-    if states.is_empty() {
+    if runs.iter().all(|r| r.states.is_empty()) {
         return Ok(files);
     }
-    let speeds: Vec<f64> = states.iter().map(|s| rad_per_s_to_rpm(s.input_speed)).collect();
+    let any = |want: bool| runs.iter().any(|r| r.branch.points.iter().any(|p| p.stable == want));
     for (mesh_index, name) in [(0usize, "sun_planet"), (1usize, "ring_planet")] {
-        let y: Vec<f64> = states.iter().map(|s| s.meshes[mesh_index].harmonics.rms / width_mm).collect();
-        let (rpm, stable, unstable) = pieces(branch, &speeds, &y);
+        let (mut rpm, mut stable, mut unstable) = (Vec::new(), Vec::new(), Vec::new());
+        let mut markers = [(Vec::new(), Vec::new()), (Vec::new(), Vec::new())];
+        for run in runs {
+            let speeds: Vec<f64> = run.states.iter().map(|s| rad_per_s_to_rpm(s.input_speed)).collect();
+            let y: Vec<f64> =
+                run.states.iter().map(|s| s.meshes[mesh_index].harmonics.rms / width_mm).collect();
+            let (x, s, u) = pieces(run.branch, &speeds, &y);
+            // A break between runs.
+            if let Some(first) = x.first().filter(|_| !rpm.is_empty()) {
+                rpm.push(*first);
+                stable.push(f64::NAN);
+                unstable.push(f64::NAN);
+            }
+            rpm.extend(x);
+            stable.extend(s);
+            unstable.extend(u);
+            for b in &run.branch.bifurcations {
+                let (i, j) = b.between;
+                let (Some(a), Some(c)) = (y.get(i), y.get(j)) else { continue };
+                let k = usize::from(b.kind == BifurcationKind::PeriodDoubling);
+                markers[k].0.push(rad_per_s_to_rpm(b.speed));
+                markers[k].1.push(0.5 * (a + c));
+            }
+        }
         let mut series = Vec::new();
-        if branch.points.iter().any(|p| p.stable) {
+        if any(true) {
             series.push(Series::new("stable", rpm.clone(), stable).with_style(SeriesStyle::Broken));
         }
-        if branch.points.iter().any(|p| !p.stable) {
+        if any(false) {
             series.push(Series::new("unstable", rpm.clone(), unstable).with_style(SeriesStyle::Dashed));
         }
-        for (kind, label) in
-            [(BifurcationKind::Fold, "fold"), (BifurcationKind::PeriodDoubling, "period doubling")]
-        {
-            let (bx, by): (Vec<f64>, Vec<f64>) = branch
-                .bifurcations
-                .iter()
-                .filter(|b| b.kind == kind)
-                .filter_map(|b| {
-                    let (i, j) = b.between;
-                    let (a, c) = (y.get(i)?, y.get(j)?);
-                    Some((b.speed * 30.0 / std::f64::consts::PI, 0.5 * (a + c)))
-                })
-                .unzip();
+        for ((bx, by), label) in markers.into_iter().zip(["fold", "period doubling"]) {
             if !bx.is_empty() {
                 series.push(Series::new(label, bx, by).with_style(SeriesStyle::Points));
             }
