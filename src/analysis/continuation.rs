@@ -55,14 +55,14 @@ fn default_max_back() -> f64 {
 
 impl ContinuationSettings {
     /// From `from` to `to` at nominal step `step` [rad/s], with the default
-    /// step bounds (1/256 to 4 nominal steps), at most 20 000 points, 8
+    /// step bounds (1/256 to 1 nominal step), at most 20 000 points, 8
     /// corrections per step, and at most 10 nominal steps back.
     pub fn new(from: f64, to: f64, step: f64) -> Self {
         Self {
             from,
             to,
             step,
-            max_step: 4.0,
+            max_step: 1.0,
             min_step: 1.0 / 256.0,
             max_points: 20_000,
             max_corrections: 8,
@@ -272,8 +272,11 @@ impl Corrector<'_> {
         predicted: &[f64],
     ) -> Option<(Vec<f64>, usize)> {
         let m = predicted.len() - 1;
+        let k = m + 1;
+        let mut chord = chord.to_vec();
         let mut x = predicted.to_vec();
         let mut previous_norm = f64::INFINITY;
+        let mut last: Option<(Vec<f64>, Vec<f64>)> = None;
         for iteration in 1..=self.max_corrections {
             let g = problem.residual(x[m] * self.unit, &x[..m], self.work).ok()?;
             *self.flows += 1;
@@ -286,15 +289,33 @@ impl Corrector<'_> {
                 return None;
             }
             previous_norm = norm;
+            // Broyden's update of the residual rows with the change the last
+            // correction made: ∂G/∂λ turns quickly with speed where the free
+            // vibration's phase at the period's start does (low speeds), and
+            // the chord of the last point alone then converges slowly
+            // (contraction about 0.4 per correction at 600 rpm).
+            if let Some((dx, g_before)) = &last {
+                let dd: f64 = dx.iter().map(|v| v * v).sum();
+                if dd > 0.0 {
+                    for i in 0..m {
+                        let predicted_change: f64 = (0..k).map(|j| chord[i + k * j] * dx[j]).sum();
+                        let miss = (g[i] - g_before[i]) - predicted_change;
+                        for j in 0..k {
+                            chord[i + k * j] += miss * dx[j] / dd;
+                        }
+                    }
+                }
+            }
             let mut rhs: Vec<f64> = g.iter().map(|v| -v).collect();
             rhs.push(
                 -constraint.iter().zip(x.iter().zip(predicted)).map(|(c, (a, b))| c * (a - b)).sum::<f64>(),
             );
-            let dx = solve_dense(chord, m + 1, &rhs);
+            let dx = solve_dense(&chord, k, &rhs);
             if dx.iter().any(|v| !v.is_finite()) {
                 return None;
             }
             x.iter_mut().zip(&dx).for_each(|(a, d)| *a += d);
+            last = Some((dx, g));
         }
         None
     }
@@ -352,6 +373,9 @@ pub struct Gap {
 /// revolution of the example, as a marching sweep's run-in).
 const RESTART_PERIODS: usize = 34;
 
+/// Speeds, one nominal step apart, at which a restart is tried before the run ends.
+const RESTART_TRIES: usize = 4;
+
 /// The state of a restart at `omega`: marching from `z` until the change
 /// over a period is at most 1e-3 of the state scales (or
 /// [`RESTART_PERIODS`] periods), then Newton.
@@ -392,9 +416,10 @@ fn restart(
 /// fold it passed (within a tenth of a nominal step: a closed loop, or back
 /// and forth between two corners), it restarts by marching at one nominal
 /// step beyond the furthest speed reached (as a marching sweep jumps at a
-/// fold). Each is recorded in [`Branch::gaps`]; the points after it
-/// start a new segment. The run ends early, keeping the points found, only
-/// when a restart fails too (the reason is in [`Branch::ended`]).
+/// fold), or up to three steps further where marching finds no periodic
+/// state. Each is recorded in [`Branch::gaps`]; the points after it start a
+/// new segment. The run ends early, keeping the points found, only when the
+/// restarts fail too (the reason is in [`Branch::ended`]).
 pub fn continue_branch(
     problem: &mut PeriodicProblem,
     settings: &ContinuationSettings,
@@ -507,32 +532,41 @@ pub fn continue_branch(
         });
         if accepted.is_none() || left || retracing {
             retracing = false;
-            let lambda = furthest[m] + direction;
-            let beyond = (lambda - lambda_end) * direction >= 0.0;
-            let lambda = if beyond { lambda_end } else { lambda };
             if (furthest[m] - lambda_end) * direction >= 0.0 {
                 ended = "reached the last speed".into();
                 add(&mut total, &work);
                 flows += step_flows;
                 break;
             }
-            match restart(problem, lambda * unit, &furthest[..m], &mut work, &mut step_flows) {
-                Some(z) => {
+            // From one nominal step beyond the furthest speed reached; where
+            // marching finds no periodic state (the attractor is not periodic
+            // in one mesh cycle) one step further, at most RESTART_TRIES times.
+            let mut tried = Vec::new();
+            for k in 1..=RESTART_TRIES {
+                let lambda = furthest[m] + direction * k as f64;
+                let beyond = (lambda - lambda_end) * direction >= 0.0;
+                let lambda = if beyond { lambda_end } else { lambda };
+                tried.push(lambda * unit);
+                if let Some(z) = restart(problem, lambda * unit, &furthest[..m], &mut work, &mut step_flows) {
                     accepted = Some((z.into_iter().chain([lambda]).collect(), 0));
                     gap = Some(GapKind::Restart);
                     last = beyond;
-                }
-                None => {
-                    ended = format!(
-                        "stopped at {:.4} rad/s: no periodic state within the smallest arclength step, and \
-                         none by marching at {:.4} rad/s",
-                        y[m] * unit,
-                        lambda * unit
-                    );
-                    add(&mut total, &work);
-                    flows += step_flows;
                     break;
                 }
+                if beyond {
+                    break;
+                }
+            }
+            if accepted.is_none() || gap != Some(GapKind::Restart) {
+                ended = format!(
+                    "stopped at {:.4} rad/s: no periodic state within the smallest arclength step, and \
+                     none by marching at {}",
+                    y[m] * unit,
+                    tried.iter().map(|w| format!("{w:.4}")).collect::<Vec<_>>().join(", ") + " rad/s"
+                );
+                add(&mut total, &work);
+                flows += step_flows;
+                break;
             }
         }
         let Some((x, corrections)) = accepted else { unreachable!("a failed step has ended the run") };
