@@ -240,6 +240,11 @@ struct SweepArgs {
     /// restarts past it by marching; default 10 nominal steps.
     #[arg(long, value_name = "RPM")]
     max_back: Option<f64>,
+    /// Continuation only: also run the marching sweep up and down on the same grid and set
+    /// each of its jumps beside the nearest fold, period doubling or change of stability
+    /// (jumps.md, and "jumps" in sweep.json).
+    #[arg(long)]
+    against_march: bool,
 }
 
 /// Work-precision study of the integrators: E_h of the mesh-force harmonics against CPU time

@@ -403,7 +403,8 @@ fn the_sweep_command_refuses_an_unknown_method() {
 /// `--direction both` runs the continuation up from --from and down from
 /// --to, side by side: the summary lists both runs, the CSV's `run` column
 /// tells their rows apart, and the up run's fold lies in the marching
-/// up-sweep's jump (8350–8400 rpm, `a_continuation_leaves_a_turned_back_branch_as_a_marching_sweep_jumps`).
+/// up-sweep's jump (8350–8400 rpm), which `--against-march` finds and sets
+/// beside it.
 #[test]
 fn the_continuation_command_runs_both_directions() {
     let dir = std::env::temp_dir().join(format!("planetwear-periodic-both-{}", std::process::id()));
@@ -429,6 +430,7 @@ fn the_continuation_command_runs_both_directions() {
             "--method",
             "continuation",
             "--json",
+            "--against-march",
         ])
         .arg("--scene")
         .arg(&scene)
@@ -462,6 +464,23 @@ fn the_continuation_command_runs_both_directions() {
     for name in ["sun_planet", "ring_planet"] {
         assert!(out.join(format!("forced_response_{name}_continuation.svg")).exists());
     }
+    // --against-march: the marching up-sweep's jump 8350 → 8400 rpm has the
+    // fold inside its step; its steep flanks either side (8300 → 8350,
+    // 8500 → 8550 rpm) lie on one stable continued branch and are no jumps.
+    let jumps = summary["jumps"].as_array().unwrap();
+    let row = |d: &str, from: f64| {
+        jumps.iter().find(|j| j["direction"] == d && j["from_rpm"].as_f64() == Some(from)).cloned()
+    };
+    let jump = row("up", 8350.0).expect("the up-sweep jumps at 8350 → 8400 rpm");
+    assert_eq!(jump["event"], "fold", "{jump}");
+    assert_eq!(jump["outside_rpm"].as_f64(), Some(0.0), "{jump}");
+    assert_eq!(jump["on_one_stable_branch"], false);
+    for from in [8300.0, 8500.0] {
+        let flank = row("up", from).expect("a steep flank");
+        assert_eq!(flank["on_one_stable_branch"], true, "{flank}");
+    }
+    let table = std::fs::read_to_string(out.join("jumps.md")).unwrap();
+    assert!(table.contains("| up | 8350 → 8400 | 138 → 168 | fold |"), "{table}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -486,6 +505,8 @@ fn the_sweep_command_refuses_continuation_flags_that_cannot_work() {
     assert!(err.contains("--max-back 0 rpm") && err.contains("positive"), "{err}");
     let err = run(&["--step", "10", "--max-back", "500"]);
     assert!(err.contains("--max-back applies to --method continuation only"), "{err}");
+    let err = run(&["--step", "10", "--against-march"]);
+    assert!(err.contains("--against-march applies to --method continuation only"), "{err}");
 }
 
 /// Marching in the rigid-body frame (`analysis::frame_sweep`) settles on the

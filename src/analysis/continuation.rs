@@ -710,9 +710,250 @@ fn detect_bifurcations(
     }
 }
 
+/// What changes along a branch at a point where a marching sweep can jump.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EventKind {
+    /// The branch turns back in speed ([`BifurcationKind::Fold`], corners included).
+    Fold,
+    /// A real multiplier passes −1.
+    PeriodDoubling,
+    /// The branch turns stable (towards `to`).
+    TurnsStable,
+    /// The branch turns unstable (towards `to`).
+    TurnsUnstable,
+}
+
+/// A fold, period doubling or change of stability of a branch.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BranchEvent {
+    /// Speed [rad/s]: a bifurcation's located speed; for a change of
+    /// stability the middle of the two points either side.
+    pub speed: f64,
+    /// What happens.
+    pub kind: EventKind,
+}
+
+/// The folds, period doublings and changes of stability of `branch`, in
+/// the order met (a change of stability across a gap is none).
+pub fn branch_events(branch: &Branch) -> Vec<BranchEvent> {
+    let mut events: Vec<(usize, BranchEvent)> = branch
+        .bifurcations
+        .iter()
+        .map(|b| {
+            let kind = match b.kind {
+                BifurcationKind::Fold => EventKind::Fold,
+                BifurcationKind::PeriodDoubling => EventKind::PeriodDoubling,
+            };
+            (b.between.1, BranchEvent { speed: b.speed, kind })
+        })
+        .collect();
+    for (i, w) in branch.points.windows(2).enumerate() {
+        if w[0].stable != w[1].stable && !w[1].after_gap {
+            let kind = if w[1].stable { EventKind::TurnsStable } else { EventKind::TurnsUnstable };
+            events.push((i + 1, BranchEvent { speed: 0.5 * (w[0].orbit.speed + w[1].orbit.speed), kind }));
+        }
+    }
+    events.sort_by_key(|(i, _)| *i);
+    events.into_iter().map(|(_, e)| e).collect()
+}
+
+/// A jump of a marching sweep: a measure changing by more than a ratio
+/// from one speed to the next.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Jump {
+    /// Speed before the jump, in the sweep's order [rad/s].
+    pub from: f64,
+    /// Speed after it [rad/s].
+    pub to: f64,
+    /// The measure before.
+    pub before: f64,
+    /// The measure after.
+    pub after: f64,
+}
+
+/// The jumps of a sweep: successive points (`speeds` in the sweep's order)
+/// whose `values` differ by a factor above `ratio` (> 1) either way.
+pub fn marching_jumps(speeds: &[f64], values: &[f64], ratio: f64) -> Vec<Jump> {
+    speeds
+        .windows(2)
+        .zip(values.windows(2))
+        .filter(|(_, v)| v[0] > 0.0 && v[1] > 0.0 && (v[1] / v[0] > ratio || v[0] / v[1] > ratio))
+        .map(|(s, v)| Jump { from: s[0], to: s[1], before: v[0], after: v[1] })
+        .collect()
+}
+
+/// The event nearest a jump and its distance [rad/s] from the jump's
+/// speed step (0 inside it), or `None` without events; of events at the
+/// same distance a fold first, then a period doubling, then a change of
+/// stability.
+pub fn nearest_event(jump: &Jump, events: &[BranchEvent]) -> Option<(BranchEvent, f64)> {
+    let (lo, hi) = (jump.from.min(jump.to), jump.from.max(jump.to));
+    let rank = |k: EventKind| match k {
+        EventKind::Fold => 0,
+        EventKind::PeriodDoubling => 1,
+        EventKind::TurnsStable | EventKind::TurnsUnstable => 2,
+    };
+    let distance = |speed: f64| (lo - speed).max(speed - hi).max(0.0);
+    events
+        .iter()
+        .map(|e| (*e, distance(e.speed)))
+        .min_by(|a, b| a.1.total_cmp(&b.1).then(rank(a.0.kind).cmp(&rank(b.0.kind))))
+}
+
+/// A point of a continuation run's curve of one measure.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurvePoint {
+    /// Speed [rad/s].
+    pub speed: f64,
+    /// The measure.
+    pub value: f64,
+    /// Whether the point is stable.
+    pub stable: bool,
+    /// Whether it is the first point after a gap.
+    pub after_gap: bool,
+}
+
+/// Whether both ends of a marching step lie on one stable stretch of a
+/// continued curve (stable points joined without a gap), each within
+/// `tolerance` (relative) of the curve interpolated linearly at its speed:
+/// then the step is a steep flank of one branch, not a jump between two.
+pub fn on_one_stable_branch(curve: &[CurvePoint], jump: &Jump, tolerance: f64) -> bool {
+    let mut start = 0;
+    while start < curve.len() {
+        // The stable stretch from `start`.
+        if !curve[start].stable {
+            start += 1;
+            continue;
+        }
+        let mut end = start + 1;
+        while end < curve.len() && curve[end].stable && !curve[end].after_gap {
+            end += 1;
+        }
+        let stretch = &curve[start..end];
+        let at = |speed: f64| -> Option<f64> {
+            stretch.windows(2).find_map(|w| {
+                let (lo, hi) = (w[0].speed.min(w[1].speed), w[0].speed.max(w[1].speed));
+                (speed >= lo && speed <= hi && hi > lo).then(|| {
+                    w[0].value + (w[1].value - w[0].value) * (speed - w[0].speed) / (w[1].speed - w[0].speed)
+                })
+            })
+        };
+        let near =
+            |speed: f64, value: f64| at(speed).is_some_and(|c| (c - value).abs() <= tolerance * value.abs());
+        if near(jump.from, jump.before) && near(jump.to, jump.after) {
+            return true;
+        }
+        start = end;
+    }
+    false
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_jump_is_a_change_beyond_the_ratio_and_meets_the_nearest_event() {
+        let speeds = [100.0, 150.0, 200.0, 250.0];
+        let values = [10.0, 11.0, 15.0, 5.0];
+        let jumps = marching_jumps(&speeds, &values, 1.15);
+        // 10 → 11 is 1.10: no jump; 11 → 15 is 1.36 and 15 → 5 is 3 (downwards).
+        assert_eq!(jumps.len(), 2);
+        assert_eq!((jumps[0].from, jumps[0].to, jumps[1].before, jumps[1].after), (150.0, 200.0, 15.0, 5.0));
+        let events = [
+            BranchEvent { speed: 170.0, kind: EventKind::Fold },
+            BranchEvent { speed: 262.0, kind: EventKind::TurnsStable },
+        ];
+        let (e, d) = nearest_event(&jumps[0], &events).unwrap();
+        assert_eq!((e.kind, d), (EventKind::Fold, 0.0));
+        // Of two events inside the step the fold, whichever comes first.
+        let both = [BranchEvent { speed: 160.0, kind: EventKind::TurnsUnstable }, events[0]];
+        assert_eq!(nearest_event(&jumps[0], &both).unwrap().0.kind, EventKind::Fold);
+        let (e, d) = nearest_event(&jumps[1], &events).unwrap();
+        assert_eq!(e.kind, EventKind::TurnsStable);
+        assert!((d - 12.0).abs() < 1e-12);
+        assert!(nearest_event(&jumps[0], &[]).is_none());
+    }
+
+    fn point(speed: f64, stable: bool, after_gap: bool) -> BranchPoint {
+        BranchPoint {
+            orbit: PeriodicOrbit {
+                speed,
+                period: 1e-3,
+                cycles: 1,
+                z: vec![],
+                residual: 0.0,
+                newton_iterations: 0,
+                multipliers: vec![],
+                flows: 0,
+                work: Work::default(),
+            },
+            stable,
+            segment: 0,
+            speed_slope: 1.0,
+            after_gap,
+        }
+    }
+
+    #[test]
+    fn the_events_of_a_branch_are_its_bifurcations_and_changes_of_stability_in_order() {
+        let branch = Branch {
+            points: vec![
+                point(1.0, true, false),
+                point(2.0, false, false),
+                point(3.0, false, false),
+                point(5.0, true, true),
+                point(6.0, true, false),
+                point(7.0, false, false),
+            ],
+            bifurcations: vec![Bifurcation {
+                kind: BifurcationKind::Fold,
+                speed: 2.5,
+                between: (1, 2),
+                multipliers: (0.9, 1.1),
+            }],
+            gaps: vec![],
+            ended: String::new(),
+            work: Work::default(),
+            flows: 0,
+        };
+        let events = branch_events(&branch);
+        let got: Vec<(f64, EventKind)> = events.iter().map(|e| (e.speed, e.kind)).collect();
+        // The change from unstable to stable across the gap (3 → 5) is none.
+        assert_eq!(
+            got,
+            vec![(1.5, EventKind::TurnsUnstable), (2.5, EventKind::Fold), (6.5, EventKind::TurnsUnstable)]
+        );
+    }
+
+    #[test]
+    fn a_steep_flank_of_one_stable_stretch_is_no_jump() {
+        let c = |speed: f64, value: f64, stable: bool, after_gap: bool| CurvePoint {
+            speed,
+            value,
+            stable,
+            after_gap,
+        };
+        // Stable 100–300 rising steeply, unstable to 350, then after a gap stable from 400.
+        let curve = [
+            c(100.0, 10.0, true, false),
+            c(200.0, 20.0, true, false),
+            c(300.0, 40.0, true, false),
+            c(350.0, 45.0, false, false),
+            c(400.0, 5.0, true, true),
+            c(500.0, 6.0, true, false),
+        ];
+        let jump = |from, to, before, after| Jump { from, to, before, after };
+        // 150 → 250 on the flank: 15 and 30 on the curve.
+        assert!(on_one_stable_branch(&curve, &jump(150.0, 250.0, 15.2, 29.5), 0.05));
+        // The same step with the second value off the curve by 20 %.
+        assert!(!on_one_stable_branch(&curve, &jump(150.0, 250.0, 15.0, 36.0), 0.05));
+        // 300 → 450 crosses the unstable stretch and the gap: a jump.
+        assert!(!on_one_stable_branch(&curve, &jump(300.0, 450.0, 40.0, 5.5), 0.05));
+        // Down a stretch works as up.
+        assert!(on_one_stable_branch(&curve, &jump(450.0, 400.0, 5.5, 5.0), 0.05));
+    }
 
     #[test]
     fn hermite_extremum_of_a_parabola() {

@@ -4,11 +4,25 @@
 //! stability, branch segment and Floquet multipliers.
 
 use planetwear::analysis::continuation::{
-    continue_branch, BifurcationKind, Branch, ContinuationSettings, GapKind,
+    branch_events, continue_branch, marching_jumps, nearest_event, on_one_stable_branch, BifurcationKind,
+    Branch, BranchEvent, ContinuationSettings, CurvePoint, GapKind,
 };
 use planetwear::dynamics::periodic::{PeriodicProblem, ShootingSettings};
 use planetwear::dynamics::response::SteadyState;
-use planetwear::report::continuation::{continuation_csv, write_continuation_response, ContinuationRun};
+use planetwear::dynamics::response::{sweep, Direction};
+use planetwear::report::continuation::{
+    continuation_csv, jumps_markdown, write_continuation_response, ContinuationRun, JumpRow,
+};
+
+/// A marching sweep's jump: F(rms) of planet 1's sun–planet mesh changing by
+/// more than 15 % from one speed to the next.
+const JUMP_RATIO: f64 = 1.15;
+
+/// How close (relative) both ends of a marching step must lie to one stable
+/// stretch of a continued branch to count as a steep flank of it, not a
+/// jump: the marching sweep's own error (E_h up to 2.9e-3, docs/ACCURACY.md)
+/// with a margin for its run-in.
+const FLANK_TOLERANCE: f64 = 0.05;
 
 use crate::*;
 
@@ -27,10 +41,11 @@ pub(crate) fn sweep_continuation(
         histories,
         json,
         max_back,
+        against_march,
         ..
     }: SweepArgs,
 ) -> Result<()> {
-    let set = validated(&load_scene(&scene)?)?;
+    let (set, run_settings) = validated_with_run(&load_scene(&scene)?)?;
     // The grid check of the marching sweep: the same rules for the same flags.
     speed_grid(from, to, step)?;
     if step > to - from {
@@ -119,6 +134,53 @@ pub(crate) fn sweep_continuation(
         files.extend(write_steady_state(s, &set, &out)?);
     }
     files.extend(write_continuation_response(&tables, &set, &out)?);
+    let jumps = if against_march {
+        let events: Vec<BranchEvent> = runs.iter().flat_map(|r| branch_events(&r.branch)).collect();
+        let curves: Vec<Vec<CurvePoint>> = runs
+            .iter()
+            .map(|r| {
+                r.branch
+                    .points
+                    .iter()
+                    .zip(&r.states)
+                    .map(|(p, s)| CurvePoint {
+                        speed: p.orbit.speed,
+                        value: s.meshes[0].harmonics.rms / width_mm,
+                        stable: p.stable,
+                        after_gap: p.after_gap,
+                    })
+                    .collect()
+            })
+            .collect();
+        let grid: Vec<f64> = speed_grid(from, to, step)?.into_iter().map(rpm_to_rad_per_s).collect();
+        let march = |d: Direction| -> Result<Vec<JumpRow>> {
+            let mut m = model.clone();
+            let mut speeds = grid.clone();
+            if d == Direction::Down {
+                speeds.reverse();
+            }
+            let sw = sweep(&set, &run_settings, &mut m, d, &speeds, &[], |_| {})?;
+            let values: Vec<f64> = sw.points.iter().map(|p| p.meshes[0].harmonics.rms / width_mm).collect();
+            let name = if d == Direction::Up { "up" } else { "down" };
+            Ok(marching_jumps(&speeds, &values, JUMP_RATIO)
+                .into_iter()
+                .map(|jump| JumpRow {
+                    direction: name,
+                    jump,
+                    nearest: nearest_event(&jump, &events),
+                    on_one_branch: curves.iter().any(|c| on_one_stable_branch(c, &jump, FLANK_TOLERANCE)),
+                })
+                .collect())
+        };
+        let (up, down) = rayon::join(|| march(Direction::Up), || march(Direction::Down));
+        let rows: Vec<JumpRow> = up?.into_iter().chain(down?).collect();
+        let path = out.join("jumps.md");
+        write_atomic(&path, jumps_markdown(&rows, JUMP_RATIO, step).as_bytes())?;
+        files.push(path);
+        Some(rows)
+    } else {
+        None
+    };
     let summaries: Vec<serde_json::Value> = runs.iter().map(Run::summary).collect();
     let summary = serde_json::json!({
         "scene": set.name(),
@@ -128,6 +190,7 @@ pub(crate) fn sweep_continuation(
         "flows": runs.iter().map(|r| r.branch.flows).sum::<usize>(),
         "internal_steps": runs.iter().map(|r| r.branch.work.steps).sum::<u64>(),
         "runs": summaries,
+        "jumps": jumps.as_ref().map(|rows| rows.iter().map(JumpRow::json).collect::<Vec<_>>()),
         "files": files,
     });
     write_atomic(&out.join("sweep.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
@@ -140,6 +203,9 @@ pub(crate) fn sweep_continuation(
         files.len(),
         out.display()
     )?;
+    for row in jumps.iter().flatten() {
+        outln!("{}", row.line(step))?;
+    }
     for r in &runs {
         let (a, b) = if r.direction == "up" { (from, to) } else { (to, from) };
         let branch = &r.branch;

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use super::plot::{write_chart, Chart, PlotError, Series, SeriesStyle};
 use super::sweep::sweep_csv;
-use crate::analysis::continuation::{BifurcationKind, Branch};
+use crate::analysis::continuation::{BifurcationKind, Branch, BranchEvent, EventKind, Jump};
 use crate::dynamics::response::{Direction, SteadyState, Sweep};
 use crate::model::gear::GearSet;
 use crate::scene::units::rad_per_s_to_rpm;
@@ -155,6 +155,123 @@ pub fn write_continuation_response(
         )?);
     }
     Ok(files)
+}
+
+/// One jump of a marching sweep beside the nearest event of the continuation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JumpRow<'a> {
+    /// The marching sweep's direction: `up` or `down`.
+    pub direction: &'a str,
+    /// The jump [rad/s; N/mm].
+    pub jump: Jump,
+    /// The nearest fold, period doubling or change of stability, and its
+    /// distance from the jump's speed step [rad/s] (0 inside it).
+    pub nearest: Option<(BranchEvent, f64)>,
+    /// Both ends lie on one stable stretch of a continued branch: a steep
+    /// flank, not a jump between branches.
+    pub on_one_branch: bool,
+}
+
+fn event_name(kind: EventKind) -> &'static str {
+    match kind {
+        EventKind::Fold => "fold",
+        EventKind::PeriodDoubling => "period doubling",
+        EventKind::TurnsStable => "turns stable",
+        EventKind::TurnsUnstable => "turns unstable",
+    }
+}
+
+impl JumpRow<'_> {
+    /// The verdict: `within the step`, `N rpm outside the step`, or `no event`.
+    pub fn verdict(&self) -> String {
+        if self.on_one_branch {
+            return "no jump: both ends on one stable continued branch".into();
+        }
+        match self.nearest {
+            Some((_, d)) if d <= 0.0 => "within the step".into(),
+            Some((_, d)) => format!("{:.1} rpm outside the step", rad_per_s_to_rpm(d)),
+            None => "no event".into(),
+        }
+    }
+
+    /// One line for the command line (`step` the sweep's step [rpm]).
+    pub fn line(&self, step: f64) -> String {
+        let j = &self.jump;
+        let what = if self.on_one_branch {
+            self.verdict()
+        } else {
+            let event = self
+                .nearest
+                .map_or("no fold, period doubling or change of stability".to_string(), |(e, _)| {
+                    format!("{} at {:.1} rpm", event_name(e.kind), rad_per_s_to_rpm(e.speed))
+                });
+            format!("jump; {event}, {}", self.verdict())
+        };
+        format!(
+            "  marching {} {:.0} -> {:.0} rpm ({:.0} -> {:.0} N/mm, step {step} rpm): {what}",
+            self.direction,
+            rad_per_s_to_rpm(j.from),
+            rad_per_s_to_rpm(j.to),
+            j.before,
+            j.after,
+        )
+    }
+
+    /// The row as JSON (speeds in rpm).
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "direction": self.direction,
+            "from_rpm": rad_per_s_to_rpm(self.jump.from),
+            "to_rpm": rad_per_s_to_rpm(self.jump.to),
+            "before_n_per_mm": self.jump.before,
+            "after_n_per_mm": self.jump.after,
+            "event": self.nearest.map(|(e, _)| event_name(e.kind)),
+            "event_rpm": self.nearest.map(|(e, _)| rad_per_s_to_rpm(e.speed)),
+            "outside_rpm": self.nearest.map(|(_, d)| rad_per_s_to_rpm(d)),
+            "on_one_stable_branch": self.on_one_branch,
+        })
+    }
+}
+
+/// The Markdown table of a marching sweep's jumps beside the continuation's
+/// events (`ratio` the jump threshold, `step` the grid step [rpm]).
+pub fn jumps_markdown(rows: &[JumpRow<'_>], ratio: f64, step: f64) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# Marching sweep's jumps beside the continuation\n\n\
+         A jump: F(rms) of planet 1's sun–planet mesh changing by more than a factor {ratio} from one \
+         speed to the next ({step} rpm steps). Beside each, the continuation's nearest fold, period \
+         doubling or change of stability (either run), and how far it lies from the jump's speed step. \
+         A change whose two ends lie on one stable stretch of a continued branch (to 5 %) is a \
+         steep flank, not a jump. A jump with no event near it is one between attractors the \
+         continuation does not follow (not periodic in one mesh cycle, or of twice the period).\n"
+    );
+    let _ = writeln!(out, "| sweep | step [rpm] | F(rms) [N/mm] | nearest event | at [rpm] | verdict |");
+    let _ = writeln!(out, "|---|---|---|---|---|---|");
+    for r in rows {
+        let j = &r.jump;
+        let (name, at) = match r.nearest {
+            Some((e, _)) if !r.on_one_branch => {
+                (event_name(e.kind), format!("{:.1}", rad_per_s_to_rpm(e.speed)))
+            }
+            _ => ("—", "—".to_string()),
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {:.0} → {:.0} | {:.0} → {:.0} | {name} | {at} | {} |",
+            r.direction,
+            rad_per_s_to_rpm(j.from),
+            rad_per_s_to_rpm(j.to),
+            j.before,
+            j.after,
+            r.verdict()
+        );
+    }
+    if rows.is_empty() {
+        let _ = writeln!(out, "\nThe marching sweeps do not jump.");
+    }
+    out
 }
 
 #[cfg(test)]
