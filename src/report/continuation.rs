@@ -162,7 +162,7 @@ pub fn write_continuation_response(
 pub struct JumpRow<'a> {
     /// The marching sweep's direction: `up` or `down`.
     pub direction: &'a str,
-    /// The jump [rad/s; N/mm].
+    /// The jump (speeds in rad/s, F(rms) in N/mm).
     pub jump: Jump,
     /// The nearest fold, period doubling or change of stability, and its
     /// distance from the jump's speed step [rad/s] (0 inside it).
@@ -194,7 +194,7 @@ impl JumpRow<'_> {
         }
     }
 
-    /// One line for the command line (`step` the sweep's step [rpm]).
+    /// One line for the command line (`step` the sweep's step in rpm).
     pub fn line(&self, step: f64) -> String {
         let j = &self.jump;
         let what = if self.on_one_branch {
@@ -234,7 +234,7 @@ impl JumpRow<'_> {
 }
 
 /// The Markdown table of a marching sweep's jumps beside the continuation's
-/// events (`ratio` the jump threshold, `step` the grid step [rpm]).
+/// events (`ratio` the jump threshold, `step` the grid step in rpm).
 pub fn jumps_markdown(rows: &[JumpRow<'_>], ratio: f64, step: f64) -> String {
     let mut out = String::new();
     let _ = writeln!(
