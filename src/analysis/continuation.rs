@@ -849,6 +849,29 @@ pub fn on_one_stable_branch(curve: &[CurvePoint], jump: &Jump, tolerance: f64) -
     false
 }
 
+/// A branch point with only a speed [rad/s], a stability and a gap before
+/// it, for the tests of what reads branches (here and in the reports).
+#[cfg(test)]
+pub(crate) fn test_point(speed: f64, stable: bool, after_gap: bool) -> BranchPoint {
+    BranchPoint {
+        orbit: PeriodicOrbit {
+            speed,
+            period: 1e-3,
+            cycles: 1,
+            z: vec![],
+            residual: 0.0,
+            newton_iterations: 0,
+            multipliers: vec![],
+            flows: 0,
+            work: Work::default(),
+        },
+        stable,
+        segment: 0,
+        speed_slope: 1.0,
+        after_gap,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -876,25 +899,7 @@ mod tests {
         assert!(nearest_event(&jumps[0], &[]).is_none());
     }
 
-    fn point(speed: f64, stable: bool, after_gap: bool) -> BranchPoint {
-        BranchPoint {
-            orbit: PeriodicOrbit {
-                speed,
-                period: 1e-3,
-                cycles: 1,
-                z: vec![],
-                residual: 0.0,
-                newton_iterations: 0,
-                multipliers: vec![],
-                flows: 0,
-                work: Work::default(),
-            },
-            stable,
-            segment: 0,
-            speed_slope: 1.0,
-            after_gap,
-        }
-    }
+    use super::test_point as point;
 
     #[test]
     fn the_events_of_a_branch_are_its_bifurcations_and_changes_of_stability_in_order() {

@@ -277,29 +277,8 @@ pub fn jumps_markdown(rows: &[JumpRow<'_>], ratio: f64, step: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::continuation::BranchPoint;
-    use crate::dynamics::periodic::PeriodicOrbit;
+    use crate::analysis::continuation::test_point as point;
     use crate::dynamics::response::Work;
-
-    fn point(speed: f64, stable: bool, after_gap: bool) -> BranchPoint {
-        BranchPoint {
-            orbit: PeriodicOrbit {
-                speed,
-                period: 1e-3,
-                cycles: 1,
-                z: vec![],
-                residual: 0.0,
-                newton_iterations: 0,
-                multipliers: vec![],
-                flows: 0,
-                work: Work::default(),
-            },
-            stable,
-            segment: 0,
-            speed_slope: 1.0,
-            after_gap,
-        }
-    }
 
     #[test]
     fn a_gap_breaks_both_pieces_and_a_change_of_stability_joins_them() {
