@@ -16,7 +16,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dynamics::periodic::{
-    at_noise_floor, floquet_multipliers, solve_dense, Linearization, PeriodicError, PeriodicOrbit,
+    floquet_multipliers, max_abs, newton_converged, solve_dense, Linearization, PeriodicError, PeriodicOrbit,
     PeriodicProblem,
 };
 use crate::dynamics::response::Work;
@@ -280,9 +280,8 @@ impl Corrector<'_> {
         for iteration in 1..=self.max_corrections {
             let g = problem.residual(x[m] * self.unit, &x[..m], self.work).ok()?;
             *self.flows += 1;
-            let norm = g.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
-            let size = x[..m].iter().fold(1.0_f64, |a, b| a.max(b.abs()));
-            if norm <= self.tol * size || at_noise_floor(norm, previous_norm, self.tol, size) {
+            let norm = max_abs(&g);
+            if newton_converged(&g, &x[..m], previous_norm, self.tol) {
                 return Some((x, iteration - 1));
             }
             if (norm >= previous_norm || norm.is_nan()) && iteration > 2 {
@@ -391,8 +390,7 @@ fn restart(
         let r = problem.residual(omega, &z, work).ok()?;
         *flows += 1;
         z.iter_mut().zip(&r).for_each(|(a, b)| *a += b);
-        let size = z.iter().fold(1.0_f64, |a, b| a.max(b.abs()));
-        if r.iter().fold(0.0_f64, |a, b| a.max(b.abs())) <= 1e-3 * size {
+        if max_abs(&r) <= 1e-3 * max_abs(&z).max(1.0) {
             break;
         }
     }
@@ -443,7 +441,6 @@ pub fn continue_branch(
     let mut furthest = y.clone();
     // Speed travelled (in nominal steps) since the furthest point last moved on.
     let mut travel = 0.0;
-    let mut previous_orbit = first.clone();
     let mut segment = 0;
     let mut points = vec![BranchPoint {
         stable: first.is_stable(),
@@ -464,7 +461,9 @@ pub fn continue_branch(
         // The last step lands on the last speed exactly (speed fixed instead
         // of the arclength); no step changes the speed by more than a nominal step.
         let mut last = false;
-        let mut h = ds.min(1.0 / t[m].abs().max(f64::MIN_POSITIVE));
+        // The arclength that changes the speed by one nominal step.
+        let one_step = 1.0 / t[m].abs().max(f64::MIN_POSITIVE);
+        let mut h = ds.min(one_step);
         if t[m] * direction > 0.0 && (y[m] + h * t[m] - lambda_end) * direction >= 0.0 {
             h = (lambda_end - y[m]) / t[m];
             last = true;
@@ -511,7 +510,7 @@ pub fn continue_branch(
             // The leaps: along the tangent, corrected from their far end with twice the corrections.
             corrector.max_corrections = 2 * settings.max_corrections;
             for leap in [1.0, 2.0] {
-                let h = leap * 1.0_f64.min(1.0 / t[m].abs().max(f64::MIN_POSITIVE));
+                let h = leap * one_step.min(1.0);
                 let far: Vec<f64> = y.iter().zip(&t).map(|(a, b)| a + h * b).collect();
                 let chord = corrector.chord_at(problem, &far, &lin, &t);
                 if let Some(found) = corrector.correct(problem, &chord, &t, &far) {
@@ -532,13 +531,10 @@ pub fn continue_branch(
         });
         if accepted.is_none() || left || retracing {
             retracing = false;
-            if (furthest[m] - lambda_end) * direction >= 0.0 {
-                ended = "reached the last speed".into();
-                add(&mut total, &work);
-                flows += step_flows;
-                break;
-            }
-            // From one nominal step beyond the furthest speed reached; where
+            // What the corrector or a leap found is left.
+            accepted = None;
+            // From one nominal step beyond the furthest speed reached (never
+            // the last speed: a point there has ended the run); where
             // marching finds no periodic state (the attractor is not periodic
             // in one mesh cycle) one step further, at most RESTART_TRIES times.
             let mut tried = Vec::new();
@@ -557,7 +553,7 @@ pub fn continue_branch(
                     break;
                 }
             }
-            if accepted.is_none() || gap != Some(GapKind::Restart) {
+            if accepted.is_none() {
                 ended = format!(
                     "stopped at {:.4} rad/s: no periodic state within the smallest arclength step, and \
                      none by marching at {}",
@@ -593,7 +589,7 @@ pub fn continue_branch(
             period: problem.period(omega),
             cycles: problem.cycles(),
             z: x[..m].to_vec(),
-            residual: new_lin.residual.iter().fold(0.0_f64, |a, b| a.max(b.abs())),
+            residual: max_abs(&new_lin.residual),
             newton_iterations: corrections,
             multipliers,
             flows: step_flows,
@@ -605,7 +601,8 @@ pub fn continue_branch(
             segment += 1;
         } else {
             let known = bifurcations.len();
-            detect_bifurcations(&previous_orbit, &orbit, (&y, &x), (&t, &new_t), unit, i, &mut bifurcations);
+            let previous = &points[i - 1].orbit;
+            detect_bifurcations(previous, &orbit, (&y, &x), (&t, &new_t), unit, i, &mut bifurcations);
             // A fold within a tenth of a nominal step of an earlier fold of
             // the run: the run is going round a closed loop, or back and
             // forth between two corners where the tangent flips.
@@ -619,7 +616,6 @@ pub fn continue_branch(
                 segment += 1;
             }
         }
-        previous_orbit = orbit.clone();
         let prev_lambda = if gap.is_some() { x[m] } else { y[m] };
         let point = BranchPoint {
             stable: orbit.is_stable(),

@@ -25,7 +25,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::dynamics::periodic::{PeriodicError, PeriodicOrbit, PeriodicProblem, ShootingSettings};
+use crate::dynamics::periodic::{max_abs, PeriodicError, PeriodicOrbit, PeriodicProblem, ShootingSettings};
 use crate::dynamics::response::{SteadyState, Work};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction};
 
@@ -222,10 +222,6 @@ fn measured_window(
     s.time = time;
     s.mesh_force = force;
     Ok(s)
-}
-
-fn max_abs(x: &[f64]) -> f64 {
-    x.iter().fold(0.0_f64, |a, x| a.max(x.abs()))
 }
 
 /// The settling test of a point: the change over one period divided by

@@ -62,11 +62,14 @@ use variational::Variational;
 /// above it.
 pub const NOISE_FLOOR_FACTOR: f64 = 10.0;
 
-/// Whether a Newton iterate with residual `norm` after one with `previous`
-/// is accepted at the flow's noise floor ([`NOISE_FLOOR_FACTOR`]); `size` is
-/// the scale of the unknowns (at least 1).
-pub fn at_noise_floor(norm: f64, previous: f64, tolerance: f64, size: f64) -> bool {
-    norm > 0.5 * previous && norm <= NOISE_FLOOR_FACTOR * tolerance * size
+/// Whether Newton has converged at the unknowns `z` with the residual `r`,
+/// the residual's largest component having been `previous` one iteration
+/// before (infinite at the first): G at most `tolerance` times the size of
+/// z (at least 1), or, at the flow's noise floor, an iteration that no
+/// longer halved G and G at most [`NOISE_FLOOR_FACTOR`] times that.
+pub fn newton_converged(r: &[f64], z: &[f64], previous: f64, tolerance: f64) -> bool {
+    let (norm, size) = (max_abs(r), max_abs(z).max(1.0));
+    norm <= tolerance * size || (norm > 0.5 * previous && norm <= NOISE_FLOOR_FACTOR * tolerance * size)
 }
 
 /// Settings of the shooting method.
@@ -688,8 +691,7 @@ impl PeriodicProblem {
         let mut previous = f64::INFINITY;
         loop {
             let norm = max_abs(&r);
-            let size = max_abs(&z).max(1.0);
-            if norm <= tol * size || at_noise_floor(norm, previous, tol, size) {
+            if newton_converged(&r, &z, previous, tol) {
                 break;
             }
             previous = norm;
@@ -794,7 +796,8 @@ impl PeriodicProblem {
     }
 }
 
-fn max_abs(x: &[f64]) -> f64 {
+/// The largest absolute value of `x` (0 when empty; NaN entries are passed over).
+pub fn max_abs(x: &[f64]) -> f64 {
     x.iter().fold(0.0, |a, b| a.max(b.abs()))
 }
 
