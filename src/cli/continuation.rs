@@ -8,8 +8,7 @@ use planetwear::analysis::continuation::{
     Branch, BranchEvent, ContinuationSettings, CurvePoint, GapKind,
 };
 use planetwear::dynamics::periodic::{PeriodicProblem, ShootingSettings};
-use planetwear::dynamics::response::SteadyState;
-use planetwear::dynamics::response::{sweep, Direction};
+use planetwear::dynamics::response::{sweep, Direction, SteadyState};
 use planetwear::report::continuation::{
     continuation_csv, jumps_markdown, write_continuation_response, ContinuationRun, JumpRow,
 };
@@ -27,6 +26,8 @@ const FLANK_TOLERANCE: f64 = 0.05;
 use crate::*;
 
 use planetwear::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 pub(crate) fn sweep_continuation(
     SweepArgs {
@@ -46,8 +47,9 @@ pub(crate) fn sweep_continuation(
     }: SweepArgs,
 ) -> Result<()> {
     let (set, run_settings) = validated_with_run(&load_scene(&scene)?)?;
-    // The grid check of the marching sweep: the same rules for the same flags.
-    speed_grid(from, to, step)?;
+    // The grid of the marching sweep: the same rules for the same flags (and
+    // the grid of `--against-march`).
+    let grid = speed_grid(from, to, step)?;
     if step > to - from {
         bail!(
             "--step {step} rpm: a continuation's nominal step must be at most the speed range \
@@ -58,11 +60,6 @@ pub(crate) fn sweep_continuation(
         bail!("--direction {direction}: allowed are up, down, both");
     }
     let direction = direction.as_str();
-    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let model = PlanetaryDynamics::new(
-        &set,
-        contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
-    )?;
     let back = match max_back {
         Some(back) if !(back.is_finite() && back > 0.0) => {
             bail!("--max-back {back} rpm: must be a positive, finite speed")
@@ -70,6 +67,11 @@ pub(crate) fn sweep_continuation(
         Some(back) => Some(back / step),
         None => None,
     };
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let model = PlanetaryDynamics::new(
+        &set,
+        contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
+    )?;
     // One run per direction: up from --from to --to, down from --to to --from
     // (the continuation's counterpart of the marching sweep's two directions).
     let ends: Vec<(&str, f64, f64)> = [("up", from, to), ("down", to, from)]
@@ -79,46 +81,31 @@ pub(crate) fn sweep_continuation(
     let started = std::time::Instant::now();
     let per_run = ((to - from).abs() / step).ceil() as u64 + 1;
     let bar = progress_bar(per_run * ends.len() as u64);
-    let done: Vec<std::sync::atomic::AtomicU64> = ends.iter().map(|_| 0.into()).collect();
-    let results: Vec<Result<Run>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = ends
-            .iter()
-            .enumerate()
-            .map(|(k, &(name, a, b))| {
-                let (model, bar, done) = (model.clone(), &bar, &done);
-                scope.spawn(move || -> Result<Run> {
-                    let mut problem =
-                        PeriodicProblem::new(model, ShootingSettings::default(), rpm_to_rad_per_s(a))?;
-                    let mut settings = ContinuationSettings::new(
-                        rpm_to_rad_per_s(a),
-                        rpm_to_rad_per_s(b),
-                        rpm_to_rad_per_s(step),
-                    );
-                    if let Some(back) = back {
-                        settings.max_back = back;
-                    }
-                    let branch = continue_branch(&mut problem, &settings, |p| {
-                        let at = ((rad_per_s_to_rpm(p.orbit.speed) - a).abs() / step) as u64;
-                        done[k].store(at.min(per_run), std::sync::atomic::Ordering::Relaxed);
-                        bar.set_position(
-                            done.iter().map(|d| d.load(std::sync::atomic::Ordering::Relaxed)).sum(),
-                        );
-                    })?;
-                    let mut states = Vec::with_capacity(branch.points.len());
-                    for p in &branch.points {
-                        states.push(problem.steady_state(&p.orbit)?);
-                    }
-                    Ok(Run { direction: name, branch, states })
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|_| Err(anyhow::anyhow!("a continuation run panicked"))))
-            .collect()
-    });
+    let done: Vec<AtomicU64> = ends.iter().map(|_| 0.into()).collect();
+    let runs = ends
+        .par_iter()
+        .enumerate()
+        .map(|(k, &(name, a, b))| -> Result<Run> {
+            let mut problem =
+                PeriodicProblem::new(model.clone(), ShootingSettings::default(), rpm_to_rad_per_s(a))?;
+            let mut settings =
+                ContinuationSettings::new(rpm_to_rad_per_s(a), rpm_to_rad_per_s(b), rpm_to_rad_per_s(step));
+            if let Some(back) = back {
+                settings.max_back = back;
+            }
+            let branch = continue_branch(&mut problem, &settings, |p| {
+                let at = ((rad_per_s_to_rpm(p.orbit.speed) - a).abs() / step) as u64;
+                done[k].store(at.min(per_run), Ordering::Relaxed);
+                bar.set_position(done.iter().map(|d| d.load(Ordering::Relaxed)).sum());
+            })?;
+            let mut states = Vec::with_capacity(branch.points.len());
+            for p in &branch.points {
+                states.push(problem.steady_state(&p.orbit)?);
+            }
+            Ok(Run { direction: name, branch, states })
+        })
+        .collect::<Result<Vec<Run>>>()?;
     bar.finish_and_clear();
-    let runs = results.into_iter().collect::<Result<Vec<Run>>>()?;
     let wall = started.elapsed().as_secs_f64();
     let width_mm = set.sun().face_width * 1e3;
     let mut files = Vec::new();
@@ -152,10 +139,9 @@ pub(crate) fn sweep_continuation(
                     .collect()
             })
             .collect();
-        let grid: Vec<f64> = speed_grid(from, to, step)?.into_iter().map(rpm_to_rad_per_s).collect();
         let march = |d: Direction| -> Result<Vec<JumpRow>> {
             let mut m = model.clone();
-            let mut speeds = grid.clone();
+            let mut speeds: Vec<f64> = grid.iter().copied().map(rpm_to_rad_per_s).collect();
             if d == Direction::Down {
                 speeds.reverse();
             }
