@@ -281,7 +281,7 @@ impl Corrector<'_> {
             let g = problem.residual(x[m] * self.unit, &x[..m], self.work).ok()?;
             *self.flows += 1;
             let norm = max_abs(&g);
-            if newton_converged(&g, &x[..m], previous_norm, self.tol) {
+            if newton_converged(norm, &x[..m], previous_norm, self.tol) {
                 return Some((x, iteration - 1));
             }
             if (norm >= previous_norm || norm.is_nan()) && iteration > 2 {

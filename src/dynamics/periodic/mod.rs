@@ -62,13 +62,13 @@ use variational::Variational;
 /// above it.
 pub const NOISE_FLOOR_FACTOR: f64 = 10.0;
 
-/// Whether Newton has converged at the unknowns `z` with the residual `r`,
-/// the residual's largest component having been `previous` one iteration
-/// before (infinite at the first): G at most `tolerance` times the size of
-/// z (at least 1), or, at the flow's noise floor, an iteration that no
-/// longer halved G and G at most [`NOISE_FLOOR_FACTOR`] times that.
-pub fn newton_converged(r: &[f64], z: &[f64], previous: f64, tolerance: f64) -> bool {
-    let (norm, size) = (max_abs(r), max_abs(z).max(1.0));
+/// Whether Newton has converged at the unknowns `z` with a residual whose
+/// largest component is `norm` ([`max_abs`]), having been `previous` one
+/// iteration before (infinite at the first): G at most `tolerance` times the
+/// size of z (at least 1), or, at the flow's noise floor, an iteration that
+/// no longer halved G and G at most [`NOISE_FLOOR_FACTOR`] times that.
+pub fn newton_converged(norm: f64, z: &[f64], previous: f64, tolerance: f64) -> bool {
+    let size = max_abs(z).max(1.0);
     norm <= tolerance * size || (norm > 0.5 * previous && norm <= NOISE_FLOOR_FACTOR * tolerance * size)
 }
 
@@ -691,7 +691,7 @@ impl PeriodicProblem {
         let mut previous = f64::INFINITY;
         loop {
             let norm = max_abs(&r);
-            if newton_converged(&r, &z, previous, tol) {
+            if newton_converged(norm, &z, previous, tol) {
                 break;
             }
             previous = norm;
