@@ -36,7 +36,10 @@
 //! The eigenvalues of M (faer's non-symmetric eigensolver) are the Floquet
 //! multipliers; the orbit is stable when all lie inside the unit circle.
 
+mod harmonic;
 mod variational;
+
+pub use harmonic::{HarmonicBalance, HarmonicOrbit, HarmonicSettings};
 
 use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
