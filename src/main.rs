@@ -191,6 +191,13 @@ struct RunArgs {
     /// Write time-history and order-spectrum plots into this directory.
     #[arg(long)]
     plots: Option<PathBuf>,
+    /// march (time marching from the static state: the scene's run-in, then its measured
+    /// revolutions), shooting (the periodic orbit by Newton's method on the flow over one mesh
+    /// cycle, measured over that cycle, with its Floquet multipliers) or harmonic-balance (the
+    /// periodic orbit as a Fourier series, measured over one mesh cycle: the fastest off
+    /// resonance, no multipliers; docs/PERIODIC.md §2).
+    #[arg(long, default_value = "march")]
+    method: String,
 }
 
 /// Speed sweep with continuation: forced-response curves, CSV, plots.

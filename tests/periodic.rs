@@ -400,6 +400,57 @@ fn the_sweep_command_refuses_an_unknown_method() {
     assert!(err.contains("--method shooting") && err.contains("march, continuation"), "{err}");
 }
 
+/// `planetwear run --method` on the torsional example at 3000 rpm: shooting
+/// and harmonic balance print the marching's harmonics (to 2e-3 of F1, the
+/// printed rounding included) with a line that says how the orbit was found;
+/// the transverse–torsional example's harmonic balance is refused by name.
+#[test]
+fn the_run_command_solves_a_point_by_each_method() {
+    let dir = std::env::temp_dir().join(format!("planetwear-periodic-run-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bin = env!("CARGO_BIN_EXE_planetwear");
+    let shown = std::process::Command::new(bin).args(["scene", "show", "example-2004"]).output().unwrap();
+    let text = String::from_utf8(shown.stdout)
+        .unwrap()
+        .replace("fidelity = \"transverse_torsional\"", "fidelity = \"torsional\"");
+    let scene = dir.join("torsional.toml");
+    std::fs::write(&scene, text).unwrap();
+    let run = |scene: &str, method: &str| {
+        std::process::Command::new(bin)
+            .args(["run", "--scene", scene, "--speed", "3000", "--method", method])
+            .output()
+            .unwrap()
+    };
+    // F1..F6 and rms of planet 1's sun mesh, and the whole text.
+    let harmonics = |method: &str| {
+        let out = run(scene.to_str().unwrap(), method);
+        assert!(out.status.success(), "{method}: {}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8(out.stdout).unwrap();
+        let row = text.lines().find(|l| l.trim_start().starts_with("planet 1 Sun")).expect("row").to_string();
+        let values: Vec<f64> = row.split_whitespace().skip(4).take(7).map(|v| v.parse().unwrap()).collect();
+        (values, text)
+    };
+    let (march, _) = harmonics("march");
+    for method in ["shooting", "harmonic-balance"] {
+        let (values, text) = harmonics(method);
+        for (a, b) in values.iter().zip(&march) {
+            assert!((a - b).abs() <= 2e-3 * march[0], "{method}: {values:?} against {march:?}");
+        }
+        let said = if method == "shooting" { "largest Floquet multiplier" } else { "harmonic balance: H = " };
+        assert!(text.contains(said), "{text}");
+    }
+    let out = run("example-2004", "harmonic-balance");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("harmonic balance at 3000 rpm") && err.contains("unknowns") && err.contains("shooting"),
+        "{err}"
+    );
+    let out = run("example-2004", "newton");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("allowed are march, shooting, harmonic-balance"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `--direction both` runs the continuation up from --from and down from
 /// --to, side by side: the summary lists both runs, the CSV's `run` column
 /// tells their rows apart, and the up run's fold lies in the marching
@@ -811,9 +862,14 @@ mod harmonic_balance {
         let none = HarmonicSettings { harmonics: 0, ..HarmonicSettings::default() };
         let e = HarmonicBalance::new(shooting.clone(), none).err().expect("refused").to_string();
         assert!(e.contains("harmonics") && e.contains("1 ..= 2048"), "{e}");
+        let huge = HarmonicSettings { harmonics: 200, samples: 3200, ..HarmonicSettings::default() };
+        let e = HarmonicBalance::new(shooting.clone(), huge).err().expect("refused").to_string();
+        assert!(e.contains("2005 unknowns") && e.contains("shooting"), "{e}");
         let tolerance = HarmonicSettings { tolerance: f64::NAN, ..HarmonicSettings::default() };
         assert!(HarmonicBalance::new(shooting.clone(), tolerance).is_err());
         let mut hb = HarmonicBalance::new(shooting, HarmonicSettings::default()).unwrap();
+        // Five coordinates: 7 values are no whole number of them, 10 no odd number of blocks.
+        assert!(hb.solve(3000.0 * RPM, Some(&[0.0; 10])).is_err());
         match hb.solve(3000.0 * RPM, Some(&[0.0; 7])) {
             Err(PeriodicError::InvalidRequest { name, .. }) => assert_eq!(name, "harmonic-balance guess"),
             other => panic!("a guess of the wrong length: {other:?}"),

@@ -68,8 +68,11 @@ pub(crate) fn simulate_command(
 const MAX_COMMUNICATION_POINTS: f64 = 1e7;
 
 pub(crate) fn run_command(
-    RunArgs { scene, wear_state, accept_state_difference, speed, json, plots }: RunArgs,
+    RunArgs { scene, wear_state, accept_state_difference, speed, json, plots, method }: RunArgs,
 ) -> Result<()> {
+    if !["march", "shooting", "harmonic-balance"].contains(&method.as_str()) {
+        bail!("--method {method}: allowed are march, shooting, harmonic-balance");
+    }
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     let mut model = PlanetaryDynamics::new(
         &set,
@@ -80,7 +83,13 @@ pub(crate) fn run_command(
     if let Some(w) = plausibility::overspeed_at_input(&set, omega) {
         eprintln!("warning: {w}");
     }
-    let ss = steady_state(&mut model, &set, &run, omega, None)?;
+    let (ss, solver) = match method.as_str() {
+        "march" => (steady_state(&mut model, &set, &run, omega, None)?, None),
+        periodic => {
+            let (ss, line) = periodic_point(&model, run.samples_per_mesh_cycle(), omega, periodic)?;
+            (ss, Some(line))
+        }
+    };
     for f in plausibility::steady_state(&set, &ss).into_iter().filter(|f| f.condition != "overspeed") {
         eprintln!("warning: {}", f.message);
     }
@@ -92,6 +101,9 @@ pub(crate) fn run_command(
         outln!("{}", serde_json::to_string_pretty(&steady_state_json(&ss)?)?)?;
     } else {
         print_steady_state(&ss, set.sun().face_width * 1e3)?;
+        if let Some(line) = solver {
+            outln!("  {line}")?;
+        }
         if model.carrier_frame_speed() != 0.0 {
             outln!(
                 "  carrier turning at {:.2} rad/s: steady centrifugal load {:.2} N on each planet bearing \
@@ -102,6 +114,50 @@ pub(crate) fn run_command(
         }
     }
     Ok(())
+}
+
+/// The periodic steady state at `omega` [rad/s] by shooting or harmonic
+/// balance (`method`), measured at `samples` per mesh cycle over one period,
+/// and a line that says how it was found.
+fn periodic_point(
+    model: &PlanetaryDynamics,
+    samples: usize,
+    omega: f64,
+    method: &str,
+) -> Result<(SteadyState, String)> {
+    use planetwear::dynamics::periodic::{
+        HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings,
+    };
+    let rpm = rad_per_s_to_rpm(omega);
+    let settings = ShootingSettings { samples_per_mesh_cycle: samples, ..ShootingSettings::default() };
+    let mut problem = PeriodicProblem::new(model.clone(), settings, omega)?;
+    if method == "shooting" {
+        let orbit = problem.solve(omega, None).with_context(|| format!("shooting at {rpm} rpm"))?;
+        let mu = orbit.largest_multiplier();
+        let line = format!(
+            "shooting: {} Newton iterations, {} flows over the period; largest Floquet multiplier |μ| = {mu:.4} ({})",
+            orbit.newton_iterations,
+            orbit.flows,
+            if orbit.is_stable() { "stable" } else { "unstable: time marching leaves this orbit" }
+        );
+        return Ok((problem.steady_state(&orbit)?, line));
+    }
+    let settings = HarmonicSettings::for_speed(&problem, omega);
+    let mut hb = HarmonicBalance::new(problem, settings).with_context(|| {
+        format!("harmonic balance at {rpm} rpm (H from the model's highest natural frequency)")
+    })?;
+    let orbit = hb.solve(omega, None).with_context(|| {
+        format!(
+            "harmonic balance at {rpm} rpm (H = {}); --method shooting or march may find the response",
+            settings.harmonics
+        )
+    })?;
+    let line = format!(
+        "harmonic balance: H = {} harmonics, N = {} samples, {} Newton iterations, {} Jacobians; \
+         stability not computed (--method shooting gives the Floquet multipliers)",
+        settings.harmonics, settings.samples, orbit.iterations, orbit.factorizations
+    );
+    Ok((hb.steady_state(&orbit)?, line))
 }
 
 pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {

@@ -45,7 +45,9 @@ pub struct HarmonicSettings {
     /// Newton stops when its step is at most this, in units of the static
     /// mesh deflection times the size of the coefficients (at least 1).
     pub tolerance: f64,
-    /// Largest number of Newton iterations at one speed.
+    /// Largest number of Newton iterations at one speed (the example's
+    /// orbits converge in 4 to 10 from a cold start; where the series cannot
+    /// resolve the orbit, Newton cycles instead, see docs/PERIODIC.md §2).
     pub max_iterations: usize,
     /// The Jacobian is kept (chord iterations) while an iteration lowers the
     /// residual at least by this factor, and assembled afresh otherwise
@@ -55,7 +57,7 @@ pub struct HarmonicSettings {
 
 impl Default for HarmonicSettings {
     fn default() -> Self {
-        Self { harmonics: 32, samples: 512, tolerance: 1e-7, max_iterations: 40, chord_contraction: 0.05 }
+        Self { harmonics: 32, samples: 512, tolerance: 1e-7, max_iterations: 15, chord_contraction: 0.05 }
     }
 }
 
@@ -74,6 +76,16 @@ pub const HARMONICS_PER_MODE_ORDER: f64 = 2.5;
 /// 32; 13 000 rpm: 7.8e-4 with 24, 7.6e-4 with 32).
 pub const MIN_HARMONICS: usize = 32;
 
+/// Most unknowns m(2H + 1) the harmonic balance takes: its Jacobian is dense,
+/// and beyond this its factorisation (about 1.2 Gflop) costs more than
+/// shooting the same point (torsional example: 1085 unknowns at 1000 rpm,
+/// 0.1 s; the transverse–torsional example at 3000 rpm would need 6365).
+pub const MAX_UNKNOWNS: usize = 1200;
+
+/// Successive Newton iterations that do not halve the residual after which
+/// the harmonic balance gives up (they cycle, see [`HarmonicBalance::solve`]).
+pub const STALLED_ITERATIONS: usize = 4;
+
 /// Samples per kept harmonic: the contact force's kinks alias onto the kept
 /// harmonics through the samples (3000 rpm, H = 32: E_h 8.1e-4 with 8 samples
 /// per harmonic, 2.6e-4 with 16).
@@ -84,7 +96,13 @@ impl HarmonicSettings {
     /// H = max([`MIN_HARMONICS`], ⌈[`HARMONICS_PER_MODE_ORDER`] · f_hi T⌉), at
     /// most 512, and N = [`SAMPLES_PER_HARMONIC`] · H samples.
     pub fn for_speed(problem: &PeriodicProblem, omega: f64) -> Self {
-        let order = highest_frequency(problem.model(), omega) * problem.period(omega);
+        Self::for_frequency(highest_frequency(problem.model(), omega), problem.period(omega))
+    }
+
+    /// [`Self::for_speed`] with the highest natural frequency `highest` \[Hz\]
+    /// given, for the period `period` \[s\].
+    pub fn for_frequency(highest: f64, period: f64) -> Self {
+        let order = highest * period;
         let h = ((HARMONICS_PER_MODE_ORDER * order).ceil() as usize).clamp(MIN_HARMONICS, 512);
         Self { harmonics: h, samples: SAMPLES_PER_HARMONIC * h, ..Self::default() }
     }
@@ -179,6 +197,8 @@ pub struct HarmonicBalance {
     reduced_mass: Vec<f64>,
     forward: Arc<dyn Fft<f64>>,
     inverse: Arc<dyn Fft<f64>>,
+    /// The highest natural frequency \[Hz\] once computed ([`Self::settings_for_speed`]).
+    highest: Option<f64>,
 }
 
 impl HarmonicBalance {
@@ -187,6 +207,19 @@ impl HarmonicBalance {
         settings.check()?;
         let n = problem.model.dim();
         let m = problem.unknowns() / 2;
+        let unknowns = m * (2 * settings.harmonics + 1);
+        if unknowns > MAX_UNKNOWNS {
+            return Err(PeriodicError::InvalidRequest {
+                name: "harmonics".into(),
+                value: settings.harmonics.to_string(),
+                reason: format!(
+                    "{m} coordinates × (2H + 1) = {unknowns} unknowns, more than the {MAX_UNKNOWNS} a dense \
+                     Jacobian is factorised for (its LU would take {:.1} Gflop per Newton iteration); \
+                     shooting or time marching solve this point",
+                    2.0 / 3.0 * (unknowns as f64).powi(3) * 1e-9
+                ),
+            });
+        }
         let mut p = vec![0.0; n * m];
         match problem.eliminated {
             Some(k) => {
@@ -208,7 +241,27 @@ impl HarmonicBalance {
         let mut planner = FftPlanner::new();
         let forward = planner.plan_fft_forward(settings.samples);
         let inverse = planner.plan_fft_inverse(settings.samples);
-        Ok(Self { problem, settings, m, n, p, reduced_mass, forward, inverse })
+        Ok(Self { problem, settings, m, n, p, reduced_mass, forward, inverse, highest: None })
+    }
+
+    /// [`HarmonicSettings::for_speed`] at `omega` [rad/s], the highest natural
+    /// frequency computed once (at the first call's speed: it hardly moves
+    /// with speed) and kept.
+    pub fn settings_for_speed(&mut self, omega: f64) -> HarmonicSettings {
+        let highest = *self.highest.get_or_insert_with(|| highest_frequency(self.problem.model(), omega));
+        HarmonicSettings::for_frequency(highest, self.problem.period(omega))
+    }
+
+    /// Changes the settings (harmonics, samples) for the next solves.
+    pub fn set_settings(&mut self, settings: HarmonicSettings) -> Result<(), PeriodicError> {
+        settings.check()?;
+        if settings.samples != self.settings.samples {
+            let mut planner = FftPlanner::new();
+            self.forward = planner.plan_fft_forward(settings.samples);
+            self.inverse = planner.plan_fft_inverse(settings.samples);
+        }
+        self.settings = settings;
+        Ok(())
     }
 
     /// The settings.
@@ -469,15 +522,22 @@ impl HarmonicBalance {
 
     /// The periodic state at `omega` [rad/s] by Newton's method with a
     /// backtracking line search from the coefficients `guess` (a cold start
-    /// when `None`).
+    /// when `None`; a guess with another number of harmonics gives its common
+    /// harmonics).
     pub fn solve(&mut self, omega: f64, guess: Option<&[f64]>) -> Result<HarmonicOrbit, PeriodicError> {
         let mut x = match guess {
-            Some(g) if g.len() == self.unknowns() => g.to_vec(),
+            // Another H's coefficients: the common harmonics, the rest zero.
+            Some(g) if g.len() % self.m == 0 && (g.len() / self.m) % 2 == 1 => {
+                let mut x = vec![0.0; self.unknowns()];
+                let common = g.len().min(x.len());
+                x[..common].copy_from_slice(&g[..common]);
+                x
+            }
             Some(g) => {
                 return Err(PeriodicError::invalid(
                     "harmonic-balance guess",
                     g.len() as f64,
-                    "must hold m(2H + 1) coefficients",
+                    "must hold m(2H' + 1) coefficients for some H' (m coordinates)",
                 ))
             }
             None => self.cold_start(omega),
@@ -489,6 +549,7 @@ impl HarmonicBalance {
         let mut lu = factorize(&jac, size);
         let mut factorizations = 1;
         let mut iterations = 0;
+        let mut stalled = 0;
         let mut last_step;
         loop {
             let norm = max_abs(&r);
@@ -514,7 +575,11 @@ impl HarmonicBalance {
             if alpha * last_step <= self.settings.tolerance * max_abs(&x).max(1.0) {
                 break;
             }
-            if iterations >= self.settings.max_iterations {
+            // Newton converges by a factor 10 or more per iteration here; iterations that
+            // no longer halve the residual cycle between contact patterns the series cannot
+            // settle (docs/PERIODIC.md §2) and do not converge.
+            stalled = if contraction > 0.5 { stalled + 1 } else { 0 };
+            if iterations >= self.settings.max_iterations || stalled >= STALLED_ITERATIONS {
                 return Err(PeriodicError::NotConverged { speed: omega, iterations, residual: max_abs(&r) });
             }
             // Chord iterations while they contract well; a fresh Jacobian otherwise.
