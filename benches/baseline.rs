@@ -13,7 +13,14 @@
 //! - the point in-process from the static state, the model built once;
 //! - the point inside a speed sweep (2500–3500 rpm in 50 rpm steps), per point;
 //! - both again by the Fig. 11 route (`analysis::frame_sweep`: marching in the
-//!   rigid-body frame one period at a time, one period measured once settled).
+//!   rigid-body frame one period at a time, one period measured once settled);
+//! - and by harmonic balance (`dynamics::periodic::HarmonicBalance`, H and N
+//!   by `HarmonicSettings::for_speed`): the point from a cold start, the point
+//!   with its Floquet multipliers (shooting's Newton from the balance's state,
+//!   which also refines the orbit to the flow's accuracy), and per point of the
+//!   sweep, each point starting from the one before (H and N by the rule at
+//!   each speed; a point where Newton does not converge is taken by the route, and
+//!   counted).
 //!
 //! and E_h of the point (docs/ACCURACY.md) against long time marching (RK 5(4)
 //! at 1e-10, 300 mesh cycles of run-in). Medians of 3 runs.
@@ -28,6 +35,7 @@ use planetwear::analysis::accuracy::{harmonic_error, reference, Protocol};
 use planetwear::analysis::frame_sweep::{frame_sweep, FrameSweepSettings};
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::periodic::{HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings};
 use planetwear::dynamics::response::{steady_state, sweep, Direction};
 use planetwear::scene::units::rpm_to_rad_per_s;
 use planetwear::scene::{Fidelity, Scene};
@@ -85,6 +93,7 @@ fn main() {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut frame_rows = Vec::new();
+    let mut balance_rows = Vec::new();
     for rpm in [3000.0, 8000.0] {
         let omega = rpm_to_rad_per_s(rpm);
         let base = script.as_deref().and_then(|s| baseline(&python, s, rpm));
@@ -164,6 +173,7 @@ fn main() {
                 bi / frame_in_sweep
             ));
         }
+        balance_rows.push(balance_row(&model, omega, &grid, &r.measured.harmonics, bi));
         println!(
             "| {rpm:.0} | {bw:.3} | {bi:.3} | {process:.3} | {cold:.4} | {in_sweep:.4} | {:.1} | {:.1} | {:.1} | {e_h:.1e} |",
             bw / process,
@@ -180,5 +190,102 @@ fn main() {
     for row in &frame_rows {
         println!("{row}");
     }
+    println!();
+    println!("the same points by harmonic balance (dynamics::periodic::HarmonicBalance, H and N by HarmonicSettings::for_speed):");
+    println!("| rpm | H | N | baseline integration [s] | ours point, cold [s] | ours point with multipliers [s] | ours per point in a sweep [s] | cold-point ratio | ratio with multipliers | in-sweep ratio | E_h ours | E_h with multipliers | largest multiplier | sweep points not converged (by the route) |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for row in &balance_rows {
+        println!("{row}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The harmonic-balance row of one speed: the cold point, the point with its
+/// multipliers, the per-point time of the sweep `grid` (each point from the
+/// one before, H and N by the rule at each speed), E_h of both points against
+/// `reference`, and the ratios to the baseline's integration time `base`.
+fn balance_row(
+    model: &PlanetaryDynamics,
+    omega: f64,
+    grid: &[f64],
+    reference: &[planetwear::dynamics::spectrum::Harmonics],
+    base: f64,
+) -> String {
+    // The reference's 60 samples per mesh cycle: the measured harmonics alias the force's
+    // kinks by the sample count.
+    let shooting_settings = ShootingSettings { samples_per_mesh_cycle: 60, ..ShootingSettings::default() };
+    let problem = PeriodicProblem::new(model.clone(), shooting_settings, omega).expect("problem");
+    let settings = HarmonicSettings::for_speed(&problem, omega);
+    let mut hb = HarmonicBalance::new(problem.clone(), settings).expect("balance");
+    // One solve untimed: the process's first touch of the Jacobian's pages (about 1 MB) is
+    // set-up, not the point's work (the medians of 3 above include their first runs).
+    hb.solve(omega, None).expect("balance point");
+    let mut orbit = None;
+    let cold = median(
+        (0..ROUNDS)
+            .map(|_| {
+                let start = Instant::now();
+                orbit = Some(hb.solve(omega, None).expect("balance point"));
+                start.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
+    let orbit = orbit.expect("ran");
+    let pick = |s: &planetwear::dynamics::response::SteadyState| -> Vec<_> {
+        s.meshes[..2].iter().map(|m| m.harmonics.clone()).collect()
+    };
+    let e_balance = harmonic_error(&pick(&hb.steady_state(&orbit).expect("measure")), reference);
+    let mut shot = None;
+    let mut shooting = problem.clone();
+    let with_multipliers = median(
+        (0..ROUNDS)
+            .map(|_| {
+                let start = Instant::now();
+                let balanced = hb.solve(omega, None).expect("balance point");
+                let z0 = hb.initial_unknowns(&balanced);
+                shot = Some(shooting.solve(omega, Some(&z0)).expect("refined point"));
+                start.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
+    let shot = shot.expect("ran");
+    let e_shot = harmonic_error(&pick(&shooting.steady_state(&shot).expect("measure")), reference);
+    let sweep_problem =
+        PeriodicProblem::new(model.clone(), ShootingSettings::default(), grid[0]).expect("problem");
+    let sweep_settings = HarmonicSettings::for_speed(&sweep_problem, grid[0]);
+    let mut sweep_hb = HarmonicBalance::new(sweep_problem, sweep_settings).expect("balance");
+    let mut failed = 0;
+    let in_sweep = median(
+        (0..ROUNDS)
+            .map(|_| {
+                let start = Instant::now();
+                let mut guess: Option<Vec<f64>> = None;
+                failed = 0;
+                for w in grid {
+                    let at = sweep_hb.settings_for_speed(*w);
+                    sweep_hb.set_settings(at).expect("settings");
+                    match sweep_hb.solve(*w, guess.as_deref()) {
+                        Ok(o) => guess = Some(o.coefficients),
+                        // Where Newton does not converge, the point comes from the route.
+                        Err(_) => {
+                            failed += 1;
+                            frame_sweep(model, &[*w], &FrameSweepSettings::default()).expect("route point");
+                        }
+                    }
+                }
+                start.elapsed().as_secs_f64() / grid.len() as f64
+            })
+            .collect(),
+    );
+    let rpm = omega * 30.0 / std::f64::consts::PI;
+    format!(
+        "| {rpm:.0} | {} | {} | {base:.3} | {cold:.4} | {with_multipliers:.4} | {in_sweep:.4} | {:.1} | {:.1} | {:.1} | {e_balance:.1e} | {e_shot:.1e} | {:.4} | {failed} of {} |",
+        settings.harmonics,
+        settings.samples,
+        base / cold,
+        base / with_multipliers,
+        base / in_sweep,
+        shot.largest_multiplier(),
+        grid.len()
+    )
 }
