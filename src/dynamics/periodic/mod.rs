@@ -39,7 +39,10 @@
 mod harmonic;
 mod variational;
 
-pub use harmonic::{HarmonicBalance, HarmonicOrbit, HarmonicSettings};
+pub use harmonic::{
+    highest_frequency, HarmonicBalance, HarmonicOrbit, HarmonicSettings, HARMONICS_PER_MODE_ORDER,
+    MAX_UNKNOWNS, MIN_HARMONICS, SAMPLES_PER_HARMONIC, STALLED_ITERATIONS,
+};
 
 use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
