@@ -400,6 +400,21 @@ fn the_sweep_command_refuses_an_unknown_method() {
     assert!(err.contains("--method shooting") && err.contains("march, continuation"), "{err}");
 }
 
+/// The example as a scene file with the torsional fidelity, written into
+/// `dir` (created) by `planetwear scene show`.
+fn torsional_scene_file(dir: &std::path::Path) -> std::path::PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let bin = env!("CARGO_BIN_EXE_planetwear");
+    let shown = std::process::Command::new(bin).args(["scene", "show", "example-2004"]).output().unwrap();
+    let text = String::from_utf8(shown.stdout)
+        .unwrap()
+        .replace("fidelity = \"transverse_torsional\"", "fidelity = \"torsional\"");
+    assert!(text.contains("fidelity = \"torsional\""));
+    let scene = dir.join("torsional.toml");
+    std::fs::write(&scene, text).unwrap();
+    scene
+}
+
 /// `planetwear run --method` on the torsional example at 3000 rpm: shooting
 /// and harmonic balance print the marching's harmonics (to 2e-3 of F1, the
 /// printed rounding included) with a line that says how the orbit was found;
@@ -407,14 +422,8 @@ fn the_sweep_command_refuses_an_unknown_method() {
 #[test]
 fn the_run_command_solves_a_point_by_each_method() {
     let dir = std::env::temp_dir().join(format!("planetwear-periodic-run-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scene = torsional_scene_file(&dir);
     let bin = env!("CARGO_BIN_EXE_planetwear");
-    let shown = std::process::Command::new(bin).args(["scene", "show", "example-2004"]).output().unwrap();
-    let text = String::from_utf8(shown.stdout)
-        .unwrap()
-        .replace("fidelity = \"transverse_torsional\"", "fidelity = \"torsional\"");
-    let scene = dir.join("torsional.toml");
-    std::fs::write(&scene, text).unwrap();
     let run = |scene: &str, method: &str| {
         std::process::Command::new(bin)
             .args(["run", "--scene", scene, "--speed", "3000", "--method", method])
@@ -459,15 +468,8 @@ fn the_run_command_solves_a_point_by_each_method() {
 #[test]
 fn the_continuation_command_runs_both_directions() {
     let dir = std::env::temp_dir().join(format!("planetwear-periodic-both-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scene = torsional_scene_file(&dir);
     let bin = env!("CARGO_BIN_EXE_planetwear");
-    let shown = std::process::Command::new(bin).args(["scene", "show", "example-2004"]).output().unwrap();
-    let text = String::from_utf8(shown.stdout)
-        .unwrap()
-        .replace("fidelity = \"transverse_torsional\"", "fidelity = \"torsional\"");
-    assert!(text.contains("fidelity = \"torsional\""));
-    let scene = dir.join("torsional.toml");
-    std::fs::write(&scene, text).unwrap();
     let out = dir.join("out");
     let run = std::process::Command::new(bin)
         .args([

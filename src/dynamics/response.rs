@@ -109,6 +109,29 @@ pub struct MeshResponse {
     pub max_force: f64,
 }
 
+/// The response measures of every mesh of `model` from its forces `force`
+/// (one sampled series per mesh, spanning `cycles` whole mesh cycles).
+pub fn mesh_responses(
+    model: &PlanetaryDynamics,
+    force: &[Vec<f64>],
+    cycles: usize,
+) -> Result<Vec<MeshResponse>, SpectrumError> {
+    force
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let (planet, mesh) = model.mesh_identity(i);
+            Ok(MeshResponse {
+                planet,
+                mesh,
+                harmonics: mesh_harmonics(f, cycles, 6)?,
+                separation: separation_fraction(f),
+                max_force: f.iter().cloned().fold(0.0, f64::max),
+            })
+        })
+        .collect()
+}
+
 /// Steady-state response at one speed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SteadyState {
@@ -459,19 +482,8 @@ pub fn steady_state_windowed(
     let (q, v) = stepper.state();
     let end = State { input_speed: omega, q: q.to_vec(), v: v.to_vec() };
     let mean_input_speed = (end.q[model.input_index] - input_start) / (t_end - t_run) / model.input_lever;
-    let mut meshes = Vec::with_capacity(n_mesh);
-    for (m, f) in force.iter().enumerate() {
-        let (planet, mesh) = model.mesh_identity(m);
-        let harmonics = mesh_harmonics(f, cycles, 6)
-            .map_err(|source| ResponseError::Spectrum { speed: omega, source })?;
-        meshes.push(MeshResponse {
-            planet,
-            mesh,
-            harmonics,
-            separation: separation_fraction(f),
-            max_force: f.iter().cloned().fold(0.0, f64::max),
-        });
-    }
+    let meshes = mesh_responses(model, &force, cycles)
+        .map_err(|source| ResponseError::Spectrum { speed: omega, source })?;
     Ok(SteadyState {
         input_speed: omega,
         mesh_frequency: fm,

@@ -29,10 +29,9 @@ use serde::{Deserialize, Serialize};
 
 use super::{max_abs, PeriodicError, PeriodicProblem};
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::dynamics::response::{static_state, MeshResponse, State, SteadyState, Work};
+use crate::dynamics::response::{mesh_responses, static_state, State, SteadyState, Work};
 use crate::dynamics::rigid_frame::RigidFrame;
 use crate::dynamics::solver::{SecondOrderSystem, TangentSystem};
-use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction};
 
 /// Settings of the harmonic balance.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -658,19 +657,8 @@ impl HarmonicBalance {
             }
         }
         let model: &PlanetaryDynamics = &self.problem.model;
-        let mut meshes = Vec::with_capacity(n_mesh);
-        for (i, f) in force.iter().enumerate() {
-            let (planet, mesh) = model.mesh_identity(i);
-            let harmonics = mesh_harmonics(f, orbit.cycles, 6)
-                .map_err(|source| PeriodicError::Spectrum { speed: omega, source })?;
-            meshes.push(MeshResponse {
-                planet,
-                mesh,
-                harmonics,
-                separation: separation_fraction(f),
-                max_force: f.iter().cloned().fold(0.0, f64::max),
-            });
-        }
+        let meshes = mesh_responses(model, &force, orbit.cycles)
+            .map_err(|source| PeriodicError::Spectrum { speed: omega, source })?;
         let z = self.initial_unknowns(orbit);
         let (qe, ve) = self.problem.expand(&z);
         let q = qe.iter().zip(&rigid).map(|(q, r)| q + r * orbit.period).collect();

@@ -48,10 +48,10 @@ use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
 
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::dynamics::response::{static_state, MeshResponse, State, SteadyState, Work};
+use crate::dynamics::response::{mesh_responses, static_state, State, SteadyState, Work};
 use crate::dynamics::rigid_frame::RigidFrame;
 use crate::dynamics::solver::{Rk45, Rk45Settings, SecondOrderSystem, SolverError};
-use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, SpectrumError};
+use crate::dynamics::spectrum::SpectrumError;
 use variational::Variational;
 
 /// How far above the Newton tolerance an iterate may stop when Newton stalls.
@@ -775,19 +775,8 @@ impl PeriodicProblem {
         let rigid = self.model.rigid_velocity_at(omega);
         let q = qe.iter().zip(&rigid).map(|(q, r)| q + r * orbit.period).collect();
         let v = ve.iter().zip(&rigid).map(|(v, r)| v + r).collect();
-        let mut meshes = Vec::with_capacity(n_mesh);
-        for (i, f) in force.iter().enumerate() {
-            let (planet, mesh) = self.model.mesh_identity(i);
-            let harmonics = mesh_harmonics(f, orbit.cycles, 6)
-                .map_err(|source| PeriodicError::Spectrum { speed: omega, source })?;
-            meshes.push(MeshResponse {
-                planet,
-                mesh,
-                harmonics,
-                separation: separation_fraction(f),
-                max_force: f.iter().cloned().fold(0.0, f64::max),
-            });
-        }
+        let meshes = mesh_responses(&self.model, &force, orbit.cycles)
+            .map_err(|source| PeriodicError::Spectrum { speed: omega, source })?;
         Ok(SteadyState {
             input_speed: omega,
             mesh_frequency: self.model.mesh_frequency_per_input_speed * omega.abs(),
