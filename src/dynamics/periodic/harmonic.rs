@@ -288,8 +288,8 @@ impl HarmonicBalance {
         x
     }
 
-    /// Samples of a coordinate's series: `block(c)` gives coefficient block c's
-    /// entry, `out` receives N values y(t_j).
+    /// Samples of a coordinate's series: `coefficient(c)` gives its entry of
+    /// coefficient block c, `out` receives the N values y(t_j).
     fn synthesize(&self, coefficient: impl Fn(usize) -> f64, buffer: &mut [Complex<f64>], out: &mut [f64]) {
         let h = self.settings.harmonics;
         let n = self.settings.samples;
