@@ -195,7 +195,8 @@ struct RunArgs {
     /// revolutions), shooting (the periodic orbit by Newton's method on the flow over one mesh
     /// cycle, measured over that cycle, with its Floquet multipliers) or harmonic-balance (the
     /// periodic orbit as a Fourier series, measured over one mesh cycle: the fastest off
-    /// resonance, no multipliers; docs/PERIODIC.md §2).
+    /// resonance, no multipliers; docs/PERIODIC.md §2). With --json the last two add
+    /// `solver`: the method and its work, and shooting's Floquet multipliers as [re, im].
     #[arg(long, default_value = "march")]
     method: String,
 }

@@ -448,6 +448,25 @@ fn the_run_command_solves_a_point_by_each_method() {
         let said = if method == "shooting" { "largest Floquet multiplier" } else { "harmonic balance: H = " };
         assert!(text.contains(said), "{text}");
     }
+    // --json carries the solver's record: shooting's multipliers, the balance's H and N.
+    for (method, key) in [("shooting", "floquet_multipliers"), ("harmonic-balance", "harmonics")] {
+        let out = std::process::Command::new(bin)
+            .args([
+                "run",
+                "--scene",
+                scene.to_str().unwrap(),
+                "--speed",
+                "3000",
+                "--method",
+                method,
+                "--json",
+            ])
+            .output()
+            .unwrap();
+        let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(doc["solver"]["method"], method);
+        assert!(!doc["solver"][key].is_null(), "{method}: {}", doc["solver"]);
+    }
     let out = run("example-2004", "harmonic-balance");
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);

@@ -86,8 +86,8 @@ pub(crate) fn run_command(
     let (ss, solver) = match method.as_str() {
         "march" => (steady_state(&mut model, &set, &run, omega, None)?, None),
         periodic => {
-            let (ss, line) = periodic_point(&model, run.samples_per_mesh_cycle(), omega, periodic)?;
-            (ss, Some(line))
+            let (ss, line, record) = periodic_point(&model, run.samples_per_mesh_cycle(), omega, periodic)?;
+            (ss, Some((line, record)))
         }
     };
     for f in plausibility::steady_state(&set, &ss).into_iter().filter(|f| f.condition != "overspeed") {
@@ -98,10 +98,14 @@ pub(crate) fn run_command(
         write_steady_state(&ss, &set, dir)?;
     }
     if json {
-        outln!("{}", serde_json::to_string_pretty(&steady_state_json(&ss)?)?)?;
+        let mut doc = steady_state_json(&ss)?;
+        if let Some((_, record)) = solver {
+            doc["solver"] = record;
+        }
+        outln!("{}", serde_json::to_string_pretty(&doc)?)?;
     } else {
         print_steady_state(&ss, set.sun().face_width * 1e3)?;
-        if let Some(line) = solver {
+        if let Some((line, _)) = solver {
             outln!("  {line}")?;
         }
         if model.carrier_frame_speed() != 0.0 {
@@ -118,13 +122,13 @@ pub(crate) fn run_command(
 
 /// The periodic steady state at `omega` [rad/s] by shooting or harmonic
 /// balance (`method`), measured at `samples` per mesh cycle over one period,
-/// and a line that says how it was found.
+/// a line that says how it was found, and the same as the JSON's `solver`.
 fn periodic_point(
     model: &PlanetaryDynamics,
     samples: usize,
     omega: f64,
     method: &str,
-) -> Result<(SteadyState, String)> {
+) -> Result<(SteadyState, String, serde_json::Value)> {
     use planetwear::dynamics::periodic::{
         HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings,
     };
@@ -140,7 +144,14 @@ fn periodic_point(
             orbit.flows,
             if orbit.is_stable() { "stable" } else { "unstable: time marching leaves this orbit" }
         );
-        return Ok((problem.steady_state(&orbit)?, line));
+        let record = serde_json::json!({
+            "method": "shooting",
+            "newton_iterations": orbit.newton_iterations,
+            "flows": orbit.flows,
+            "floquet_multipliers": orbit.multipliers.iter().map(|m| [m.re, m.im]).collect::<Vec<_>>(),
+            "stable": orbit.is_stable(),
+        });
+        return Ok((problem.steady_state(&orbit)?, line, record));
     }
     let settings = HarmonicSettings::for_speed(&problem, omega);
     let mut hb = HarmonicBalance::new(problem, settings).with_context(|| {
@@ -157,7 +168,14 @@ fn periodic_point(
          stability not computed (--method shooting gives the Floquet multipliers)",
         settings.harmonics, settings.samples, orbit.iterations, orbit.factorizations
     );
-    Ok((hb.steady_state(&orbit)?, line))
+    let record = serde_json::json!({
+        "method": "harmonic-balance",
+        "harmonics": settings.harmonics,
+        "samples": settings.samples,
+        "newton_iterations": orbit.iterations,
+        "jacobians": orbit.factorizations,
+    });
+    Ok((hb.steady_state(&orbit)?, line, record))
 }
 
 pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
