@@ -784,26 +784,20 @@ fn the_variational_monodromy_carries_the_jump_of_the_damping_at_separation() {
 /// teeth separate and on worn flanks; the error falls as harmonics are added;
 /// settings that cannot work are refused by name.
 mod harmonic_balance {
+    use super::{build, torsional, worn_states, RPM};
     use planetwear::analysis::accuracy::harmonic_error;
-    use planetwear::contact::ltca::SetModel;
     use planetwear::dynamics::equations::PlanetaryDynamics;
     use planetwear::dynamics::periodic::{
         max_abs, HarmonicBalance, HarmonicSettings, PeriodicError, PeriodicProblem, ShootingSettings,
     };
     use planetwear::dynamics::response::{SteadyState, Work};
-    use planetwear::scene::{Fidelity, Scene};
-
-    const RPM: f64 = std::f64::consts::PI / 30.0;
 
     fn problem(rpm: f64, kappa: usize) -> PeriodicProblem {
-        let mut scene = Scene::example_2004();
-        scene.dynamics.fidelity = Fidelity::Torsional;
-        let set = scene.validate().unwrap();
+        let (set, _, model) = build(&torsional());
         let model = if kappa == 0 {
-            PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap()
+            model
         } else {
-            let states = planetwear::package::pack::example_wear_states().unwrap();
-            PlanetaryDynamics::new(&set, states[kappa].set_model(&set)).unwrap()
+            PlanetaryDynamics::new(&set, worn_states()[kappa].set_model(&set)).unwrap()
         };
         PeriodicProblem::new(model, ShootingSettings::default(), rpm * RPM).unwrap()
     }

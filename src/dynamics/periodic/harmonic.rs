@@ -170,6 +170,12 @@ pub fn highest_frequency(model: &PlanetaryDynamics, omega: f64) -> f64 {
     largest.sqrt() / (2.0 * std::f64::consts::PI)
 }
 
+/// rustfft's forward and inverse plans of length `samples`.
+fn fft_plans(samples: usize) -> (Arc<dyn Fft<f64>>, Arc<dyn Fft<f64>>) {
+    let mut planner = FftPlanner::new();
+    (planner.plan_fft_forward(samples), planner.plan_fft_inverse(samples))
+}
+
 /// faer's partial-pivoting LU of the column-major square matrix `a` of size `m`.
 fn factorize(a: &[f64], m: usize) -> faer::linalg::solvers::PartialPivLu<f64> {
     faer::Mat::<f64>::from_fn(m, m, |i, j| a[i + m * j]).partial_piv_lu()
@@ -237,9 +243,7 @@ impl HarmonicBalance {
                 reduced_mass[a + m * b] = (0..n).map(|i| p[i + n * a] * mass[i] * p[i + n * b]).sum();
             }
         }
-        let mut planner = FftPlanner::new();
-        let forward = planner.plan_fft_forward(settings.samples);
-        let inverse = planner.plan_fft_inverse(settings.samples);
+        let (forward, inverse) = fft_plans(settings.samples);
         Ok(Self { problem, settings, m, n, p, reduced_mass, forward, inverse, highest: None })
     }
 
@@ -255,9 +259,7 @@ impl HarmonicBalance {
     pub fn set_settings(&mut self, settings: HarmonicSettings) -> Result<(), PeriodicError> {
         settings.check()?;
         if settings.samples != self.settings.samples {
-            let mut planner = FftPlanner::new();
-            self.forward = planner.plan_fft_forward(settings.samples);
-            self.inverse = planner.plan_fft_inverse(settings.samples);
+            (self.forward, self.inverse) = fft_plans(settings.samples);
         }
         self.settings = settings;
         Ok(())
@@ -369,13 +371,12 @@ impl HarmonicBalance {
         let nu = 2.0 * std::f64::consts::PI / period;
         let q_scale = self.problem.q_scale;
         let [y, yd, ydd] = self.samples_of(x, nu);
-        let mass = self.problem.model.mass().to_vec();
         // Row scale: accelerations in units of the static deflection times ν².
         let row: Vec<f64> =
             (0..m).map(|a| 1.0 / (self.reduced_mass[a + m * a] * nu * nu * q_scale)).collect();
         self.problem.model.set_drive_speed(omega);
         let rigid = self.problem.model.rigid_velocity_at(omega);
-        let p = self.p.clone();
+        let p = &self.p;
         let mut frame = RigidFrame::new(&mut self.problem.model, rigid);
         let (mut q, mut v, mut f, mut r) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; ns * m]);
         let want_jacobian = jacobian.is_some();
@@ -397,7 +398,7 @@ impl HarmonicBalance {
                 }
                 q[i] = qi * q_scale;
                 v[i] = vi * q_scale;
-                f[i] = mass[i] * ai * q_scale;
+                f[i] = frame.mass()[i] * ai * q_scale;
             }
             frame.force(t, &q, &v, &mut force);
             *evaluations += 1;
@@ -629,7 +630,7 @@ impl HarmonicBalance {
         let mut force = vec![Vec::with_capacity(samples); n_mesh];
         self.problem.model.set_drive_speed(omega);
         let rigid = self.problem.model.rigid_velocity_at(omega);
-        let p = self.p.clone();
+        let p = &self.p;
         let mut frame = RigidFrame::new(&mut self.problem.model, rigid.clone());
         let (mut q, mut v, mut f) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let (mut y, mut yd) = (vec![0.0; m], vec![0.0; m]);
