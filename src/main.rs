@@ -195,8 +195,9 @@ struct RunArgs {
     /// revolutions), shooting (the periodic orbit by Newton's method on the flow over one mesh
     /// cycle, measured over that cycle, with its Floquet multipliers) or harmonic-balance (the
     /// periodic orbit as a Fourier series, measured over one mesh cycle: the fastest off
-    /// resonance, no multipliers; docs/PERIODIC.md §2). With --json the last two add
-    /// `solver`: the method and its work, and shooting's Floquet multipliers as [re, im].
+    /// resonance, its Floquet multipliers from the tangents along the series; docs/PERIODIC.md
+    /// §2). With --json the last two add `solver`: the method and its work, the Floquet
+    /// multipliers as [re, im] and whether the orbit is stable.
     #[arg(long, default_value = "march")]
     method: String,
 }

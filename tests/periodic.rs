@@ -417,8 +417,9 @@ fn torsional_scene_file(dir: &std::path::Path) -> std::path::PathBuf {
 
 /// `planetwear run --method` on the torsional example at 3000 rpm: shooting
 /// and harmonic balance print the marching's harmonics (to 2e-3 of F1, the
-/// printed rounding included) with a line that says how the orbit was found;
-/// the transverse–torsional example's harmonic balance is refused by name.
+/// printed rounding included) with a line that says how the orbit was found
+/// and its largest Floquet multiplier; the transverse–torsional example's
+/// harmonic balance is refused by name.
 #[test]
 fn the_run_command_solves_a_point_by_each_method() {
     let dir = std::env::temp_dir().join(format!("planetwear-periodic-run-{}", std::process::id()));
@@ -445,11 +446,13 @@ fn the_run_command_solves_a_point_by_each_method() {
         for (a, b) in values.iter().zip(&march) {
             assert!((a - b).abs() <= 2e-3 * march[0], "{method}: {values:?} against {march:?}");
         }
-        let said = if method == "shooting" { "largest Floquet multiplier" } else { "harmonic balance: H = " };
-        assert!(text.contains(said), "{text}");
+        let said = if method == "shooting" { "shooting: " } else { "harmonic balance: H = " };
+        assert!(text.contains(said) && text.contains("largest Floquet multiplier"), "{text}");
     }
-    // --json carries the solver's record: shooting's multipliers, the balance's H and N.
-    for (method, key) in [("shooting", "floquet_multipliers"), ("harmonic-balance", "harmonics")] {
+    // --json carries the solver's record: both methods' multipliers and stability, the
+    // balance's H and N; the two largest |μ| agree (measured 0.6075 and 0.6054).
+    let mut largest = Vec::new();
+    for (method, key) in [("shooting", "flows"), ("harmonic-balance", "harmonics")] {
         let out = std::process::Command::new(bin)
             .args([
                 "run",
@@ -464,9 +467,13 @@ fn the_run_command_solves_a_point_by_each_method() {
             .output()
             .unwrap();
         let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-        assert_eq!(doc["solver"]["method"], method);
-        assert!(!doc["solver"][key].is_null(), "{method}: {}", doc["solver"]);
+        let solver = &doc["solver"];
+        assert_eq!(solver["method"], method);
+        assert!(!solver[key].is_null() && solver["stable"] == true, "{method}: {solver}");
+        let mu = &solver["floquet_multipliers"][0];
+        largest.push(mu[0].as_f64().unwrap().hypot(mu[1].as_f64().unwrap()));
     }
+    assert!((largest[0] - largest[1]).abs() <= 5e-3, "largest |μ|: {largest:?}");
     let out = run("example-2004", "harmonic-balance");
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
@@ -806,12 +813,22 @@ mod harmonic_balance {
         vec![s.meshes[0].harmonics.clone(), s.meshes[1].harmonics.clone()]
     }
 
-    /// E_h of the harmonic balance against the shooting solution at `rpm`, the
-    /// shooting residual |φ_T(z₀) − z₀| at the balance's initial state relative
-    /// to that state (printed: the state's velocities carry the planets' ringing,
-    /// which the series truncates, so it is 1e-3 to 2e-2 where E_h is 1e-4), and
-    /// the separation, with `settings` or the rule of `for_speed`.
-    fn balance_error(rpm: f64, kappa: usize, settings: Option<HarmonicSettings>) -> (f64, f64, f64) {
+    /// What the harmonic balance gives at `rpm` against the shooting solution.
+    struct Agreement {
+        /// E_h of the balance's orbit.
+        e: f64,
+        /// Share of the cycle the sun–planet teeth are apart.
+        separation: f64,
+        /// Largest |μ| of the balance's multipliers (from its own tangents)
+        /// and of shooting's (the variational monodromy).
+        largest: (f64, f64),
+    }
+
+    /// [`Agreement`] at `rpm`, with `settings` or the rule of `for_speed`;
+    /// printed also the shooting residual |φ_T(z₀) − z₀| at the balance's
+    /// initial state (the state's velocities carry the planets' ringing, which
+    /// the series truncates, so it is 1e-3 to 2e-2 where E_h is 1e-4).
+    fn balance_error(rpm: f64, kappa: usize, settings: Option<HarmonicSettings>) -> Agreement {
         let omega = rpm * RPM;
         let mut shooting = problem(rpm, kappa);
         let settings = settings.unwrap_or_else(|| HarmonicSettings::for_speed(&shooting, omega));
@@ -823,37 +840,76 @@ mod harmonic_balance {
         let e = harmonic_error(&pick(&state), &pick(&shot));
         let z0 = hb.initial_unknowns(&balanced);
         let g = shooting.residual(omega, &z0, &mut Work::default()).unwrap();
+        let mu = hb.floquet_multipliers(&balanced, settings.samples).unwrap();
+        let largest = (mu[0].modulus(), orbit.largest_multiplier());
         eprintln!(
-            "κ = {kappa}, {rpm} rpm, H = {}, N = {}: E_h {e:.3e}, |G(z0)| {:.3e}, |z0| {:.3e}, separation {:.4}, {} iterations, {} factorisations",
+            "κ = {kappa}, {rpm} rpm, H = {}, N = {}: E_h {e:.3e}, |G(z0)| {:.3e}, |z0| {:.3e}, separation {:.4}, {} iterations, {} factorisations, largest |μ| {:.4} (shooting {:.4})",
             settings.harmonics,
             settings.samples,
             max_abs(&g),
             max_abs(&z0),
             state.meshes[0].separation,
             balanced.iterations,
-            balanced.factorizations
+            balanced.factorizations,
+            largest.0,
+            largest.1
         );
-        (e, max_abs(&g) / max_abs(&z0).max(1.0), state.meshes[0].separation)
+        Agreement { e, separation: state.meshes[0].separation, largest }
+    }
+
+    /// The balance's multipliers (from the tangents along its own orbit)
+    /// against shooting's variational monodromy, the largest |μ| within
+    /// `tolerance` and the same stability (measured 2.1e-3 apart at 3000 rpm,
+    /// 1.2e-3 at κ = 6, 6.0e-3 at 10 200 rpm where the teeth separate:
+    /// docs/PERIODIC.md §2).
+    fn assert_multipliers_agree(a: &Agreement, tolerance: f64) {
+        let (hb, shot) = a.largest;
+        assert!((hb - shot).abs() <= tolerance, "largest |μ| {hb:.5} against shooting's {shot:.5}");
+        assert_eq!(hb < 1.0, shot < 1.0, "the same stability: {hb:.5}, {shot:.5}");
     }
 
     #[test]
     fn harmonic_balance_agrees_with_shooting_off_resonance() {
-        let (e, _, separation) = balance_error(3000.0, 0, None);
-        assert!(e <= 1e-3, "E_h {e:.3e}");
-        assert_eq!(separation, 0.0);
+        let a = balance_error(3000.0, 0, None);
+        assert!(a.e <= 1e-3, "E_h {:.3e}", a.e);
+        assert_eq!(a.separation, 0.0);
+        assert_multipliers_agree(&a, 5e-3);
     }
 
     #[test]
     fn harmonic_balance_agrees_with_shooting_where_the_teeth_separate() {
-        let (e, _, separation) = balance_error(10200.0, 0, None);
-        assert!(separation > 0.01, "the teeth separate: {separation}");
-        assert!(e <= 1e-3, "E_h {e:.3e}");
+        let a = balance_error(10200.0, 0, None);
+        assert!(a.separation > 0.01, "the teeth separate: {}", a.separation);
+        assert!(a.e <= 1e-3, "E_h {:.3e}", a.e);
+        // Measured 6.0e-3: the tangents jump where the teeth part, inside an interval.
+        assert_multipliers_agree(&a, 1e-2);
     }
 
     #[test]
     fn harmonic_balance_agrees_with_shooting_on_worn_flanks() {
-        let (e, _, _) = balance_error(3000.0, 6, None);
-        assert!(e <= 1e-3, "κ = 6: E_h {e:.3e}");
+        let a = balance_error(3000.0, 6, None);
+        assert!(a.e <= 1e-3, "κ = 6: E_h {:.3e}", a.e);
+        assert_multipliers_agree(&a, 5e-3);
+    }
+
+    /// At 10 000 rpm the period-1 orbit is unstable (the march there is
+    /// quasi-periodic, docs/PERIODIC.md §4): the balance converges to it all
+    /// the same, and its multipliers say so, as shooting's from the same start
+    /// do (measured largest |μ| 1.022 and 1.040).
+    #[test]
+    fn the_balance_multipliers_mark_an_unstable_orbit() {
+        let omega = 10000.0 * RPM;
+        let mut shooting = problem(10000.0, 0);
+        let mut hb =
+            HarmonicBalance::new(shooting.clone(), HarmonicSettings::for_speed(&shooting, omega)).unwrap();
+        let balanced = hb.solve(omega, None).unwrap();
+        let mu = hb.floquet_multipliers(&balanced, hb.settings().samples).unwrap();
+        let shot = shooting.solve(omega, Some(&hb.initial_unknowns(&balanced))).unwrap();
+        let (ours, theirs) = (mu[0].modulus(), shot.largest_multiplier());
+        eprintln!("10 000 rpm: largest |μ| {ours:.4}, shooting {theirs:.4}");
+        assert!(ours > 1.0 && theirs > 1.0, "unstable: {ours:.4}, {theirs:.4}");
+        assert!((ours - theirs).abs() <= 3e-2, "{ours:.4} against {theirs:.4}");
+        assert!(hb.floquet_multipliers(&balanced, 0).is_err());
     }
 
     /// Too few harmonics and samples miss the planets' own modes (they ring at
@@ -862,8 +918,8 @@ mod harmonic_balance {
     #[test]
     fn the_error_falls_as_harmonics_are_kept() {
         let coarse = HarmonicSettings { harmonics: 16, samples: 256, ..HarmonicSettings::default() };
-        let (e_coarse, _, _) = balance_error(3000.0, 0, Some(coarse));
-        let (e_rule, _, _) = balance_error(3000.0, 0, None);
+        let e_coarse = balance_error(3000.0, 0, Some(coarse)).e;
+        let e_rule = balance_error(3000.0, 0, None).e;
         assert!(e_coarse > 3e-3, "H = 16: E_h {e_coarse:.3e}");
         assert!(e_rule <= 1e-3 && e_rule * 5.0 < e_coarse, "rule: E_h {e_rule:.3e} against {e_coarse:.3e}");
     }

@@ -27,7 +27,7 @@ use std::sync::Arc;
 use rustfft::{num_complex::Complex, Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
-use super::{max_abs, PeriodicError, PeriodicProblem};
+use super::{floquet_multipliers, max_abs, Multiplier, PeriodicError, PeriodicProblem};
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{mesh_responses, static_state, State, SteadyState, Work};
 use crate::dynamics::rigid_frame::RigidFrame;
@@ -187,6 +187,43 @@ fn lu_solve(lu: &faer::linalg::solvers::PartialPivLu<f64>, r: &[f64]) -> Vec<f64
     let b = faer::Mat::<f64>::from_fn(r.len(), 1, |i, _| -r[i]);
     let x = lu.solve(&b);
     (0..r.len()).map(|i| x[(i, 0)]).collect()
+}
+
+/// The orbit's unknowns' coordinates y, ẏ (units of the static deflection,
+/// per second) at time `t`, summed from its series, and the relative
+/// coordinates q = P y and v = P ẏ \[m, m/s\] (P n × m column-major).
+fn orbit_state_at(
+    orbit: &HarmonicOrbit,
+    m: usize,
+    p: &[f64],
+    q_scale: f64,
+    t: f64,
+    (y, yd): (&mut [f64], &mut [f64]),
+    (q, v): (&mut [f64], &mut [f64]),
+) {
+    let nu = 2.0 * std::f64::consts::PI / orbit.period;
+    for a in 0..m {
+        y[a] = orbit.coefficients[a];
+        yd[a] = 0.0;
+    }
+    // cos kνt and sin kνt by the angle-addition recurrence from kνt = νt.
+    let (s1, c1) = (nu * t).sin_cos();
+    let (mut sin, mut cos) = (s1, c1);
+    for k in 1..=orbit.harmonics {
+        let block = &orbit.coefficients[(2 * k - 1) * m..][..2 * m];
+        let kn = k as f64 * nu;
+        for a in 0..m {
+            let (ak, bk) = (block[a], block[m + a]);
+            y[a] += ak * cos + bk * sin;
+            yd[a] += kn * (bk * cos - ak * sin);
+        }
+        (sin, cos) = (sin * c1 + cos * s1, cos * c1 - sin * s1);
+    }
+    let n = q.len();
+    for i in 0..n {
+        q[i] = q_scale * (0..m).map(|a| p[i + n * a] * y[a]).sum::<f64>();
+        v[i] = q_scale * (0..m).map(|a| p[i + n * a] * yd[a]).sum::<f64>();
+    }
 }
 
 /// The harmonic balance of one [`PeriodicProblem`].
@@ -617,13 +654,119 @@ impl HarmonicBalance {
         z
     }
 
+    /// Floquet multipliers of `orbit`, largest modulus first: the eigenvalues
+    /// of the monodromy of the variational equations along the orbit in the
+    /// unknowns' coordinates (the free rotation excluded, as in shooting),
+    /// PᵀMP δÿ + PᵀCP δẏ + PᵀKP δy = 0 (K, C the tangent stiffness and
+    /// damping), with K and C frozen at the middle of each of `intervals`
+    /// equal intervals of the period and each interval's exponential taken
+    /// by its Taylor series (in substeps of ‖hA‖ ≤ 1, to the degree whose
+    /// first omitted term is below 1e-11). No flow is integrated. The
+    /// tangents jump where teeth enter and leave contact, which a frozen
+    /// interval places to within its length; the error against shooting's
+    /// variational monodromy is measured (docs/PERIODIC.md §2).
+    pub fn floquet_multipliers(
+        &mut self,
+        orbit: &HarmonicOrbit,
+        intervals: usize,
+    ) -> Result<Vec<Multiplier>, PeriodicError> {
+        if intervals == 0 {
+            return Err(PeriodicError::invalid("multiplier intervals", 0.0, "must be at least 1"));
+        }
+        let omega = orbit.speed;
+        let (m, n) = (self.m, self.n);
+        let s = 2 * m;
+        let q_scale = self.problem.q_scale;
+        let mass_inverse = nalgebra::DMatrix::from_column_slice(m, m, &self.reduced_mass)
+            .try_inverse()
+            .ok_or_else(|| PeriodicError::invalid("reduced mass", 0.0, "must be invertible"))?;
+        self.problem.model.set_drive_speed(omega);
+        let rigid = self.problem.model.rigid_velocity_at(omega);
+        let p = &self.p;
+        let mut frame = RigidFrame::new(&mut self.problem.model, rigid);
+        let (mut q, mut v) = (vec![0.0; n], vec![0.0; n]);
+        let (mut y, mut yd) = (vec![0.0; m], vec![0.0; m]);
+        let mut kt = nalgebra::DMatrix::<f64>::zeros(n, n);
+        let mut ct = nalgebra::DMatrix::<f64>::zeros(n, n);
+        // Φ (s × s, column-major) from the identity, and the Horner sums.
+        let mut phi = vec![0.0; s * s];
+        (0..s).for_each(|i| phi[i + s * i] = 1.0);
+        let (mut x, mut ax) = (vec![0.0; s * s], vec![0.0; s * s]);
+        let h = orbit.period / intervals as f64;
+        let mut scale: Option<f64> = None;
+        let mut lower = vec![0.0; m * s];
+        for j in 0..intervals {
+            let t = (j as f64 + 0.5) * h;
+            orbit_state_at(orbit, m, p, q_scale, t, (&mut y, &mut yd), (&mut q, &mut v));
+            frame.jacobian(t, &q, &v, &mut kt, &mut ct);
+            // The lower blocks of A = [0 I; G D]: G = −(PᵀMP)⁻¹PᵀKP, D = −(PᵀMP)⁻¹PᵀCP.
+            let project = |mat: &nalgebra::DMatrix<f64>| {
+                let full = nalgebra::DMatrix::from_fn(n, m, |i, b| {
+                    (0..n).map(|l| mat[(i, l)] * p[l + n * b]).sum::<f64>()
+                });
+                let reduced = nalgebra::DMatrix::from_fn(m, m, |a, b| {
+                    (0..n).map(|i| p[i + n * a] * full[(i, b)]).sum::<f64>()
+                });
+                -(&mass_inverse * reduced)
+            };
+            let (g, d) = (project(&kt), project(&ct));
+            // In the balanced state (y, ẏ/w), w² the size of G, A = [0 wI; G/w D] has a norm
+            // of the order of its largest frequency; the multipliers are the same.
+            let w = *scale.get_or_insert_with(|| {
+                (0..m)
+                    .fold(0.0_f64, |acc, a| acc.max((0..m).map(|b| g[(a, b)].abs()).sum::<f64>()))
+                    .sqrt()
+                    .max(1.0)
+            });
+            // The lower block row [G/w D], row-major m × 2m.
+            for a in 0..m {
+                for b in 0..m {
+                    lower[a * s + b] = g[(a, b)] / w;
+                    lower[a * s + m + b] = d[(a, b)];
+                }
+            }
+            let norm =
+                (0..m).fold(w, |acc, a| acc.max(lower[a * s..][..s].iter().map(|x| x.abs()).sum::<f64>()));
+            let substeps = (h * norm).ceil().max(1.0) as usize;
+            let hs = h / substeps as f64;
+            // The Taylor degree whose first omitted term (h‖A‖)^(p+1)/(p+1)! is below 1e-11.
+            let (mut degree, mut term) = (1usize, hs * norm);
+            while term > 1e-11 && degree < 20 {
+                degree += 1;
+                term *= hs * norm / degree as f64;
+            }
+            for _ in 0..substeps {
+                // Φ ← Σ_{k ≤ p} (hA)^k/k! Φ by Horner: X = Φ + (h/k) A X, k = p … 1.
+                x.copy_from_slice(&phi);
+                for k in (1..=degree).rev() {
+                    let f = hs / k as f64;
+                    for col in 0..s {
+                        let c = &x[col * s..][..s];
+                        let out = &mut ax[col * s..][..s];
+                        for a in 0..m {
+                            out[a] = w * c[m + a];
+                            out[m + a] = lower[a * s..][..s].iter().zip(c).map(|(l, c)| l * c).sum();
+                        }
+                    }
+                    for ((xi, pi), ai) in x.iter_mut().zip(&phi).zip(&ax) {
+                        *xi = pi + f * ai;
+                    }
+                }
+                phi.copy_from_slice(&x);
+            }
+        }
+        if let Some(bad) = phi.iter().find(|x| !x.is_finite()) {
+            return Err(PeriodicError::invalid("monodromy of the balance's orbit", *bad, "must be finite"));
+        }
+        Ok(floquet_multipliers(&phi, s))
+    }
+
     /// The orbit's mesh forces over one period at the shooting settings'
     /// samples per mesh cycle, and their measures, as a [`SteadyState`].
     pub fn steady_state(&mut self, orbit: &HarmonicOrbit) -> Result<SteadyState, PeriodicError> {
         let omega = orbit.speed;
         let (m, n) = (self.m, self.n);
         let samples = self.problem.settings.samples_per_mesh_cycle * orbit.cycles;
-        let nu = 2.0 * std::f64::consts::PI / orbit.period;
         let q_scale = self.problem.q_scale;
         let n_mesh = self.problem.model.mesh_count();
         let mut time = Vec::with_capacity(samples);
@@ -636,21 +779,7 @@ impl HarmonicBalance {
         let (mut y, mut yd) = (vec![0.0; m], vec![0.0; m]);
         for j in 0..samples {
             let t = orbit.period * j as f64 / samples as f64;
-            for a in 0..m {
-                let x = |c: usize| orbit.coefficients[c * m + a];
-                let (mut s, mut sd) = (x(0), 0.0);
-                for k in 1..=orbit.harmonics {
-                    let (sin, cos) = (k as f64 * nu * t).sin_cos();
-                    s += x(2 * k - 1) * cos + x(2 * k) * sin;
-                    sd += k as f64 * nu * (x(2 * k) * cos - x(2 * k - 1) * sin);
-                }
-                y[a] = s;
-                yd[a] = sd;
-            }
-            for i in 0..n {
-                q[i] = q_scale * (0..m).map(|a| p[i + n * a] * y[a]).sum::<f64>();
-                v[i] = q_scale * (0..m).map(|a| p[i + n * a] * yd[a]).sum::<f64>();
-            }
+            orbit_state_at(orbit, m, p, q_scale, t, (&mut y, &mut yd), (&mut q, &mut v));
             frame.force(t, &q, &v, &mut f);
             time.push(t);
             for (i, s) in frame.model().meshes.iter().enumerate() {
