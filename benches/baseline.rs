@@ -16,11 +16,13 @@
 //!   rigid-body frame one period at a time, one period measured once settled);
 //! - and by harmonic balance (`dynamics::periodic::HarmonicBalance`, H and N
 //!   by `HarmonicSettings::for_speed`): the point from a cold start, the point
-//!   with its Floquet multipliers (shooting's Newton from the balance's state,
-//!   which also refines the orbit to the flow's accuracy), and per point of the
-//!   sweep, each point starting from the one before (H and N by the rule at
-//!   each speed; a point where Newton does not converge is taken by the route, and
-//!   counted).
+//!   with its Floquet multipliers from the tangents along its own series
+//!   (`HarmonicBalance::floquet_multipliers`), the point refined by shooting's
+//!   Newton from the balance's state (the flow's accuracy, and shooting's
+//!   multipliers), and per point of the sweep, without and with each point's
+//!   multipliers, each point starting from the one before (H and N by the
+//!   rule at each speed; a point where Newton does not converge is taken by
+//!   the route, and counted).
 //!
 //! and E_h of the point (docs/ACCURACY.md) against long time marching (RK 5(4)
 //! at 1e-10, 300 mesh cycles of run-in). Medians of 3 runs.
@@ -192,8 +194,8 @@ fn main() {
     }
     println!();
     println!("the same points by harmonic balance (dynamics::periodic::HarmonicBalance, H and N by HarmonicSettings::for_speed):");
-    println!("| rpm | H | N | baseline integration [s] | ours point, cold [s] | ours point with multipliers [s] | ours per point in a sweep [s] | cold-point ratio | ratio with multipliers | in-sweep ratio | E_h ours | E_h with multipliers | largest multiplier | sweep points not converged (by the route) |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| rpm | H | N | baseline integration [s] | ours point, cold [s] | with its multipliers [s] | refined by shooting, with its multipliers [s] | ours per point in a sweep [s] | in a sweep with multipliers [s] | cold-point ratio | ratio with its multipliers | ratio refined by shooting | in-sweep ratio | in-sweep ratio with multipliers | E_h ours | E_h refined | largest |μ| ours | largest |μ| shooting | sweep points not converged (by the route) |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for row in &balance_rows {
         println!("{row}");
     }
@@ -235,6 +237,18 @@ fn balance_row(
         s.meshes[..2].iter().map(|m| m.harmonics.clone()).collect()
     };
     let e_balance = harmonic_error(&pick(&hb.steady_state(&orbit).expect("measure")), reference);
+    let mut own_mu = 0.0;
+    let own = median(
+        (0..ROUNDS)
+            .map(|_| {
+                let start = Instant::now();
+                let balanced = hb.solve(omega, None).expect("balance point");
+                let mu = hb.floquet_multipliers(&balanced, settings.samples).expect("multipliers");
+                own_mu = mu[0].modulus();
+                start.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
     let mut shot = None;
     let mut shooting = problem.clone();
     let with_multipliers = median(
@@ -255,36 +269,48 @@ fn balance_row(
     let sweep_settings = HarmonicSettings::for_speed(&sweep_problem, grid[0]);
     let mut sweep_hb = HarmonicBalance::new(sweep_problem, sweep_settings).expect("balance");
     let mut failed = 0;
-    let in_sweep = median(
-        (0..ROUNDS)
-            .map(|_| {
-                let start = Instant::now();
-                let mut guess: Option<Vec<f64>> = None;
-                failed = 0;
-                for w in grid {
-                    let at = sweep_hb.settings_for_speed(*w);
-                    sweep_hb.set_settings(at).expect("settings");
-                    match sweep_hb.solve(*w, guess.as_deref()) {
-                        Ok(o) => guess = Some(o.coefficients),
-                        // Where Newton does not converge, the point comes from the route.
-                        Err(_) => {
-                            failed += 1;
-                            frame_sweep(model, &[*w], &FrameSweepSettings::default()).expect("route point");
+    // Per point of the sweep, with or without each point's own multipliers.
+    let mut in_sweep = |multipliers: bool| {
+        median(
+            (0..ROUNDS)
+                .map(|_| {
+                    let start = Instant::now();
+                    let mut guess: Option<Vec<f64>> = None;
+                    failed = 0;
+                    for w in grid {
+                        let at = sweep_hb.settings_for_speed(*w);
+                        sweep_hb.set_settings(at).expect("settings");
+                        match sweep_hb.solve(*w, guess.as_deref()) {
+                            Ok(o) => {
+                                if multipliers {
+                                    sweep_hb.floquet_multipliers(&o, at.samples).expect("multipliers");
+                                }
+                                guess = Some(o.coefficients)
+                            }
+                            // Where Newton does not converge, the point comes from the route.
+                            Err(_) => {
+                                failed += 1;
+                                frame_sweep(model, &[*w], &FrameSweepSettings::default())
+                                    .expect("route point");
+                            }
                         }
                     }
-                }
-                start.elapsed().as_secs_f64() / grid.len() as f64
-            })
-            .collect(),
-    );
+                    start.elapsed().as_secs_f64() / grid.len() as f64
+                })
+                .collect(),
+        )
+    };
+    let (in_sweep_own, in_sweep) = (in_sweep(true), in_sweep(false));
     let rpm = omega * 30.0 / std::f64::consts::PI;
     format!(
-        "| {rpm:.0} | {} | {} | {base:.3} | {cold:.4} | {with_multipliers:.4} | {in_sweep:.4} | {:.1} | {:.1} | {:.1} | {e_balance:.1e} | {e_shot:.1e} | {:.4} | {failed} of {} |",
+        "| {rpm:.0} | {} | {} | {base:.3} | {cold:.4} | {own:.4} | {with_multipliers:.4} | {in_sweep:.4} | {in_sweep_own:.4} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {e_balance:.1e} | {e_shot:.1e} | {own_mu:.4} | {:.4} | {failed} of {} |",
         settings.harmonics,
         settings.samples,
         base / cold,
+        base / own,
         base / with_multipliers,
         base / in_sweep,
+        base / in_sweep_own,
         shot.largest_multiplier(),
         grid.len()
     )
