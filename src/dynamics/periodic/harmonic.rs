@@ -226,6 +226,22 @@ fn orbit_state_at(
     }
 }
 
+/// PᵀXP into `out` (m × m, column-major) for the n × n matrix `x` and P
+/// (n × m, column-major); `xp` (n × m) receives XP.
+fn project(p: &[f64], x: &nalgebra::DMatrix<f64>, m: usize, xp: &mut [f64], out: &mut [f64]) {
+    let n = x.nrows();
+    for b in 0..m {
+        for i in 0..n {
+            xp[i + n * b] = (0..n).map(|l| x[(i, l)] * p[l + n * b]).sum();
+        }
+    }
+    for b in 0..m {
+        for a in 0..m {
+            out[a + m * b] = (0..n).map(|i| p[i + n * a] * xp[i + n * b]).sum();
+        }
+    }
+}
+
 /// The harmonic balance of one [`PeriodicProblem`].
 pub struct HarmonicBalance {
     problem: PeriodicProblem,
@@ -421,7 +437,7 @@ impl HarmonicBalance {
         let mut ct = nalgebra::DMatrix::<f64>::zeros(n, n);
         // Tangent sequences, (a, b) pair-major, N samples each: stiffness then damping.
         let mut tangents = if want_jacobian { vec![0.0; 2 * m * m * ns] } else { Vec::new() };
-        let mut kp = vec![0.0; n * m];
+        let (mut kp, mut reduced) = (vec![0.0; n * m], vec![0.0; m * m]);
         let mut force = vec![0.0; n];
         for j in 0..ns {
             let t = period * j as f64 / ns as f64;
@@ -455,16 +471,10 @@ impl HarmonicBalance {
             if want_jacobian {
                 frame.jacobian(t, &q, &v, &mut kt, &mut ct);
                 for (s, mat) in [&kt, &ct].into_iter().enumerate() {
-                    // K P, then Pᵀ (K P).
-                    for b in 0..m {
-                        for i in 0..n {
-                            kp[i + n * b] = (0..n).map(|l| mat[(i, l)] * p[l + n * b]).sum();
-                        }
-                    }
+                    project(p, mat, m, &mut kp, &mut reduced);
                     for b in 0..m {
                         for a in 0..m {
-                            let value: f64 = (0..n).map(|i| p[i + n * a] * kp[i + n * b]).sum();
-                            tangents[((s * m + b) * m + a) * ns + j] = value;
+                            tangents[((s * m + b) * m + a) * ns + j] = reduced[a + m * b];
                         }
                     }
                 }
@@ -688,6 +698,7 @@ impl HarmonicBalance {
         let (mut y, mut yd) = (vec![0.0; m], vec![0.0; m]);
         let mut kt = nalgebra::DMatrix::<f64>::zeros(n, n);
         let mut ct = nalgebra::DMatrix::<f64>::zeros(n, n);
+        let (mut kp, mut reduced) = (vec![0.0; n * m], vec![0.0; m * m]);
         // Φ (s × s, column-major) from the identity, and the Horner sums.
         let mut phi = vec![0.0; s * s];
         (0..s).for_each(|i| phi[i + s * i] = 1.0);
@@ -700,16 +711,11 @@ impl HarmonicBalance {
             orbit_state_at(orbit, m, p, q_scale, t, (&mut y, &mut yd), (&mut q, &mut v));
             frame.jacobian(t, &q, &v, &mut kt, &mut ct);
             // The lower blocks of A = [0 I; G D]: G = −(PᵀMP)⁻¹PᵀKP, D = −(PᵀMP)⁻¹PᵀCP.
-            let project = |mat: &nalgebra::DMatrix<f64>| {
-                let full = nalgebra::DMatrix::from_fn(n, m, |i, b| {
-                    (0..n).map(|l| mat[(i, l)] * p[l + n * b]).sum::<f64>()
-                });
-                let reduced = nalgebra::DMatrix::from_fn(m, m, |a, b| {
-                    (0..n).map(|i| p[i + n * a] * full[(i, b)]).sum::<f64>()
-                });
-                -(&mass_inverse * reduced)
+            let mut lower_block = |mat: &nalgebra::DMatrix<f64>| {
+                project(p, mat, m, &mut kp, &mut reduced);
+                -(&mass_inverse * nalgebra::DMatrix::from_column_slice(m, m, &reduced))
             };
-            let (g, d) = (project(&kt), project(&ct));
+            let (g, d) = (lower_block(&kt), lower_block(&ct));
             // In the balanced state (y, ẏ/w), w² the size of G, A = [0 wI; G/w D] has a norm
             // of the order of its largest frequency; the multipliers are the same.
             let w = *scale.get_or_insert_with(|| {
