@@ -795,7 +795,8 @@ mod harmonic_balance {
     use planetwear::analysis::accuracy::harmonic_error;
     use planetwear::dynamics::equations::PlanetaryDynamics;
     use planetwear::dynamics::periodic::{
-        max_abs, HarmonicBalance, HarmonicSettings, PeriodicError, PeriodicProblem, ShootingSettings,
+        max_abs, HarmonicBalance, HarmonicOrbit, HarmonicSettings, Multiplier, PeriodicError, PeriodicOrbit,
+        PeriodicProblem, ShootingSettings,
     };
     use planetwear::dynamics::response::{SteadyState, Work};
 
@@ -892,6 +893,20 @@ mod harmonic_balance {
         assert_multipliers_agree(&a, 5e-3);
     }
 
+    /// The balance's orbit at `omega` by the rule's settings (cold start)
+    /// with its multipliers, and shooting's orbit from the balance's state.
+    fn multipliers_both_ways(
+        mut shooting: PeriodicProblem,
+        omega: f64,
+    ) -> (HarmonicBalance, HarmonicOrbit, Vec<Multiplier>, PeriodicOrbit) {
+        let mut hb =
+            HarmonicBalance::new(shooting.clone(), HarmonicSettings::for_speed(&shooting, omega)).unwrap();
+        let balanced = hb.solve(omega, None).unwrap();
+        let mu = hb.floquet_multipliers(&balanced, hb.settings().samples).unwrap();
+        let shot = shooting.solve(omega, Some(&hb.initial_unknowns(&balanced))).unwrap();
+        (hb, balanced, mu, shot)
+    }
+
     /// At 10 000 rpm the period-1 orbit is unstable (the march there is
     /// quasi-periodic, docs/PERIODIC.md §4): the balance converges to it all
     /// the same, and its multipliers say so, as shooting's from the same start
@@ -899,12 +914,7 @@ mod harmonic_balance {
     #[test]
     fn the_balance_multipliers_mark_an_unstable_orbit() {
         let omega = 10000.0 * RPM;
-        let mut shooting = problem(10000.0, 0);
-        let mut hb =
-            HarmonicBalance::new(shooting.clone(), HarmonicSettings::for_speed(&shooting, omega)).unwrap();
-        let balanced = hb.solve(omega, None).unwrap();
-        let mu = hb.floquet_multipliers(&balanced, hb.settings().samples).unwrap();
-        let shot = shooting.solve(omega, Some(&hb.initial_unknowns(&balanced))).unwrap();
+        let (mut hb, balanced, mu, shot) = multipliers_both_ways(problem(10000.0, 0), omega);
         let (ours, theirs) = (mu[0].modulus(), shot.largest_multiplier());
         eprintln!("10 000 rpm: largest |μ| {ours:.4}, shooting {theirs:.4}");
         assert!(ours > 1.0 && theirs > 1.0, "unstable: {ours:.4}, {theirs:.4}");
@@ -922,12 +932,8 @@ mod harmonic_balance {
         scene.dynamics.drive = planetwear::scene::Drive::Speed;
         let (_, _, model) = build(&scene);
         let omega = 3000.0 * RPM;
-        let mut shooting = PeriodicProblem::new(model, ShootingSettings::default(), omega).unwrap();
-        let mut hb =
-            HarmonicBalance::new(shooting.clone(), HarmonicSettings::for_speed(&shooting, omega)).unwrap();
-        let balanced = hb.solve(omega, None).unwrap();
-        let mu = hb.floquet_multipliers(&balanced, hb.settings().samples).unwrap();
-        let shot = shooting.solve(omega, Some(&hb.initial_unknowns(&balanced))).unwrap();
+        let shooting = PeriodicProblem::new(model, ShootingSettings::default(), omega).unwrap();
+        let (_, _, mu, shot) = multipliers_both_ways(shooting, omega);
         assert_eq!(mu.len(), shot.multipliers.len(), "2n multipliers either way");
         let (ours, theirs) = (mu[0].modulus(), shot.largest_multiplier());
         eprintln!("speed drive, 3000 rpm: largest |μ| {ours:.5}, shooting {theirs:.5}");
