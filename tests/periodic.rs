@@ -706,7 +706,8 @@ fn the_variational_monodromy_is_the_limit_of_the_differences_of_the_flow() {
             relative_difference(&fine.monodromy, &a.monodromy),
         );
         let moduli = |m: &[f64]| {
-            let mut v: Vec<f64> = floquet_multipliers(m, a.dim).iter().map(|x| x.modulus()).collect();
+            let mut v: Vec<f64> =
+                floquet_multipliers(m, a.dim).unwrap().iter().map(|x| x.modulus()).collect();
             v.sort_by(f64::total_cmp);
             v
         };
@@ -776,7 +777,8 @@ fn the_variational_monodromy_carries_the_jump_of_the_damping_at_separation() {
         }
     }
     let d = relative_difference(&a.monodromy, &central);
-    let largest = |x: &[f64]| floquet_multipliers(x, m).iter().fold(0.0_f64, |l, mu| l.max(mu.modulus()));
+    let largest =
+        |x: &[f64]| floquet_multipliers(x, m).unwrap().iter().fold(0.0_f64, |l, mu| l.max(mu.modulus()));
     let dm = (largest(&a.monodromy) - largest(&central)).abs();
     println!(
         "separating orbit: variational against central differences {d:.2e}; largest |μ| differs by {dm:.2e}"

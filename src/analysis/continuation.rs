@@ -583,7 +583,15 @@ pub fn continue_branch(
         // After a restart the tangent points towards `to`; otherwise along the branch.
         let orient = if gap == Some(GapKind::Restart) { &seed } else { &t };
         let new_t = tangent(&new_lin, unit, orient);
-        let multipliers = floquet_multipliers(&new_lin.monodromy, m);
+        let multipliers = match floquet_multipliers(&new_lin.monodromy, m) {
+            Ok(mu) => mu,
+            Err(e) => {
+                add(&mut total, &work);
+                flows += step_flows;
+                ended = format!("stopped at {omega:.4} rad/s: {e}");
+                break;
+            }
+        };
         let orbit = PeriodicOrbit {
             speed: omega,
             period: problem.period(omega),

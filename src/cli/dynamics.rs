@@ -130,7 +130,7 @@ fn periodic_point(
     method: &str,
 ) -> Result<(SteadyState, String, serde_json::Value)> {
     use planetwear::dynamics::periodic::{
-        HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings,
+        all_inside_unit_circle, HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings,
     };
     let rpm = rad_per_s_to_rpm(omega);
     let settings = ShootingSettings { samples_per_mesh_cycle: samples, ..ShootingSettings::default() };
@@ -165,7 +165,7 @@ fn periodic_point(
     })?;
     let multipliers = hb.floquet_multipliers(&orbit, settings.samples)?;
     let mu = multipliers.first().map_or(0.0, |m| m.modulus());
-    let stable = !multipliers.is_empty() && mu < 1.0;
+    let stable = all_inside_unit_circle(&multipliers);
     let line = format!(
         "harmonic balance: H = {} harmonics, N = {} samples, {} Newton iterations, {} Jacobians; \
          largest Floquet multiplier |μ| = {mu:.4} from the orbit's tangents ({})",

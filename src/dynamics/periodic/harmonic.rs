@@ -761,10 +761,7 @@ impl HarmonicBalance {
                 phi.copy_from_slice(&x);
             }
         }
-        if let Some(bad) = phi.iter().find(|x| !x.is_finite()) {
-            return Err(PeriodicError::invalid("monodromy of the balance's orbit", *bad, "must be finite"));
-        }
-        Ok(floquet_multipliers(&phi, s))
+        floquet_multipliers(&phi, s)
     }
 
     /// The orbit's mesh forces over one period at the shooting settings'

@@ -264,10 +264,18 @@ impl PeriodicOrbit {
         self.multipliers.first().map_or(0.0, Multiplier::modulus)
     }
 
-    /// All multipliers inside the unit circle.
+    /// All multipliers inside the unit circle ([`all_inside_unit_circle`]):
+    /// false for an orbit whose multipliers are not known.
     pub fn is_stable(&self) -> bool {
-        self.largest_multiplier() < 1.0
+        all_inside_unit_circle(&self.multipliers)
     }
+}
+
+/// Whether a periodic orbit with these Floquet multipliers is stable: there
+/// are some, and every one lies inside the unit circle. An empty list is
+/// "not known", which is never reported as stable.
+pub fn all_inside_unit_circle(multipliers: &[Multiplier]) -> bool {
+    !multipliers.is_empty() && multipliers.iter().all(|m| m.modulus() < 1.0)
 }
 
 /// The monodromy matrix and the derivative of G with respect to the speed at
@@ -734,7 +742,7 @@ impl PeriodicProblem {
             lin = self.linearize_with(omega, &z, &mut work, speed)?;
             flows += flows_per_linearization;
         }
-        let multipliers = floquet_multipliers(&lin.monodromy, m);
+        let multipliers = floquet_multipliers(&lin.monodromy, m)?;
         let orbit = PeriodicOrbit {
             speed: omega,
             period: self.period(omega),
@@ -814,15 +822,25 @@ pub fn solve_dense(a: &[f64], m: usize, b: &[f64]) -> Vec<f64> {
 }
 
 /// The eigenvalues of the monodromy matrix (faer's non-symmetric
-/// eigensolver), largest modulus first; empty when the solver fails.
-pub fn floquet_multipliers(monodromy: &[f64], m: usize) -> Vec<Multiplier> {
+/// eigensolver), largest modulus first. A monodromy with an entry that is not
+/// finite, or one the eigensolver does not converge on, is an error: an
+/// orbit never goes on without its multipliers.
+pub fn floquet_multipliers(monodromy: &[f64], m: usize) -> Result<Vec<Multiplier>, PeriodicError> {
+    if let Some(bad) = monodromy.iter().find(|x| !x.is_finite()) {
+        return Err(PeriodicError::invalid("monodromy matrix entry", *bad, "must be finite"));
+    }
     let a = faer::Mat::<f64>::from_fn(m, m, |i, j| monodromy[i + m * j]);
-    let mut mu: Vec<Multiplier> = match a.eigenvalues() {
-        Ok(values) => values.iter().map(|c| Multiplier { re: c.re, im: c.im }).collect(),
-        Err(_) => Vec::new(),
-    };
+    let values = a.eigenvalues().map_err(|e| PeriodicError::InvalidRequest {
+        name: "monodromy matrix".into(),
+        value: format!("{m} × {m}"),
+        reason: format!("its eigenvalues (the Floquet multipliers) could not be computed: {e:?}"),
+    })?;
+    let mut mu: Vec<Multiplier> = values.iter().map(|c| Multiplier { re: c.re, im: c.im }).collect();
+    if let Some(bad) = mu.iter().find(|x| !x.modulus().is_finite()) {
+        return Err(PeriodicError::invalid("Floquet multiplier", bad.modulus(), "must be finite"));
+    }
     mu.sort_by(|a, b| b.modulus().total_cmp(&a.modulus()));
-    mu
+    Ok(mu)
 }
 
 #[cfg(test)]
@@ -834,11 +852,46 @@ mod tests {
         // A rotation by 0.3 rad scaled by 0.9, and a real 1.2: |μ| = 1.2, 0.9, 0.9.
         let (c, s) = (0.9 * 0.3f64.cos(), 0.9 * 0.3f64.sin());
         let a = [c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.2];
-        let mu = floquet_multipliers(&a, 3);
+        let mu = floquet_multipliers(&a, 3).unwrap();
         assert!((mu[0].re - 1.2).abs() < 1e-12 && mu[0].is_real());
         assert!((mu[1].modulus() - 0.9).abs() < 1e-12 && !mu[1].is_real());
         assert!((mu[1].im.abs() - s).abs() < 1e-12);
         let x = solve_dense(&a, 3, &[1.0, 0.0, 2.4]);
         assert!((x[2] - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_monodromy_that_is_not_finite_is_an_error_naming_it() {
+        let mut a = [0.5, 0.0, 0.0, 0.5];
+        a[2] = f64::NAN;
+        let e = floquet_multipliers(&a, 2).unwrap_err().to_string();
+        assert!(e.contains("monodromy matrix entry") && e.contains("finite"), "{e}");
+        a[2] = f64::INFINITY;
+        assert!(floquet_multipliers(&a, 2).is_err());
+    }
+
+    #[test]
+    fn an_orbit_is_stable_only_with_every_multiplier_known_and_inside() {
+        let mu = |re: f64, im: f64| Multiplier { re, im };
+        assert!(all_inside_unit_circle(&[mu(0.9, 0.0), mu(0.3, 0.4)]));
+        assert!(!all_inside_unit_circle(&[]), "no multipliers: not known, never stable");
+        assert!(!all_inside_unit_circle(&[mu(0.6, 0.8)]), "on the circle");
+        assert!(
+            !all_inside_unit_circle(&[mu(0.1, 0.0), mu(-1.2, 0.0)]),
+            "unsorted list, an outside one last"
+        );
+        assert!(!all_inside_unit_circle(&[mu(f64::NAN, 0.0)]));
+        let orbit = PeriodicOrbit {
+            speed: 1.0,
+            period: 1.0,
+            cycles: 1,
+            z: vec![],
+            residual: 0.0,
+            newton_iterations: 0,
+            multipliers: vec![],
+            flows: 0,
+            work: Work::default(),
+        };
+        assert!(!orbit.is_stable());
     }
 }
