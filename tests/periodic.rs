@@ -863,7 +863,7 @@ mod harmonic_balance {
     /// The balance's multipliers (from the tangents along its own orbit)
     /// against shooting's variational monodromy, the largest |μ| within
     /// `tolerance` and the same stability (measured 2.1e-3 apart at 3000 rpm,
-    /// 1.2e-3 at κ = 6, 6.0e-3 at 10 200 rpm where the teeth separate:
+    /// 1.2e-3 at κ = 6, 2.8e-3 at 10 200 rpm where the teeth separate:
     /// docs/PERIODIC.md §2).
     fn assert_multipliers_agree(a: &Agreement, tolerance: f64) {
         let (hb, shot) = a.largest;
@@ -884,8 +884,9 @@ mod harmonic_balance {
         let a = balance_error(10200.0, 0, None);
         assert!(a.separation > 0.01, "the teeth separate: {}", a.separation);
         assert!(a.e <= 1e-3, "E_h {:.3e}", a.e);
-        // Measured 6.0e-3: the tangents jump where the teeth part, inside an interval.
-        assert_multipliers_agree(&a, 1e-2);
+        // Measured 2.8e-3 with the saltation where the mesh separates and touches
+        // again; 6.0e-3 without it.
+        assert_multipliers_agree(&a, 5e-3);
     }
 
     #[test]
@@ -912,7 +913,8 @@ mod harmonic_balance {
     /// At 10 000 rpm the period-1 orbit is unstable (the march there is
     /// quasi-periodic, docs/PERIODIC.md §4): the balance converges to it all
     /// the same, and its multipliers say so, as shooting's from the same start
-    /// do (measured largest |μ| 1.022 and 1.040).
+    /// do (measured largest |μ| 1.0379 and 1.0402; without the saltation of
+    /// the damping's jumps where the meshes separate, 1.0222).
     #[test]
     fn the_balance_multipliers_mark_an_unstable_orbit() {
         let omega = 10000.0 * RPM;
@@ -920,7 +922,7 @@ mod harmonic_balance {
         let (ours, theirs) = (mu[0].modulus(), shot.largest_multiplier());
         eprintln!("10 000 rpm: largest |μ| {ours:.4}, shooting {theirs:.4}");
         assert!(ours > 1.0 && theirs > 1.0, "unstable: {ours:.4}, {theirs:.4}");
-        assert!((ours - theirs).abs() <= 3e-2, "{ours:.4} against {theirs:.4}");
+        assert!((ours - theirs).abs() <= 5e-3, "{ours:.4} against {theirs:.4}");
         assert!(hb.floquet_multipliers(&balanced, 0).is_err());
     }
 

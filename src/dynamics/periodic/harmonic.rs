@@ -242,6 +242,275 @@ fn project(p: &[f64], x: &nalgebra::DMatrix<f64>, m: usize, xp: &mut [f64], out:
     }
 }
 
+/// An instant on a harmonic-balance orbit where a whole mesh separates or
+/// touches again, so that its damping force jumps.
+#[derive(Clone, Copy, Debug)]
+struct DampingSwitch {
+    /// Time in the period \[s\].
+    time: f64,
+    /// The mesh.
+    mesh: usize,
+    /// Whether it touches after the instant.
+    on: bool,
+    /// The event (tooth pair and flank) whose value crosses zero there.
+    event: usize,
+}
+
+/// The monodromy of the balance's variational equations, built interval by
+/// interval ([`HarmonicBalance::floquet_multipliers`]): Φ in the balanced
+/// state (y, ẏ/w) of the unknowns' coordinates.
+struct Propagation<'o> {
+    orbit: &'o HarmonicOrbit,
+    p: &'o [f64],
+    q_scale: f64,
+    m: usize,
+    n: usize,
+    /// (PᵀMP)⁻¹.
+    mass_inverse: nalgebra::DMatrix<f64>,
+    /// Φ, 2m × 2m column-major, from the identity.
+    phi: Vec<f64>,
+    /// w: the balancing scale, the square root of the size of the first
+    /// interval's stiffness block.
+    scale: Option<f64>,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    y: Vec<f64>,
+    yd: Vec<f64>,
+    kt: nalgebra::DMatrix<f64>,
+    ct: nalgebra::DMatrix<f64>,
+    kp: Vec<f64>,
+    reduced: Vec<f64>,
+    lower: Vec<f64>,
+    x: Vec<f64>,
+    ax: Vec<f64>,
+    events: Vec<f64>,
+}
+
+impl<'o> Propagation<'o> {
+    fn new(
+        orbit: &'o HarmonicOrbit,
+        p: &'o [f64],
+        q_scale: f64,
+        (m, n): (usize, usize),
+        mass_inverse: nalgebra::DMatrix<f64>,
+    ) -> Self {
+        let s = 2 * m;
+        let mut phi = vec![0.0; s * s];
+        (0..s).for_each(|i| phi[i + s * i] = 1.0);
+        Self {
+            orbit,
+            p,
+            q_scale,
+            m,
+            n,
+            mass_inverse,
+            phi,
+            scale: None,
+            q: vec![0.0; n],
+            v: vec![0.0; n],
+            y: vec![0.0; m],
+            yd: vec![0.0; m],
+            kt: nalgebra::DMatrix::zeros(n, n),
+            ct: nalgebra::DMatrix::zeros(n, n),
+            kp: vec![0.0; n * m],
+            reduced: vec![0.0; m * m],
+            lower: vec![0.0; m * s],
+            x: vec![0.0; s * s],
+            ax: vec![0.0; s * s],
+            events: Vec::new(),
+        }
+    }
+
+    /// The orbit's relative state at `t` into `q`, `v`.
+    fn state_at(&mut self, t: f64) {
+        let (orbit, p, m, q_scale) = (self.orbit, self.p, self.m, self.q_scale);
+        orbit_state_at(orbit, m, p, q_scale, t, (&mut self.y, &mut self.yd), (&mut self.q, &mut self.v));
+    }
+
+    /// Φ ← exp(length · A(t_mid)) Φ, A = [0 wI; G/w D] with K and C taken at
+    /// `t_mid` on the orbit.
+    fn advance(&mut self, frame: &mut RigidFrame<'_>, t_mid: f64, length: f64) {
+        let m = self.m;
+        let s = 2 * m;
+        self.state_at(t_mid);
+        frame.jacobian(t_mid, &self.q, &self.v, &mut self.kt, &mut self.ct);
+        // The lower blocks of A = [0 I; G D]: G = −(PᵀMP)⁻¹PᵀKP, D = −(PᵀMP)⁻¹PᵀCP.
+        let (p, kp, reduced, mass_inverse) = (self.p, &mut self.kp, &mut self.reduced, &self.mass_inverse);
+        let mut lower_block = |mat: &nalgebra::DMatrix<f64>| {
+            project(p, mat, m, kp, reduced);
+            -(mass_inverse * nalgebra::DMatrix::from_column_slice(m, m, reduced))
+        };
+        let (g, d) = (lower_block(&self.kt), lower_block(&self.ct));
+        // In the balanced state (y, ẏ/w), w² the size of G, A = [0 wI; G/w D] has a norm
+        // of the order of its largest frequency; the multipliers are the same.
+        let w = *self.scale.get_or_insert_with(|| {
+            (0..m)
+                .fold(0.0_f64, |acc, a| acc.max((0..m).map(|b| g[(a, b)].abs()).sum::<f64>()))
+                .sqrt()
+                .max(1.0)
+        });
+        // The lower block row [G/w D], row-major m × 2m.
+        let lower = &mut self.lower;
+        for a in 0..m {
+            for b in 0..m {
+                lower[a * s + b] = g[(a, b)] / w;
+                lower[a * s + m + b] = d[(a, b)];
+            }
+        }
+        let norm = (0..m).fold(w, |acc, a| acc.max(lower[a * s..][..s].iter().map(|x| x.abs()).sum::<f64>()));
+        let substeps = (length * norm).ceil().max(1.0) as usize;
+        let hs = length / substeps as f64;
+        // The Taylor degree whose first omitted term (h‖A‖)^(p+1)/(p+1)! is below 1e-11.
+        let (mut degree, mut term) = (1usize, hs * norm);
+        while term > 1e-11 && degree < 20 {
+            degree += 1;
+            term *= hs * norm / degree as f64;
+        }
+        let (phi, x, ax) = (&mut self.phi, &mut self.x, &mut self.ax);
+        for _ in 0..substeps {
+            // Φ ← Σ_{k ≤ p} (hA)^k/k! Φ by Horner: X = Φ + (h/k) A X, k = p … 1.
+            x.copy_from_slice(phi);
+            for k in (1..=degree).rev() {
+                let f = hs / k as f64;
+                for col in 0..s {
+                    let c = &x[col * s..][..s];
+                    let out = &mut ax[col * s..][..s];
+                    for a in 0..m {
+                        out[a] = w * c[m + a];
+                        out[m + a] = lower[a * s..][..s].iter().zip(c).map(|(l, c)| l * c).sum();
+                    }
+                }
+                for ((xi, pi), ai) in x.iter_mut().zip(phi.iter()).zip(ax.iter()) {
+                    *xi = pi + f * ai;
+                }
+            }
+            phi.copy_from_slice(x);
+        }
+    }
+
+    /// The largest event value of each mesh at `t` on the orbit, with the
+    /// event that gives it (a mesh touches where its largest value is
+    /// positive).
+    fn mesh_events(&mut self, frame: &mut RigidFrame<'_>, t: f64) -> Vec<(f64, usize)> {
+        self.state_at(t);
+        frame.events(t, &self.q, &self.v, &mut self.events);
+        let model = frame.model();
+        let mut largest = vec![(f64::NEG_INFINITY, usize::MAX); model.mesh_count()];
+        for (e, &g) in self.events.iter().enumerate() {
+            if let Some(i) = model.event_mesh(e) {
+                if g > largest[i].0 {
+                    largest[i] = (g, e);
+                }
+            }
+        }
+        largest
+    }
+
+    /// The instants in the period where a mesh starts or stops touching,
+    /// in time order: a sign change of its largest event value between the
+    /// ends of one of the `intervals` intervals of length `h`, located by
+    /// bisection to 1e-12 of the interval. Two changes of one mesh within
+    /// one interval cancel and are not seen.
+    fn damping_switches(
+        &mut self,
+        frame: &mut RigidFrame<'_>,
+        h: f64,
+        intervals: usize,
+    ) -> Vec<DampingSwitch> {
+        let mut switches = Vec::new();
+        let mut before = self.mesh_events(frame, 0.0);
+        for j in 0..intervals {
+            let (a, b) = (j as f64 * h, (j + 1) as f64 * h);
+            let after = self.mesh_events(frame, b);
+            for (i, (was, is)) in before.iter().zip(&after).enumerate() {
+                if (was.0 > 0.0) == (is.0 > 0.0) {
+                    continue;
+                }
+                let on = is.0 > 0.0;
+                let (mut lo, mut hi) = (a, b);
+                while hi - lo > 1e-12 * h {
+                    let mid = 0.5 * (lo + hi);
+                    if (self.mesh_events(frame, mid)[i].0 > 0.0) == on {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                let event = self.mesh_events(frame, hi)[i].1;
+                switches.push(DampingSwitch { time: hi, mesh: i, on, event });
+            }
+            before = after;
+        }
+        switches.sort_by(|x, y| x.time.total_cmp(&y.time));
+        switches
+    }
+
+    /// Φ ← S Φ for the saltation S of `switch`: in physical coordinates
+    /// δv⁺ = δv⁻ + M⁻¹Δf (∂h/∂q · δq)/ḣ (Δf the jump of the generalized
+    /// forces, h the crossing event's value), here in the unknowns'
+    /// coordinates, δẏ⁺ = δẏ⁻ + (PᵀMP)⁻¹PᵀΔf (∂h/∂q · P δy)/ḣ, and in the
+    /// balanced state divided by w. ∂h/∂q · P and ḣ are central
+    /// differences (along each column of P, and along the series in time).
+    fn saltation(&mut self, frame: &mut RigidFrame<'_>, switch: &DampingSwitch) {
+        let (m, n) = (self.m, self.n);
+        let s = 2 * m;
+        let t = switch.time;
+        let tau = 1e-6 * self.orbit.period;
+        let value = |walk: &mut Self, frame: &mut RigidFrame<'_>, t: f64, q: &[f64], v: &[f64]| {
+            frame.events(t, q, v, &mut walk.events);
+            walk.events[switch.event]
+        };
+        self.state_at(t + tau);
+        let (q, v) = (self.q.clone(), self.v.clone());
+        let ahead = value(self, frame, t + tau, &q, &v);
+        self.state_at(t - tau);
+        let (q, v) = (self.q.clone(), self.v.clone());
+        let behind = value(self, frame, t - tau, &q, &v);
+        let rate = (ahead - behind) / (2.0 * tau);
+        if !(rate.is_finite() && rate != 0.0) {
+            return;
+        }
+        self.state_at(t);
+        let (q0, v0) = (self.q.clone(), self.v.clone());
+        // ∂h/∂q · P, column by column.
+        let mut slope = vec![0.0; m];
+        let mut qp = q0.clone();
+        for (b, out) in slope.iter_mut().enumerate() {
+            let column = &self.p[n * b..][..n];
+            let size = column.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
+            if size == 0.0 {
+                continue;
+            }
+            let eps = 1e-6 * self.q_scale / size;
+            for k in 0..n {
+                qp[k] = q0[k] + eps * column[k];
+            }
+            let plus = value(self, frame, t, &qp, &v0);
+            for k in 0..n {
+                qp[k] = q0[k] - eps * column[k];
+            }
+            let minus = value(self, frame, t, &qp, &v0);
+            *out = (plus - minus) / (2.0 * eps);
+        }
+        // The jump at the switch's own state: the mesh's approach rate of this evaluation.
+        frame.events(t, &q0, &v0, &mut self.events);
+        let mut jump = vec![0.0; n];
+        frame.model().add_damping_switch(switch.mesh, switch.on, &mut jump);
+        let projected: Vec<f64> = (0..m).map(|a| (0..n).map(|i| self.p[i + n * a] * jump[i]).sum()).collect();
+        let w = self.scale.unwrap_or(1.0);
+        let kick: Vec<f64> = (0..m)
+            .map(|a| (0..m).map(|b| self.mass_inverse[(a, b)] * projected[b]).sum::<f64>() / (w * rate))
+            .collect();
+        for col in 0..s {
+            let c = &mut self.phi[col * s..][..s];
+            let dot: f64 = slope.iter().zip(&c[..m]).map(|(g, y)| g * y).sum();
+            for (a, k) in kick.iter().enumerate() {
+                c[m + a] += k * dot;
+            }
+        }
+    }
+}
+
 /// The harmonic balance of one [`PeriodicProblem`].
 pub struct HarmonicBalance {
     problem: PeriodicProblem,
@@ -673,8 +942,12 @@ impl HarmonicBalance {
     /// by its Taylor series (in substeps of ‖hA‖ ≤ 1, to the degree whose
     /// first omitted term is below 1e-11). No flow is integrated. The
     /// tangents jump where teeth enter and leave contact, which a frozen
-    /// interval places to within its length; the error against shooting's
-    /// variational monodromy is measured (docs/PERIODIC.md §2).
+    /// interval places to within its length. Where a whole mesh separates or
+    /// touches again its damping force jumps: those instants are located on
+    /// the series (bisection on the mesh's largest event value), the
+    /// intervals are split there, and the columns take the jump's saltation
+    /// term, as shooting's variational flow does. The error against
+    /// shooting's variational monodromy is measured (docs/PERIODIC.md §2).
     pub fn floquet_multipliers(
         &mut self,
         orbit: &HarmonicOrbit,
@@ -685,83 +958,36 @@ impl HarmonicBalance {
         }
         let omega = orbit.speed;
         let (m, n) = (self.m, self.n);
-        let s = 2 * m;
-        let q_scale = self.problem.q_scale;
         let mass_inverse = nalgebra::DMatrix::from_column_slice(m, m, &self.reduced_mass)
             .try_inverse()
             .ok_or_else(|| PeriodicError::invalid("reduced mass", 0.0, "must be invertible"))?;
         self.problem.model.set_drive_speed(omega);
         let rigid = self.problem.model.rigid_velocity_at(omega);
-        let p = &self.p;
         let mut frame = RigidFrame::new(&mut self.problem.model, rigid);
-        let (mut q, mut v) = (vec![0.0; n], vec![0.0; n]);
-        let (mut y, mut yd) = (vec![0.0; m], vec![0.0; m]);
-        let mut kt = nalgebra::DMatrix::<f64>::zeros(n, n);
-        let mut ct = nalgebra::DMatrix::<f64>::zeros(n, n);
-        let (mut kp, mut reduced) = (vec![0.0; n * m], vec![0.0; m * m]);
-        // Φ (s × s, column-major) from the identity, and the Horner sums.
-        let mut phi = vec![0.0; s * s];
-        (0..s).for_each(|i| phi[i + s * i] = 1.0);
-        let (mut x, mut ax) = (vec![0.0; s * s], vec![0.0; s * s]);
+        let mut walk = Propagation::new(orbit, &self.p, self.problem.q_scale, (m, n), mass_inverse);
         let h = orbit.period / intervals as f64;
-        let mut scale: Option<f64> = None;
-        let mut lower = vec![0.0; m * s];
+        let switches = walk.damping_switches(&mut frame, h, intervals);
+        let mut next = 0;
         for j in 0..intervals {
-            let t = (j as f64 + 0.5) * h;
-            orbit_state_at(orbit, m, p, q_scale, t, (&mut y, &mut yd), (&mut q, &mut v));
-            frame.jacobian(t, &q, &v, &mut kt, &mut ct);
-            // The lower blocks of A = [0 I; G D]: G = −(PᵀMP)⁻¹PᵀKP, D = −(PᵀMP)⁻¹PᵀCP.
-            let mut lower_block = |mat: &nalgebra::DMatrix<f64>| {
-                project(p, mat, m, &mut kp, &mut reduced);
-                -(&mass_inverse * nalgebra::DMatrix::from_column_slice(m, m, &reduced))
-            };
-            let (g, d) = (lower_block(&kt), lower_block(&ct));
-            // In the balanced state (y, ẏ/w), w² the size of G, A = [0 wI; G/w D] has a norm
-            // of the order of its largest frequency; the multipliers are the same.
-            let w = *scale.get_or_insert_with(|| {
-                (0..m)
-                    .fold(0.0_f64, |acc, a| acc.max((0..m).map(|b| g[(a, b)].abs()).sum::<f64>()))
-                    .sqrt()
-                    .max(1.0)
-            });
-            // The lower block row [G/w D], row-major m × 2m.
-            for a in 0..m {
-                for b in 0..m {
-                    lower[a * s + b] = g[(a, b)] / w;
-                    lower[a * s + m + b] = d[(a, b)];
-                }
+            let end = (j + 1) as f64 * h;
+            if switches.get(next).is_none_or(|s| s.time > end) {
+                walk.advance(&mut frame, (j as f64 + 0.5) * h, h);
+                continue;
             }
-            let norm =
-                (0..m).fold(w, |acc, a| acc.max(lower[a * s..][..s].iter().map(|x| x.abs()).sum::<f64>()));
-            let substeps = (h * norm).ceil().max(1.0) as usize;
-            let hs = h / substeps as f64;
-            // The Taylor degree whose first omitted term (h‖A‖)^(p+1)/(p+1)! is below 1e-11.
-            let (mut degree, mut term) = (1usize, hs * norm);
-            while term > 1e-11 && degree < 20 {
-                degree += 1;
-                term *= hs * norm / degree as f64;
-            }
-            for _ in 0..substeps {
-                // Φ ← Σ_{k ≤ p} (hA)^k/k! Φ by Horner: X = Φ + (h/k) A X, k = p … 1.
-                x.copy_from_slice(&phi);
-                for k in (1..=degree).rev() {
-                    let f = hs / k as f64;
-                    for col in 0..s {
-                        let c = &x[col * s..][..s];
-                        let out = &mut ax[col * s..][..s];
-                        for a in 0..m {
-                            out[a] = w * c[m + a];
-                            out[m + a] = lower[a * s..][..s].iter().zip(c).map(|(l, c)| l * c).sum();
-                        }
-                    }
-                    for ((xi, pi), ai) in x.iter_mut().zip(&phi).zip(&ax) {
-                        *xi = pi + f * ai;
-                    }
+            let mut from = j as f64 * h;
+            while let Some(switch) = switches.get(next).filter(|s| s.time <= end) {
+                if switch.time > from {
+                    walk.advance(&mut frame, 0.5 * (from + switch.time), switch.time - from);
                 }
-                phi.copy_from_slice(&x);
+                walk.saltation(&mut frame, switch);
+                from = switch.time;
+                next += 1;
+            }
+            if end > from {
+                walk.advance(&mut frame, 0.5 * (from + end), end - from);
             }
         }
-        floquet_multipliers(&phi, s)
+        floquet_multipliers(&walk.phi, 2 * m)
     }
 
     /// The orbit's mesh forces over one period at the shooting settings'
