@@ -586,8 +586,7 @@ pub fn continue_branch(
         let multipliers = match floquet_multipliers(&new_lin.monodromy, m) {
             Ok(mu) => mu,
             Err(e) => {
-                add(&mut total, &work);
-                flows += step_flows;
+                // The step's work is counted above.
                 ended = format!("stopped at {omega:.4} rad/s: {e}");
                 break;
             }
@@ -857,23 +856,7 @@ pub fn on_one_stable_branch(curve: &[CurvePoint], jump: &Jump, tolerance: f64) -
 /// it, for the tests of what reads branches (here and in the reports).
 #[cfg(test)]
 pub(crate) fn test_point(speed: f64, stable: bool, after_gap: bool) -> BranchPoint {
-    BranchPoint {
-        orbit: PeriodicOrbit {
-            speed,
-            period: 1e-3,
-            cycles: 1,
-            z: vec![],
-            residual: 0.0,
-            newton_iterations: 0,
-            multipliers: vec![],
-            flows: 0,
-            work: Work::default(),
-        },
-        stable,
-        segment: 0,
-        speed_slope: 1.0,
-        after_gap,
-    }
+    BranchPoint { orbit: PeriodicOrbit::bare(speed, 1e-3), stable, segment: 0, speed_slope: 1.0, after_gap }
 }
 
 #[cfg(test)]

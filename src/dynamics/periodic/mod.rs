@@ -264,6 +264,24 @@ impl PeriodicOrbit {
         self.multipliers.first().map_or(0.0, Multiplier::modulus)
     }
 
+    /// An orbit of one mesh cycle at `speed` [rad/s] and `period` \[s\] with
+    /// nothing else known: no unknowns, no multipliers, no work (for the
+    /// tests of what reads orbits).
+    #[cfg(test)]
+    pub(crate) fn bare(speed: f64, period: f64) -> Self {
+        PeriodicOrbit {
+            speed,
+            period,
+            cycles: 1,
+            z: vec![],
+            residual: 0.0,
+            newton_iterations: 0,
+            multipliers: vec![],
+            flows: 0,
+            work: Work::default(),
+        }
+    }
+
     /// All multipliers inside the unit circle ([`all_inside_unit_circle`]):
     /// false for an orbit whose multipliers are not known.
     pub fn is_stable(&self) -> bool {
@@ -881,17 +899,6 @@ mod tests {
             "unsorted list, an outside one last"
         );
         assert!(!all_inside_unit_circle(&[mu(f64::NAN, 0.0)]));
-        let orbit = PeriodicOrbit {
-            speed: 1.0,
-            period: 1.0,
-            cycles: 1,
-            z: vec![],
-            residual: 0.0,
-            newton_iterations: 0,
-            multipliers: vec![],
-            flows: 0,
-            work: Work::default(),
-        };
-        assert!(!orbit.is_stable());
+        assert!(!PeriodicOrbit::bare(1.0, 1.0).is_stable());
     }
 }
