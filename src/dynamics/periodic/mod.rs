@@ -844,6 +844,13 @@ pub fn solve_dense(a: &[f64], m: usize, b: &[f64]) -> Vec<f64> {
 /// finite, or one the eigensolver does not converge on, is an error: an
 /// orbit never goes on without its multipliers.
 pub fn floquet_multipliers(monodromy: &[f64], m: usize) -> Result<Vec<Multiplier>, PeriodicError> {
+    if monodromy.len() != m * m {
+        return Err(PeriodicError::invalid(
+            "monodromy matrix length",
+            monodromy.len() as f64,
+            &format!("must be m × m = {} for m = {m}", m * m),
+        ));
+    }
     if let Some(bad) = monodromy.iter().find(|x| !x.is_finite()) {
         return Err(PeriodicError::invalid("monodromy matrix entry", *bad, "must be finite"));
     }
@@ -886,6 +893,8 @@ mod tests {
         assert!(e.contains("monodromy matrix entry") && e.contains("finite"), "{e}");
         a[2] = f64::INFINITY;
         assert!(floquet_multipliers(&a, 2).is_err());
+        let e = floquet_multipliers(&[1.0; 3], 2).unwrap_err().to_string();
+        assert!(e.contains("monodromy matrix length") && e.contains("m × m = 4"), "{e}");
     }
 
     #[test]
