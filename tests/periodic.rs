@@ -896,6 +896,18 @@ mod harmonic_balance {
         assert_multipliers_agree(&a, 5e-3);
     }
 
+    /// Worn flanks where every planet's teeth separate alike (κ = 6,
+    /// 13 500 rpm, where shooting agrees with long marching,
+    /// docs/PERIODIC.md §4): the orbit, and the multipliers with the
+    /// saltation of the damping's jumps at the separations.
+    #[test]
+    fn harmonic_balance_agrees_with_shooting_on_worn_flanks_where_the_teeth_separate() {
+        let a = balance_error(13500.0, 6, None);
+        assert!(a.separation > 0.005, "the teeth separate: {}", a.separation);
+        assert!(a.e <= 1e-3, "κ = 6: E_h {:.3e}", a.e);
+        assert_multipliers_agree(&a, 5e-3);
+    }
+
     /// The balance's orbit at `omega` by the rule's settings (cold start)
     /// with its multipliers, and shooting's orbit from the balance's state.
     fn multipliers_both_ways(
