@@ -970,6 +970,10 @@ impl HarmonicBalance {
         let mut next = 0;
         for j in 0..intervals {
             let end = (j + 1) as f64 * h;
+            // An interval without a switch is advanced whole, its midpoint and length
+            // written as (j + ½)h and h rather than from its ends (which round
+            // differently): where no mesh separates the multipliers stay the same to
+            // the last bit as without the switches.
             if switches.get(next).is_none_or(|s| s.time > end) {
                 walk.advance(&mut frame, (j as f64 + 0.5) * h, h);
                 continue;
