@@ -37,6 +37,7 @@
 //! multipliers; the orbit is stable when all lie inside the unit circle.
 
 mod harmonic;
+mod switches;
 mod variational;
 
 pub use harmonic::{
