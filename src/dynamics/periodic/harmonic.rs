@@ -32,7 +32,7 @@ use std::sync::Arc;
 use rustfft::{num_complex::Complex, Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
-use super::switches::{add_back, add_time_terms, locate, subtract, SeriesResidual};
+use super::switches::{add_back, add_time_terms, locate, series_state, subtract, SeriesResidual};
 use super::{floquet_multipliers, max_abs, Multiplier, PeriodicError, PeriodicProblem};
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{mesh_responses, static_state, State, SteadyState, Work};
@@ -95,8 +95,8 @@ pub const STALLED_ITERATIONS: usize = 4;
 /// harmonics through the samples (3000 rpm, H = 32: E_h 8.1e-4 with 8 samples
 /// per harmonic, 2.6e-4 with 16). With the contact switches projected exactly
 /// (module `switches`) 8 reach E_h ≤ 1e-3 at most speeds, but not all (5300
-/// rpm: 2.8e-3; 4.7e-4 with 10), and Newton on the plain sums fails more often
-/// where the teeth separate (docs/PERIODIC.md §2).
+/// rpm: 2.8e-3; 4.7e-4 with 10), and Newton converges at fewer speeds where
+/// the teeth separate (docs/PERIODIC.md §2).
 pub const SAMPLES_PER_HARMONIC: usize = 16;
 
 impl HarmonicSettings {
@@ -208,43 +208,6 @@ fn lu_solve(lu: &faer::linalg::solvers::PartialPivLu<f64>, r: &[f64]) -> Vec<f64
     (0..r.len()).map(|i| x[(i, 0)]).collect()
 }
 
-/// The orbit's unknowns' coordinates y, ẏ (units of the static deflection,
-/// per second) at time `t`, summed from its series, and the relative
-/// coordinates q = P y and v = P ẏ \[m, m/s\] (P n × m column-major).
-fn orbit_state_at(
-    orbit: &HarmonicOrbit,
-    m: usize,
-    p: &[f64],
-    q_scale: f64,
-    t: f64,
-    (y, yd): (&mut [f64], &mut [f64]),
-    (q, v): (&mut [f64], &mut [f64]),
-) {
-    let nu = 2.0 * std::f64::consts::PI / orbit.period;
-    for a in 0..m {
-        y[a] = orbit.coefficients[a];
-        yd[a] = 0.0;
-    }
-    // cos kνt and sin kνt by the angle-addition recurrence from kνt = νt.
-    let (s1, c1) = (nu * t).sin_cos();
-    let (mut sin, mut cos) = (s1, c1);
-    for k in 1..=orbit.harmonics {
-        let block = &orbit.coefficients[(2 * k - 1) * m..][..2 * m];
-        let kn = k as f64 * nu;
-        for a in 0..m {
-            let (ak, bk) = (block[a], block[m + a]);
-            y[a] += ak * cos + bk * sin;
-            yd[a] += kn * (bk * cos - ak * sin);
-        }
-        (sin, cos) = (sin * c1 + cos * s1, cos * c1 - sin * s1);
-    }
-    let n = q.len();
-    for i in 0..n {
-        q[i] = q_scale * (0..m).map(|a| p[i + n * a] * y[a]).sum::<f64>();
-        v[i] = q_scale * (0..m).map(|a| p[i + n * a] * yd[a]).sum::<f64>();
-    }
-}
-
 /// PᵀXP into `out` (m × m, column-major) for the n × n matrix `x` and P
 /// (n × m, column-major); `xp` (n × m) receives XP.
 fn project(p: &[f64], x: &nalgebra::DMatrix<f64>, m: usize, xp: &mut [f64], out: &mut [f64]) {
@@ -342,8 +305,17 @@ impl<'o> Propagation<'o> {
 
     /// The orbit's relative state at `t` into `q`, `v`.
     fn state_at(&mut self, t: f64) {
-        let (orbit, p, m, q_scale) = (self.orbit, self.p, self.m, self.q_scale);
-        orbit_state_at(orbit, m, p, q_scale, t, (&mut self.y, &mut self.yd), (&mut self.q, &mut self.v));
+        let (orbit, p, q_scale) = (self.orbit, self.p, self.q_scale);
+        let nu = 2.0 * std::f64::consts::PI / orbit.period;
+        series_state(
+            &orbit.coefficients,
+            nu,
+            p,
+            q_scale,
+            t,
+            (&mut self.y, &mut self.yd, None),
+            (&mut self.q, &mut self.v),
+        );
     }
 
     /// Φ ← exp(length · A(t_mid)) Φ, A = [0 wI; G/w D] with K and C taken at
@@ -781,7 +753,7 @@ impl HarmonicBalance {
         }
         let size = m * (2 * h + 1);
         let found = if switches {
-            let mut series = SeriesResidual::new(p, &row, x, h, nu, q_scale);
+            let mut series = SeriesResidual::new(p, &row, x, nu, q_scale);
             series.events(&mut frame, period, &mut sample_events);
             events.extend_from_slice(&sample_events);
             let found = locate(
@@ -1098,9 +1070,10 @@ impl HarmonicBalance {
         let mut frame = RigidFrame::new(&mut self.problem.model, rigid.clone());
         let (mut q, mut v, mut f) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let (mut y, mut yd) = (vec![0.0; m], vec![0.0; m]);
+        let nu = 2.0 * std::f64::consts::PI / orbit.period;
         for j in 0..samples {
             let t = orbit.period * j as f64 / samples as f64;
-            orbit_state_at(orbit, m, p, q_scale, t, (&mut y, &mut yd), (&mut q, &mut v));
+            series_state(&orbit.coefficients, nu, p, q_scale, t, (&mut y, &mut yd, None), (&mut q, &mut v));
             frame.force(t, &q, &v, &mut f);
             time.push(t);
             for (i, s) in frame.model().meshes.iter().enumerate() {
@@ -1158,21 +1131,48 @@ mod tests {
         for (i, v) in x.iter_mut().enumerate().skip(hb.m) {
             *v += 0.02 * ((i as f64) * 0.7).sin();
         }
-        let mut evaluations = 0;
         let mut jac = Vec::new();
-        hb.evaluate(omega, &x, Some(&mut jac), &mut evaluations, false).unwrap();
-        for direction in 0..3 {
-            let d: Vec<f64> = (0..size).map(|i| ((i * (direction + 2)) as f64 * 1.3).cos()).collect();
-            let eps = 1e-7;
-            let plus: Vec<f64> = x.iter().zip(&d).map(|(a, b)| a + eps * b).collect();
-            let minus: Vec<f64> = x.iter().zip(&d).map(|(a, b)| a - eps * b).collect();
-            let rp = hb.evaluate(omega, &plus, None, &mut evaluations, false).unwrap();
-            let rm = hb.evaluate(omega, &minus, None, &mut evaluations, false).unwrap();
-            let jd: Vec<f64> = (0..size).map(|i| (0..size).map(|j| jac[i + size * j] * d[j]).sum()).collect();
+        hb.evaluate(omega, &x, Some(&mut jac), &mut 0, false).unwrap();
+        for k in 0..3 {
+            let d = direction(size, k);
+            let jd = times(&jac, &d);
             let scale = max_abs(&jd);
-            let worst = (0..size).map(|i| ((rp[i] - rm[i]) / (2.0 * eps) - jd[i]).abs()).fold(0.0, f64::max);
-            assert!(worst <= 1e-6 * scale, "direction {direction}: difference {worst:.3e} of {scale:.3e}");
+            let worst = off(&difference(&mut hb, omega, &x, &d, 1e-7, false), &jd);
+            assert!(worst <= 1e-6 * scale, "direction {k}: difference {worst:.3e} of {scale:.3e}");
         }
+    }
+
+    /// The test direction `k` of `size` unknowns.
+    fn direction(size: usize, k: usize) -> Vec<f64> {
+        (0..size).map(|i| ((i * (k + 2)) as f64 * 1.3).cos()).collect()
+    }
+
+    /// The column-major square matrix `jac` times `d`.
+    fn times(jac: &[f64], d: &[f64]) -> Vec<f64> {
+        let size = d.len();
+        (0..size).map(|i| (0..size).map(|j| jac[i + size * j] * d[j]).sum()).collect()
+    }
+
+    /// The central difference of the residual (with or without the
+    /// `switches`) at `x` along `d`, step `eps`.
+    fn difference(
+        hb: &mut HarmonicBalance,
+        omega: f64,
+        x: &[f64],
+        d: &[f64],
+        eps: f64,
+        switches: bool,
+    ) -> Vec<f64> {
+        let plus: Vec<f64> = x.iter().zip(d).map(|(a, b)| a + eps * b).collect();
+        let minus: Vec<f64> = x.iter().zip(d).map(|(a, b)| a - eps * b).collect();
+        let rp = hb.evaluate(omega, &plus, None, &mut 0, switches).unwrap();
+        let rm = hb.evaluate(omega, &minus, None, &mut 0, switches).unwrap();
+        rp.iter().zip(&rm).map(|(p, m)| (p - m) / (2.0 * eps)).collect()
+    }
+
+    /// The largest difference between two vectors.
+    fn off(a: &[f64], b: &[f64]) -> f64 {
+        a.iter().zip(b).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
     }
 
     /// With the contact switches projected, the Jacobian (the plain sums'
@@ -1188,33 +1188,23 @@ mod tests {
         let (mut hb, omega) = balance(32, 512, 10200.0);
         let size = hb.unknowns();
         let x = hb.solve(omega, None).unwrap().coefficients;
-        let mut evaluations = 0;
         let (mut jac, mut plain) = (Vec::new(), Vec::new());
-        hb.evaluate(omega, &x, Some(&mut jac), &mut evaluations, true).unwrap();
-        hb.evaluate(omega, &x, Some(&mut plain), &mut evaluations, false).unwrap();
+        hb.evaluate(omega, &x, Some(&mut jac), &mut 0, true).unwrap();
+        hb.evaluate(omega, &x, Some(&mut plain), &mut 0, false).unwrap();
         let mut closer = 0;
-        for direction in 0..3 {
-            let d: Vec<f64> = (0..size).map(|i| ((i * (direction + 2)) as f64 * 1.3).cos()).collect();
-            let product = |j: &[f64]| -> Vec<f64> {
-                (0..size).map(|i| (0..size).map(|k| j[i + size * k] * d[k]).sum()).collect()
-            };
-            let (jd, pd) = (product(&jac), product(&plain));
+        for k in 0..3 {
+            let d = direction(size, k);
+            let (jd, pd) = (times(&jac, &d), times(&plain, &d));
             let scale = max_abs(&jd);
             // The smallest difference of three steps: a grazing jump lies between at most some.
             let (mut with, mut without) = (f64::INFINITY, f64::INFINITY);
             for eps in [1e-7, 1e-6, 1e-4] {
-                let plus: Vec<f64> = x.iter().zip(&d).map(|(a, b)| a + eps * b).collect();
-                let minus: Vec<f64> = x.iter().zip(&d).map(|(a, b)| a - eps * b).collect();
-                let rp = hb.evaluate(omega, &plus, None, &mut evaluations, true).unwrap();
-                let rm = hb.evaluate(omega, &minus, None, &mut evaluations, true).unwrap();
-                let off = |p: &[f64]| {
-                    (0..size).map(|i| ((rp[i] - rm[i]) / (2.0 * eps) - p[i]).abs()).fold(0.0, f64::max)
-                };
-                if off(&jd) < with {
-                    (with, without) = (off(&jd), off(&pd));
+                let dr = difference(&mut hb, omega, &x, &d, eps, true);
+                if off(&dr, &jd) < with {
+                    (with, without) = (off(&dr, &jd), off(&dr, &pd));
                 }
             }
-            assert!(with <= 1e-4 * scale, "direction {direction}: {with:.3e} of {scale:.3e}");
+            assert!(with <= 1e-4 * scale, "direction {k}: {with:.3e} of {scale:.3e}");
             if with < without {
                 closer += 1;
             }

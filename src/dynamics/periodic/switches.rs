@@ -39,18 +39,61 @@ pub(super) struct Switch {
     time_gradient: Vec<f64>,
 }
 
+/// The series `x` (blocks of m = `y.len()` values as in
+/// `HarmonicOrbit::coefficients`) at `t`, ν = 2π/T its period's angular
+/// frequency: the unknowns' coordinates y, ẏ (units of the static deflection,
+/// per second) and, when given, ÿ, with cos kνt and sin kνt by the
+/// angle-addition recurrence from νt; and the relative coordinates q = P y,
+/// v = P ẏ \[m, m/s\] (P n × m column-major).
+pub(super) fn series_state(
+    x: &[f64],
+    nu: f64,
+    p: &[f64],
+    q_scale: f64,
+    t: f64,
+    (y, yd, mut ydd): (&mut [f64], &mut [f64], Option<&mut [f64]>),
+    (q, v): (&mut [f64], &mut [f64]),
+) {
+    let m = y.len();
+    y.copy_from_slice(&x[..m]);
+    yd.iter_mut().for_each(|a| *a = 0.0);
+    if let Some(ydd) = ydd.as_deref_mut() {
+        ydd.iter_mut().for_each(|a| *a = 0.0);
+    }
+    let (s1, c1) = (nu * t).sin_cos();
+    let (mut sin, mut cos) = (s1, c1);
+    for k in 1..=(x.len() / m - 1) / 2 {
+        let block = &x[(2 * k - 1) * m..][..2 * m];
+        let kn = k as f64 * nu;
+        for a in 0..m {
+            let (ak, bk) = (block[a], block[m + a]);
+            let value = ak * cos + bk * sin;
+            y[a] += value;
+            yd[a] += kn * (bk * cos - ak * sin);
+            if let Some(ydd) = ydd.as_deref_mut() {
+                ydd[a] -= kn * kn * value;
+            }
+        }
+        (sin, cos) = (sin * c1 + cos * s1, cos * c1 - sin * s1);
+    }
+    let n = q.len();
+    for i in 0..n {
+        q[i] = q_scale * (0..m).map(|a| p[i + n * a] * y[a]).sum::<f64>();
+        v[i] = q_scale * (0..m).map(|a| p[i + n * a] * yd[a]).sum::<f64>();
+    }
+}
+
 /// The balance's residual rows at any time of the period, summed from the
 /// series (the coefficients `x`, blocks as in `HarmonicOrbit::coefficients`).
 pub(super) struct SeriesResidual<'a> {
     /// P, n × m column-major.
-    pub p: &'a [f64],
+    p: &'a [f64],
     /// Row scale of each of the m rows.
-    pub row: &'a [f64],
-    pub x: &'a [f64],
-    pub harmonics: usize,
+    row: &'a [f64],
+    x: &'a [f64],
     /// Angular frequency ν = 2π/T of the period \[rad/s\].
-    pub nu: f64,
-    pub q_scale: f64,
+    nu: f64,
+    q_scale: f64,
     y: Vec<f64>,
     yd: Vec<f64>,
     ydd: Vec<f64>,
@@ -61,13 +104,12 @@ pub(super) struct SeriesResidual<'a> {
 }
 
 impl<'a> SeriesResidual<'a> {
-    pub fn new(p: &'a [f64], row: &'a [f64], x: &'a [f64], harmonics: usize, nu: f64, q_scale: f64) -> Self {
+    pub fn new(p: &'a [f64], row: &'a [f64], x: &'a [f64], nu: f64, q_scale: f64) -> Self {
         let (m, n) = (row.len(), p.len() / row.len());
         Self {
             p,
             row,
             x,
-            harmonics,
             nu,
             q_scale,
             y: vec![0.0; m],
@@ -80,36 +122,17 @@ impl<'a> SeriesResidual<'a> {
         }
     }
 
-    /// y, ẏ, ÿ at `t` (cos kνt, sin kνt by the angle-addition recurrence), and q, v.
+    /// y, ẏ, ÿ and q, v at `t`.
     fn state(&mut self, t: f64) {
-        let m = self.row.len();
-        let n = self.q.len();
-        self.y.copy_from_slice(&self.x[..m]);
-        self.yd.iter_mut().for_each(|a| *a = 0.0);
-        self.ydd.iter_mut().for_each(|a| *a = 0.0);
-        let (s1, c1) = (self.nu * t).sin_cos();
-        let (mut sin, mut cos) = (s1, c1);
-        for k in 1..=self.harmonics {
-            let kn = k as f64 * self.nu;
-            let block = &self.x[(2 * k - 1) * m..][..2 * m];
-            for a in 0..m {
-                let (ak, bk) = (block[a], block[m + a]);
-                let value = ak * cos + bk * sin;
-                self.y[a] += value;
-                self.yd[a] += kn * (bk * cos - ak * sin);
-                self.ydd[a] -= kn * kn * value;
-            }
-            (sin, cos) = (sin * c1 + cos * s1, cos * c1 - sin * s1);
-        }
-        for i in 0..n {
-            let (mut qi, mut vi) = (0.0, 0.0);
-            for a in 0..m {
-                qi += self.p[i + n * a] * self.y[a];
-                vi += self.p[i + n * a] * self.yd[a];
-            }
-            self.q[i] = qi * self.q_scale;
-            self.v[i] = vi * self.q_scale;
-        }
+        series_state(
+            self.x,
+            self.nu,
+            self.p,
+            self.q_scale,
+            t,
+            (&mut self.y, &mut self.yd, Some(&mut self.ydd)),
+            (&mut self.q, &mut self.v),
+        );
     }
 
     /// The m scaled residual rows at `t` into `out`.
