@@ -42,7 +42,7 @@ mod variational;
 
 pub use harmonic::{
     highest_frequency, HarmonicBalance, HarmonicOrbit, HarmonicSettings, HARMONICS_PER_MODE_ORDER,
-    MAX_UNKNOWNS, MIN_HARMONICS, SAMPLES_PER_HARMONIC, STALLED_ITERATIONS,
+    MAX_UNKNOWNS, MIN_HARMONICS, SAMPLES_PER_HARMONIC, SCAN_INTERVALS_PER_STEP, STALLED_ITERATIONS,
 };
 
 use faer::linalg::solvers::Solve;
