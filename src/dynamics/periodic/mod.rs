@@ -41,8 +41,9 @@ mod switches;
 mod variational;
 
 pub use harmonic::{
-    highest_frequency, HarmonicBalance, HarmonicOrbit, HarmonicSettings, HARMONICS_PER_MODE_ORDER,
-    MAX_UNKNOWNS, MIN_HARMONICS, SAMPLES_PER_HARMONIC, SCAN_INTERVALS_PER_STEP, STALLED_ITERATIONS,
+    highest_frequency, HarmonicBalance, HarmonicOrbit, HarmonicSettings, HANDOVER_STEP,
+    HARMONICS_PER_MODE_ORDER, MAX_UNKNOWNS, MIN_HARMONICS, SAMPLES_PER_HARMONIC, SCAN_INTERVALS_PER_STEP,
+    STALLED_ITERATIONS,
 };
 
 use faer::linalg::solvers::Solve;
