@@ -32,7 +32,7 @@ use std::sync::Arc;
 use rustfft::{num_complex::Complex, Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
-use super::switches::{add_back, add_time_terms, locate, series_state, subtract, SeriesResidual};
+use super::switches::{add_back, add_time_terms, illinois, locate, series_state, subtract, SeriesResidual};
 use super::{floquet_multipliers, max_abs, Multiplier, PeriodicError, PeriodicProblem};
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{mesh_responses, static_state, State, SteadyState, Work};
@@ -505,7 +505,8 @@ impl<'o> Propagation<'o> {
     /// The instants in the period where the tangents jump, in time order: a
     /// tooth pair starts or stops touching where its event value changes sign
     /// between the ends of one of the `intervals` intervals of length `h`
-    /// (located by the Illinois method to 1e-12 of the interval); and, among
+    /// (located by the Illinois method to 1e-12 of the interval, in at most 100
+    /// evaluations); and, among
     /// them, those where a whole mesh starts or stops touching (a sign change
     /// of its largest event value, located by bisection to 1e-12 of the
     /// interval), where its damping force jumps. Two changes of one event
@@ -528,29 +529,8 @@ impl<'o> Propagation<'o> {
                 if (ga > 0.0) == (gb > 0.0) {
                     continue;
                 }
-                // Illinois: regula falsi that halves the stale end's value.
-                let (mut ta, mut tb, mut fa, mut fb) = (a, b, ga, gb);
-                let mut stale = 0;
-                while tb - ta > 1e-12 * h {
-                    let guess = (ta * fb - tb * fa) / (fb - fa);
-                    let tc = if guess > ta && guess < tb { guess } else { 0.5 * (ta + tb) };
-                    let fc = self.event_value(frame, tc, e);
-                    if fc == 0.0 {
-                        (ta, tb) = (tc, tc);
-                    } else if (fc > 0.0) == (fa > 0.0) {
-                        (ta, fa) = (tc, fc);
-                        if stale == -1 {
-                            fb *= 0.5;
-                        }
-                        stale = -1;
-                    } else {
-                        (tb, fb) = (tc, fc);
-                        if stale == 1 {
-                            fa *= 0.5;
-                        }
-                        stale = 1;
-                    }
-                }
+                let [(ta, _), (tb, _)] =
+                    illinois(|t| self.event_value(frame, t, e), [(a, ga), (b, gb)], 1e-12 * h, 100);
                 pairs.push(0.5 * (ta + tb));
             }
             for (i, (was, is)) in before.iter().zip(&after).enumerate() {
@@ -1051,10 +1031,10 @@ impl HarmonicBalance {
         lu.factorize(&jacobian, size);
         let mut newton = Newton { evaluations, iterations: 0, factorizations: 1, jacobian, lu };
         // Near the root of the plain N-sample sums first (to [`HANDOVER_STEP`]); then, from
-        // there, the root with the contact
-        // switches' jumps and kinks projected exactly (module `switches`), which moves it by
-        // 2e-4 to 1.2e-3 of the coefficients off the separating speeds of the torsional
-        // example, more where the teeth separate: each evaluation of that residual costs more.
+        // there, the root with the contact switches' jumps and kinks projected exactly (module
+        // `switches`), which lies 2e-4 to 1.2e-3 of the coefficients from the plain root off the
+        // separating speeds of the torsional example, more where the teeth separate: each
+        // evaluation of that residual costs more.
         // The second run starts on the plain sums' factorised Jacobian; a Jacobian it takes
         // afresh holds the jumps' time terms.
         let (x, _, _) = self.newton(omega, x, r, false, &mut newton)?;

@@ -182,6 +182,44 @@ impl<'a> SeriesResidual<'a> {
     }
 }
 
+/// The bracket of a sign change of `f` between the ends of `bracket` (each a
+/// time and f's value there, of opposite signs) narrowed by the Illinois
+/// method (regula falsi that halves the stale end's value) to at most `width`,
+/// or after `limit` evaluations: its ends with f's values there as evaluated.
+pub(super) fn illinois(
+    mut f: impl FnMut(f64) -> f64,
+    bracket: [(f64, f64); 2],
+    width: f64,
+    limit: usize,
+) -> [(f64, f64); 2] {
+    let [(mut ta, mut ha), (mut tb, mut hb)] = bracket;
+    // The values the method weighs (it halves the stale end's).
+    let (mut fa, mut fb) = (ha, hb);
+    let mut stale = 0;
+    for _ in 0..limit {
+        if tb - ta <= width {
+            break;
+        }
+        let guess = (ta * fb - tb * fa) / (fb - fa);
+        let tc = if guess > ta && guess < tb { guess } else { 0.5 * (ta + tb) };
+        let fc = f(tc);
+        if (fc > 0.0) == (fa > 0.0) {
+            (ta, fa, ha) = (tc, fc, fc);
+            if stale == -1 {
+                fb *= 0.5;
+            }
+            stale = -1;
+        } else {
+            (tb, fb, hb) = (tc, fc, fc);
+            if stale == 1 {
+                fa *= 0.5;
+            }
+            stale = 1;
+        }
+    }
+    [(ta, ha), (tb, hb)]
+}
+
 /// Step of the forward differences ∂h/∂y of a switch's event, in units of
 /// the static deflection (the coordinates are of order 1 in them).
 const DIFFERENCE: f64 = 1e-7;
@@ -218,33 +256,15 @@ pub(super) fn locate(
             if (ga > 0.0) == (gb > 0.0) {
                 continue;
             }
-            // Illinois: regula falsi that halves the stale end's value.
-            let (mut ta, mut tb, mut fa, mut fb) = (j as f64 * dt, (j + 1) as f64 * dt, ga, gb);
-            // The bracket's values as they are (the method halves the stored ones).
-            let (mut ha, mut hb) = (ga, gb);
-            let mut stale = 0;
-            for _ in 0..50 {
-                if tb - ta <= 1e-6 * dt {
-                    break;
-                }
-                let guess = (ta * fb - tb * fa) / (fb - fa);
-                let tc = if guess > ta && guess < tb { guess } else { 0.5 * (ta + tb) };
-                let fc = series.event(frame, tc, e);
-                *evaluations += 1;
-                if (fc > 0.0) == (fa > 0.0) {
-                    (ta, fa, ha) = (tc, fc, fc);
-                    if stale == -1 {
-                        fb *= 0.5;
-                    }
-                    stale = -1;
-                } else {
-                    (tb, fb, hb) = (tc, fc, fc);
-                    if stale == 1 {
-                        fa *= 0.5;
-                    }
-                    stale = 1;
-                }
-            }
+            let [(ta, ha), (tb, hb)] = illinois(
+                |t| {
+                    *evaluations += 1;
+                    series.event(frame, t, e)
+                },
+                [(j as f64 * dt, ga), ((j + 1) as f64 * dt, gb)],
+                1e-6 * dt,
+                50,
+            );
             let time = 0.5 * (ta + tb);
             if found.iter().any(|s| (s.time - time).abs() <= 2.5 * eps) {
                 continue;
