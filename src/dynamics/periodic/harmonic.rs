@@ -573,12 +573,8 @@ impl<'o> Propagation<'o> {
             frame.events(t, q, v, &mut walk.events);
             walk.events[switch.event]
         };
-        self.state_at(t + tau);
-        let (q, v) = (self.q.clone(), self.v.clone());
-        let ahead = value(self, frame, t + tau, &q, &v);
-        self.state_at(t - tau);
-        let (q, v) = (self.q.clone(), self.v.clone());
-        let behind = value(self, frame, t - tau, &q, &v);
+        let ahead = self.event_value(frame, t + tau, switch.event);
+        let behind = self.event_value(frame, t - tau, switch.event);
         let rate = (ahead - behind) / (2.0 * tau);
         if !(rate.is_finite() && rate != 0.0) {
             return;
