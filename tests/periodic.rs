@@ -904,6 +904,19 @@ mod harmonic_balance {
         assert_balance_agrees(10200.0, 0, 0.01, 2.5e-3);
     }
 
+    /// At 8350 rpm, between the fold at 8235 rpm and the steep flank, Newton
+    /// from the root of the plain sums on half the samples does not converge;
+    /// the solve then starts again on the full samples and finds the march's
+    /// orbit (E_h 1.1e-4 against long marching, largest |μ| 0.8220), which
+    /// agrees with shooting's. Without that second start the solve fails
+    /// (`PLAIN_SAMPLES_PER_HARMONIC`, docs/PERIODIC.md §2).
+    #[test]
+    fn harmonic_balance_starts_again_on_the_full_samples_where_the_half_start_fails() {
+        let a = balance_error(8350.0, 0, None);
+        assert!(a.e <= 1e-3, "8350 rpm: E_h {:.3e}", a.e);
+        assert_multipliers_agree(&a, 1e-3);
+    }
+
     #[test]
     fn harmonic_balance_agrees_with_shooting_on_worn_flanks() {
         assert_balance_agrees(3000.0, 6, 0.0, 1e-3);
@@ -947,10 +960,15 @@ mod harmonic_balance {
     /// At 10 000 rpm the period-1 orbit is unstable (the march there is
     /// quasi-periodic, docs/PERIODIC.md §4): the balance converges to it all
     /// the same, and its multipliers say so, as shooting's from the same start
-    /// do (measured largest |μ| 1.0388 and 1.0404; shooting's from the
-    /// balance's state before the plain run handed over early, 1.0358;
-    /// without the saltation of the damping's jumps where the meshes separate,
-    /// 1.0222 before the steps were cut at the pairs' switches).
+    /// do (measured largest |μ| 1.0388 and 1.0340). Shooting's own figure
+    /// there moves with its start: from the balance's state and seven starts
+    /// that differ from it by at most 1e-7 of each unknown, 1.0299 to 1.0502
+    /// (its Newton takes one or two steps and ends 2.15e-3 from the start; the
+    /// teeth separate and the period map is not smooth), so agreement within
+    /// 2e-2 is what the comparison can show (1.0358 and 1.0404 from the
+    /// balance's states of earlier sessions; without the saltation of the
+    /// damping's jumps where the meshes separate, the balance gave 1.0222
+    /// before the steps were cut at the pairs' switches).
     #[test]
     fn the_balance_multipliers_mark_an_unstable_orbit() {
         let omega = 10000.0 * RPM;
@@ -958,7 +976,7 @@ mod harmonic_balance {
         let (ours, theirs) = (mu[0].modulus(), shot.largest_multiplier());
         eprintln!("10 000 rpm: largest |μ| {ours:.4}, shooting {theirs:.4}");
         assert!(ours > 1.0 && theirs > 1.0, "unstable: {ours:.4}, {theirs:.4}");
-        assert!((ours - theirs).abs() <= 5e-3, "{ours:.4} against {theirs:.4}");
+        assert!((ours - theirs).abs() <= 2e-2, "{ours:.4} against {theirs:.4}");
         assert!(hb.floquet_multipliers(&balanced, 0).is_err());
     }
 
