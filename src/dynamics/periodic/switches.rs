@@ -229,7 +229,9 @@ const DIFFERENCE: f64 = 1e-7;
 /// samples `dt` \[s\] apart, located to 1e-6 of `dt` (a hundredth of the
 /// difference stencil), with their times' gradients when `gradients`; a
 /// switch within the difference stencil of one already found is the same
-/// instant (the residual's jump is measured whole).
+/// instant (the residual's jump is measured whole). Every sign change found,
+/// the same instant's included, goes to `crossings` as its time and event.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn locate(
     series: &mut SeriesResidual<'_>,
     frame: &mut RigidFrame<'_>,
@@ -238,6 +240,7 @@ pub(super) fn locate(
     dt: f64,
     gradients: bool,
     evaluations: &mut u64,
+    crossings: &mut Vec<(f64, usize)>,
 ) -> Result<Vec<Switch>, PeriodicError> {
     let m = series.row.len();
     if count == 0 || events.len() < 2 * count {
@@ -266,6 +269,7 @@ pub(super) fn locate(
                 50,
             );
             let time = 0.5 * (ta + tb);
+            crossings.push((time, e));
             if found.iter().any(|s| (s.time - time).abs() <= 2.5 * eps) {
                 continue;
             }
