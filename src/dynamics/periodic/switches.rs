@@ -227,10 +227,11 @@ const DIFFERENCE: f64 = 1e-7;
 /// The switches between the N + 1 samples of the period's event values
 /// `events` (sample-major, `count` values each, the last at t = T), the
 /// samples `dt` \[s\] apart, located to 1e-6 of `dt` (a hundredth of the
-/// difference stencil), with their times' gradients when `gradients`; a
-/// switch within the difference stencil of one already found is the same
-/// instant (the residual's jump is measured whole). Every sign change found,
-/// the same instant's included, goes to `crossings` as its time and event.
+/// difference stencil), with their times' gradients when `gradients`; sign
+/// changes within the difference stencil of each other (in a chain) are one
+/// switch at the first of them (the residual's jump is measured whole).
+/// Every sign change found, the same instant's included, goes to
+/// `crossings` as its time and event.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn locate(
     series: &mut SeriesResidual<'_>,
@@ -253,6 +254,8 @@ pub(super) fn locate(
     let mut found: Vec<Switch> = Vec::new();
     let (mut left, mut left2, mut right, mut right2) =
         (vec![0.0; m], vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+    // Every sign change, located: its time, event and the event's rate over the bracket.
+    let mut located: Vec<(f64, usize, f64)> = Vec::new();
     for j in 0..samples {
         for e in 0..count {
             let (ga, gb) = (events[j * count + e], events[(j + 1) * count + e]);
@@ -270,48 +273,63 @@ pub(super) fn locate(
             );
             let time = 0.5 * (ta + tb);
             crossings.push((time, e));
-            if found.iter().any(|s| (s.time - time).abs() <= 2.5 * eps) {
-                continue;
-            }
-            series.residual(frame, time - eps, &mut left);
-            series.residual(frame, time - 2.0 * eps, &mut left2);
-            series.residual(frame, time + eps, &mut right);
-            series.residual(frame, time + 2.0 * eps, &mut right2);
-            *evaluations += 4;
-            // Limits from each side by linear extrapolation, slopes by differences.
-            let jump: Vec<f64> =
-                (0..m).map(|a| (2.0 * right[a] - right2[a]) - (2.0 * left[a] - left2[a])).collect();
-            let kink: Vec<f64> =
-                (0..m).map(|a| ((right2[a] - right[a]) - (left[a] - left2[a])) / eps).collect();
-            if let Some(bad) = jump.iter().chain(&kink).find(|v| !v.is_finite()) {
-                return Err(PeriodicError::invalid(
-                    "harmonic-balance iterate",
-                    *bad,
-                    "gives a non-finite residual at a contact switch: the iterate diverged",
-                ));
-            }
-            // ∂t*/∂y = −(∂h/∂y)/ḣ (for the Jacobian only): ḣ over the last bracket, ∂h/∂y by
-            // forward differences.
-            let mut time_gradient = vec![0.0; m];
-            if !gradients {
-                found.push(Switch { time, jump, kink, time_gradient });
-                continue;
-            }
-            let rate = (hb - ha) / (tb - ta);
-            series.state(time);
-            let base = series.event_here(frame, time, e);
-            for (b, g) in time_gradient.iter_mut().enumerate() {
-                series.shift(b, DIFFERENCE);
-                let moved = series.event_here(frame, time, e);
-                series.shift(b, -DIFFERENCE);
-                *g = -(moved - base) / DIFFERENCE / rate;
-            }
-            *evaluations += m as u64 + 1;
-            if !rate.is_finite() || rate == 0.0 || time_gradient.iter().any(|g| !g.is_finite()) {
-                time_gradient.iter_mut().for_each(|g| *g = 0.0);
-            }
-            found.push(Switch { time, jump, kink, time_gradient });
+            located.push((time, e, (hb - ha) / (tb - ta)));
         }
+    }
+    // Sign changes within the difference stencil of each other, in a chain, are one
+    // switch at the first of them: the residual's jump and kink are measured whole, from
+    // outside the cluster, so that no difference straddles a switch of its own cluster (at
+    // separating speeds two meshes' switches lie 2e-4 of a sample interval apart, and a
+    // stencil that straddled one of them made the residual jump as the iterate moved).
+    located.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut first = 0;
+    while first < located.len() {
+        let mut end = first + 1;
+        while end < located.len() && located[end].0 - located[end - 1].0 <= 2.5 * eps {
+            end += 1;
+        }
+        let (time, e, rate) = located[first];
+        let last = located[end - 1].0;
+        first = end;
+        series.residual(frame, time - eps, &mut left);
+        series.residual(frame, time - 2.0 * eps, &mut left2);
+        series.residual(frame, last + eps, &mut right);
+        series.residual(frame, last + 2.0 * eps, &mut right2);
+        *evaluations += 4;
+        // Limits at `time` from each side by linear extrapolation (from the right over the
+        // cluster's width too), slopes by differences.
+        let reach = (last + eps - time) / eps;
+        let jump: Vec<f64> = (0..m)
+            .map(|a| (right[a] - reach * (right2[a] - right[a])) - (2.0 * left[a] - left2[a]))
+            .collect();
+        let kink: Vec<f64> = (0..m).map(|a| ((right2[a] - right[a]) - (left[a] - left2[a])) / eps).collect();
+        if let Some(bad) = jump.iter().chain(&kink).find(|v| !v.is_finite()) {
+            return Err(PeriodicError::invalid(
+                "harmonic-balance iterate",
+                *bad,
+                "gives a non-finite residual at a contact switch: the iterate diverged",
+            ));
+        }
+        // ∂t*/∂y = −(∂h/∂y)/ḣ (for the Jacobian only): ḣ over the last bracket, ∂h/∂y by
+        // forward differences.
+        let mut time_gradient = vec![0.0; m];
+        if !gradients {
+            found.push(Switch { time, jump, kink, time_gradient });
+            continue;
+        }
+        series.state(time);
+        let base = series.event_here(frame, time, e);
+        for (b, g) in time_gradient.iter_mut().enumerate() {
+            series.shift(b, DIFFERENCE);
+            let moved = series.event_here(frame, time, e);
+            series.shift(b, -DIFFERENCE);
+            *g = -(moved - base) / DIFFERENCE / rate;
+        }
+        *evaluations += m as u64 + 1;
+        if !rate.is_finite() || rate == 0.0 || time_gradient.iter().any(|g| !g.is_finite()) {
+            time_gradient.iter_mut().for_each(|g| *g = 0.0);
+        }
+        found.push(Switch { time, jump, kink, time_gradient });
     }
     Ok(found)
 }
