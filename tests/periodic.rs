@@ -918,9 +918,9 @@ mod harmonic_balance {
     }
 
     /// At 13 000 rpm the ring–planet meshes separate (their damping jumps),
-    /// and two meshes' contact switches lie
-    /// 2e-4 of a sample interval apart, as near as the one-sided differences
-    /// that measure a switch's jump reach: measured from the first of them
+    /// and two meshes' contact switches lie 2e-4 of a sample interval apart,
+    /// as near as the one-sided differences that measure a switch's jump
+    /// reach: measured from the first of them
     /// alone, the difference straddled the second as the iterate moved, the
     /// residual jumped by 0.14 and Newton stalled at a residual of 2.6e-4. The
     /// switches within each other's stencil are now measured as one, from

@@ -536,15 +536,11 @@ impl<'o> Propagation<'o> {
         self.events[e]
     }
 
-    /// The instants in the period where the tangents jump, in time order: a
-    /// tooth pair starts or stops touching where its event value changes sign
-    /// between the ends of one of the `intervals` intervals of length `h`
-    /// (located by the Illinois method to 1e-12 of the interval, in at most 100
-    /// evaluations); and, among
-    /// them, those where a whole mesh starts or stops touching (a sign change
-    /// of its largest event value, located by bisection to 1e-12 of the
-    /// interval), where its damping force jumps. Two changes of one event
-    /// within one interval cancel and are not seen.
+    /// The instants in the period where the tangents jump: a tooth pair
+    /// starts or stops touching where its event value changes sign between
+    /// the ends of one of the `intervals` intervals of length `h`, each located
+    /// by [`Self::switch_at`]. Two changes of one event within one interval
+    /// cancel and are not seen.
     fn switches(
         &mut self,
         frame: &mut RigidFrame<'_>,
@@ -552,54 +548,31 @@ impl<'o> Propagation<'o> {
         intervals: usize,
     ) -> (Vec<f64>, Vec<DampingSwitch>) {
         let (mut pairs, mut switches) = (Vec::new(), Vec::new());
-        let mut before = self.mesh_events(frame, 0.0);
+        self.state_at(0.0);
+        frame.events(0.0, &self.q, &self.v, &mut self.events);
         let mut values_before = self.events.clone();
         let mut values_after = Vec::new();
         for j in 0..intervals {
             let (a, b) = (j as f64 * h, (j + 1) as f64 * h);
-            let after = self.mesh_events(frame, b);
+            self.state_at(b);
+            frame.events(b, &self.q, &self.v, &mut self.events);
             values_after.clone_from(&self.events);
             for (e, (&ga, &gb)) in values_before.iter().zip(&values_after).enumerate() {
-                if (ga > 0.0) == (gb > 0.0) {
-                    continue;
+                if (ga > 0.0) != (gb > 0.0) {
+                    self.switch_at(frame, e, [(a, ga), (b, gb)], h, (&mut pairs, &mut switches));
                 }
-                let [(ta, _), (tb, _)] =
-                    illinois(|t| self.event_value(frame, t, e), [(a, ga), (b, gb)], 1e-12 * h, 100);
-                pairs.push(0.5 * (ta + tb));
             }
-            for (i, (was, is)) in before.iter().zip(&after).enumerate() {
-                if (was.0 > 0.0) == (is.0 > 0.0) {
-                    continue;
-                }
-                let on = is.0 > 0.0;
-                let (mut lo, mut hi) = (a, b);
-                while hi - lo > 1e-12 * h {
-                    let mid = 0.5 * (lo + hi);
-                    if (self.mesh_events(frame, mid)[i].0 > 0.0) == on {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                }
-                let event = self.mesh_events(frame, hi)[i].1;
-                switches.push(DampingSwitch { time: hi, mesh: i, on, event });
-            }
-            before = after;
             std::mem::swap(&mut values_before, &mut values_after);
         }
-        pairs.sort_by(f64::total_cmp);
-        switches.sort_by(|x, y| x.time.total_cmp(&y.time));
         (pairs, switches)
     }
 
     /// The instants of [`Self::switches`] found from `seeds`, the crossings the
     /// solve located (time, event) a Newton step of at most the tolerance
     /// away: each event's sign change is bracketed within 1e-4 of an interval
-    /// `h` of its seed (1e-2 if not there) and located by the Illinois method to
-    /// 1e-12 of `h`, and the mesh of each event that separates or touches there
-    /// (its largest event value changes sign across the bracket) takes a
-    /// damping switch at the same instant. `None` (search the whole period)
-    /// where a seed's sign change is in neither bracket.
+    /// `h` of its seed (1e-2 if not there) and located by [`Self::switch_at`].
+    /// `None` (search the whole period) where a seed's sign change is in
+    /// neither bracket.
     fn seeded_switches(
         &mut self,
         frame: &mut RigidFrame<'_>,
@@ -607,27 +580,42 @@ impl<'o> Propagation<'o> {
         seeds: &[(f64, usize)],
     ) -> Option<(Vec<f64>, Vec<DampingSwitch>)> {
         let period = self.orbit.period;
-        let (mut pairs, mut switches) = (Vec::with_capacity(seeds.len()), Vec::<DampingSwitch>::new());
+        let (mut pairs, mut switches) = (Vec::with_capacity(seeds.len()), Vec::new());
         for &(seed, e) in seeds {
             let bracket = [1e-4 * h, 1e-2 * h].into_iter().find_map(|w| {
                 let (a, b) = ((seed - w).max(0.0), (seed + w).min(period));
                 let (ga, gb) = (self.event_value(frame, a, e), self.event_value(frame, b, e));
                 ((ga > 0.0) != (gb > 0.0)).then_some([(a, ga), (b, gb)])
             })?;
-            let [(ta, _), (tb, _)] = illinois(|t| self.event_value(frame, t, e), bracket, 1e-12 * h, 100);
-            let time = 0.5 * (ta + tb);
-            pairs.push(time);
-            let Some(i) = frame.model().event_mesh(e) else { continue };
-            let (was, is) = (self.mesh_events(frame, ta)[i], self.mesh_events(frame, tb)[i]);
-            if (was.0 > 0.0) != (is.0 > 0.0)
-                && !switches.iter().any(|s| s.mesh == i && (s.time - time).abs() <= 1e-9 * h)
-            {
-                switches.push(DampingSwitch { time, mesh: i, on: is.0 > 0.0, event: is.1 });
-            }
+            self.switch_at(frame, e, bracket, h, (&mut pairs, &mut switches));
         }
-        pairs.sort_by(f64::total_cmp);
-        switches.sort_by(|x, y| x.time.total_cmp(&y.time));
         Some((pairs, switches))
+    }
+
+    /// The sign change of event `e` inside `bracket` (times and the event's
+    /// values, of opposite signs), located by the Illinois method to 1e-12 of
+    /// `h` in at most 100 evaluations, into `pairs`; where the event's mesh
+    /// separates or touches there (its largest event value changes sign across
+    /// the located bracket) a damping switch at the same instant into
+    /// `switches`, once per mesh and instant.
+    fn switch_at(
+        &mut self,
+        frame: &mut RigidFrame<'_>,
+        e: usize,
+        bracket: [(f64, f64); 2],
+        h: f64,
+        (pairs, switches): (&mut Vec<f64>, &mut Vec<DampingSwitch>),
+    ) {
+        let [(ta, _), (tb, _)] = illinois(|t| self.event_value(frame, t, e), bracket, 1e-12 * h, 100);
+        let time = 0.5 * (ta + tb);
+        pairs.push(time);
+        let Some(i) = frame.model().event_mesh(e) else { return };
+        let (was, is) = (self.mesh_events(frame, ta)[i], self.mesh_events(frame, tb)[i]);
+        if (was.0 > 0.0) != (is.0 > 0.0)
+            && !switches.iter().any(|s| s.mesh == i && (s.time - time).abs() <= 1e-9 * h)
+        {
+            switches.push(DampingSwitch { time, mesh: i, on: is.0 > 0.0, event: is.1 });
+        }
     }
 
     /// Φ ← S Φ for the saltation S of `switch`: in physical coordinates
@@ -1307,10 +1295,12 @@ impl HarmonicBalance {
         } else {
             walk.seeded_switches(&mut frame, h_scan, &orbit.crossings)
         };
-        let (pairs, switches) = match seeded {
+        let (mut pairs, mut switches) = match seeded {
             Some(found) => found,
             None => walk.switches(&mut frame, h_scan, intervals),
         };
+        pairs.sort_by(f64::total_cmp);
+        switches.sort_by(|x, y| x.time.total_cmp(&y.time));
         // Every step is cut where a pair's tangents jump; where a whole mesh touches or
         // separates the columns also take the damping's saltation.
         let mut cuts: Vec<(f64, Option<&DampingSwitch>)> = pairs.iter().map(|t| (*t, None)).collect();
