@@ -271,11 +271,10 @@ pub(super) fn locate(
                 1e-6 * dt,
                 50,
             );
-            let time = 0.5 * (ta + tb);
-            crossings.push((time, e));
-            located.push((time, e, (hb - ha) / (tb - ta)));
+            located.push((0.5 * (ta + tb), e, (hb - ha) / (tb - ta)));
         }
     }
+    crossings.extend(located.iter().map(|&(time, e, _)| (time, e)));
     // Sign changes within the difference stencil of each other, in a chain, are one
     // switch at the first of them: the residual's jump and kink are measured whole, from
     // outside the cluster, so that no difference straddles a switch of its own cluster (at
