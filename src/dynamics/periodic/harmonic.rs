@@ -1102,16 +1102,60 @@ impl HarmonicBalance {
             }
             None => self.cold_start(omega),
         };
-        // The plain run on half the samples where the settings allow it
-        // ([`PLAIN_SAMPLES_PER_HARMONIC`]); where that solve fails, the whole solve again on
-        // the full samples (the orbit's counts hold both).
         let mut newton = Newton::default();
+        let solved = self.attempt(omega, x, &mut newton);
+        if guess.is_some() || solved.is_ok() {
+            return solved;
+        }
+        // A cold start that fails: Newton from the static state can stall where the response
+        // lies far from it (4100 rpm on the torsional example: a fourth-harmonic resonance,
+        // the ring teeth separating; residual 3 after 10 iterations). Then from the state the
+        // march reaches after the shooting problem's run-in, as its own cold start does, its
+        // next period sampled and analysed into coefficients (the counts hold all attempts).
+        match self.marched_start(omega, &mut newton.evaluations) {
+            Ok(x) => self.attempt(omega, x, &mut newton),
+            Err(_) => solved,
+        }
+    }
+
+    /// [`Self::run`] from `x`: the plain run on half the samples where the settings allow
+    /// it ([`PLAIN_SAMPLES_PER_HARMONIC`]); where that solve fails, the whole solve again
+    /// on the full samples.
+    fn attempt(
+        &mut self,
+        omega: f64,
+        x: Vec<f64>,
+        newton: &mut Newton,
+    ) -> Result<HarmonicOrbit, PeriodicError> {
         if self.half.is_some() {
-            if let Ok(orbit) = self.run(omega, x.clone(), true, &mut newton) {
+            if let Ok(orbit) = self.run(omega, x.clone(), true, newton) {
                 return Ok(orbit);
             }
         }
-        self.run(omega, x, false, &mut newton)
+        self.run(omega, x, false, newton)
+    }
+
+    /// The coefficients of the period the march from the static state reaches after the
+    /// shooting problem's run-in periods ([`PeriodicProblem::cold_start`]): that period
+    /// sampled at the settings' N and analysed. `evaluations` counts the flows' force
+    /// evaluations.
+    fn marched_start(&mut self, omega: f64, evaluations: &mut u64) -> Result<Vec<f64>, PeriodicError> {
+        let mut work = Work::default();
+        let z = self.problem.cold_start(omega, &mut work)?;
+        let ns = self.settings.samples;
+        let (coordinates, _) = self.problem.sampled_flow(omega, &z, ns, &mut work)?;
+        *evaluations += work.rhs_evaluations;
+        self.samples = ns;
+        let (m, blocks) = (self.m, 2 * self.settings.harmonics + 1);
+        let mut buffer = vec![Complex::new(0.0, 0.0); ns];
+        let (mut column, mut out) = (vec![0.0; ns], vec![0.0; blocks]);
+        let mut x = vec![0.0; m * blocks];
+        for a in 0..m {
+            column.iter_mut().enumerate().for_each(|(j, y)| *y = coordinates[j * m + a]);
+            self.analyse(&column, &mut buffer, &mut out);
+            out.iter().enumerate().for_each(|(c, v)| x[c * m + a] = *v);
+        }
+        Ok(x)
     }
 
     /// [`Self::solve`] from the coefficients `x`, its plain run on N/2 samples when

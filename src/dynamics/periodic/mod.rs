@@ -312,9 +312,9 @@ pub struct Linearization {
     pub residual: Vec<f64>,
 }
 
-/// What [`PeriodicProblem::steady_state`] does at each sample: time, and the
-/// model evaluated there.
-type Observer<'a> = dyn FnMut(f64, &PlanetaryDynamics) + 'a;
+/// What a sampled flow does at each sample: time, the relative coordinates
+/// q_e, and the model evaluated there.
+type Observer<'a> = dyn FnMut(f64, &[f64], &PlanetaryDynamics) + 'a;
 
 /// Mesh cycles (1, 2, …, up to 12) after which the equations of motion in
 /// the relative frame repeat at speed `omega` [rad/s]: the least common
@@ -510,7 +510,7 @@ impl PeriodicProblem {
                     if let Some(i) = f.iter().position(|x| !x.is_finite()) {
                         return Err(err(SolverError::NonFiniteState { t, index: i }));
                     }
-                    observe(t, frame.model());
+                    observe(t, &q, frame.model());
                 }
                 rk.advance_to(&mut frame, period).map_err(err)?;
             }
@@ -681,6 +681,28 @@ impl PeriodicProblem {
         Ok(z)
     }
 
+    /// The unknowns' coordinates (the first half of z: the relative
+    /// coordinates over the static deflection scale) at `samples` equally
+    /// spaced times of one period's flow from `z`, sample-major, and the state
+    /// the flow ends in; `work` counts the flow.
+    fn sampled_flow(
+        &mut self,
+        omega: f64,
+        z: &[f64],
+        samples: usize,
+        work: &mut Work,
+    ) -> Result<(Vec<f64>, Vec<f64>), PeriodicError> {
+        // As [`Self::reduce`]'s coordinates, without borrowing the problem in the flow.
+        let keep: Vec<usize> = (0..self.model.dim()).filter(|i| Some(*i) != self.eliminated).collect();
+        let scale = self.q_scale;
+        let mut coordinates = Vec::with_capacity(samples * keep.len());
+        let mut observe = |_: f64, q: &[f64], _: &PlanetaryDynamics| {
+            coordinates.extend(keep.iter().map(|i| q[*i] / scale));
+        };
+        let end = self.flow(omega, z, work, Some((samples, &mut observe)))?;
+        Ok((coordinates, end))
+    }
+
     /// The periodic state at `omega` [rad/s] by Newton's method with a
     /// backtracking line search from `guess` (a cold start when `None`),
     /// with its Floquet multipliers.
@@ -792,7 +814,7 @@ impl PeriodicProblem {
         let mut time = Vec::with_capacity(samples);
         let mut force = vec![Vec::with_capacity(samples); n_mesh];
         let mut work = orbit.work;
-        let mut observe = |t: f64, m: &PlanetaryDynamics| {
+        let mut observe = |t: f64, _: &[f64], m: &PlanetaryDynamics| {
             time.push(t);
             for (i, s) in m.meshes.iter().enumerate() {
                 force[i].push(s.force);
