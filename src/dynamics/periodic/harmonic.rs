@@ -1082,8 +1082,9 @@ impl HarmonicBalance {
 
     /// The periodic state at `omega` [rad/s] by Newton's method with a
     /// backtracking line search from the coefficients `guess` (a cold start
-    /// when `None`; a guess with another number of harmonics gives its common
-    /// harmonics).
+    /// when `None`: the static state, and where Newton fails from there the
+    /// march's period after the shooting problem's run-in; a guess with
+    /// another number of harmonics gives its common harmonics).
     pub fn solve(&mut self, omega: f64, guess: Option<&[f64]>) -> Result<HarmonicOrbit, PeriodicError> {
         let x = match guess {
             // Another H's coefficients: the common harmonics, the rest zero.
