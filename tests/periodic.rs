@@ -448,6 +448,15 @@ fn the_run_command_solves_a_point_by_each_method() {
         }
         let said = if method == "shooting" { "shooting: " } else { "harmonic balance: H = " };
         assert!(text.contains(said) && text.contains("largest Floquet multiplier"), "{text}");
+        // The header counts the solver's Newton iterations, as its line does.
+        let count = |line: &str| -> u64 {
+            let words: Vec<&str> = line.split_whitespace().collect();
+            let at = words.iter().position(|w| *w == "Newton").expect("a count of Newton iterations");
+            words[at - 1].parse().unwrap()
+        };
+        let header = text.lines().next().unwrap();
+        let line = text.lines().find(|l| l.trim_start().starts_with(said)).unwrap();
+        assert!(count(header) > 0 && count(header) == count(line), "{method}: {header} / {line}");
     }
     // --json carries the solver's record: both methods' multipliers and stability, the
     // balance's H and N; the two largest |μ| agree (measured 0.6075 and 0.6054).
@@ -948,6 +957,13 @@ mod harmonic_balance {
     /// balance's state (the balance: 1.0499), hence the wider tolerance.
     #[test]
     fn harmonic_balance_starts_from_the_march_where_the_static_start_stalls() {
+        // The orbit counts the march's steps where it took them, and only there.
+        for (rpm, marched) in [(3000.0, false), (4100.0, true)] {
+            let shooting = problem(rpm, 0);
+            let settings = HarmonicSettings::for_speed(&shooting, rpm * RPM);
+            let orbit = HarmonicBalance::new(shooting, settings).unwrap().solve(rpm * RPM, None).unwrap();
+            assert_eq!(orbit.march_steps > 0, marched, "{rpm} rpm: {} steps marched", orbit.march_steps);
+        }
         let a = balance_error(4100.0, 0, None);
         assert!(a.e <= 1e-3, "4100 rpm: E_h {:.3e}", a.e);
         assert_multipliers_agree(&a, 1e-3);

@@ -151,7 +151,10 @@ fn periodic_point(
             "floquet_multipliers": orbit.multipliers.iter().map(|m| [m.re, m.im]).collect::<Vec<_>>(),
             "stable": orbit.is_stable(),
         });
-        return Ok((problem.steady_state(&orbit)?, line, record));
+        // The header's Newton iterations are the solver's (the flows' RK 5(4) takes none).
+        let mut ss = problem.steady_state(&orbit)?;
+        ss.stats.newton_iterations = orbit.newton_iterations as u64;
+        return Ok((ss, line, record));
     }
     let settings = HarmonicSettings::for_speed(&problem, omega);
     let mut hb = HarmonicBalance::new(problem, settings).with_context(|| {
@@ -184,7 +187,9 @@ fn periodic_point(
         "floquet_multipliers": multipliers.iter().map(|m| [m.re, m.im]).collect::<Vec<_>>(),
         "stable": stable,
     });
-    Ok((hb.steady_state(&orbit)?, line, record))
+    let mut ss = hb.steady_state(&orbit)?;
+    ss.stats.newton_iterations = orbit.iterations as u64;
+    Ok((ss, line, record))
 }
 
 pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
@@ -391,10 +396,11 @@ pub(crate) fn ltca_command(
 
 pub(crate) fn print_steady_state(ss: &SteadyState, width_mm: f64) -> Result<()> {
     outln!(
-        "steady state at {:.1} rpm (mesh frequency {:.1} Hz, {} mesh cycles; {} steps, {} Newton iterations)",
+        "steady state at {:.1} rpm (mesh frequency {:.1} Hz, {} mesh cycle{}; {} steps, {} Newton iterations)",
         rad_per_s_to_rpm(ss.input_speed),
         ss.mesh_frequency,
         ss.cycles,
+        if ss.cycles == 1 { "" } else { "s" },
         ss.stats.steps,
         ss.stats.newton_iterations
     )?;

@@ -190,8 +190,13 @@ pub struct HarmonicOrbit {
     pub last_step: f64,
     /// Jacobians assembled and factorised.
     pub factorizations: usize,
-    /// Force evaluations (one per sample and residual).
+    /// Force evaluations (one per sample and residual, and the march's where
+    /// a cold start started again from it).
     pub force_evaluations: u64,
+    /// Accepted integrator steps of the march a stalled cold start started again from
+    /// ([`HarmonicBalance::solve`]; 0 when none).
+    #[serde(default)]
+    pub march_steps: u64,
     /// Where tooth pairs start or stop touching as located at the last
     /// residual evaluation, at most the last Newton step (within the
     /// tolerance) from these coefficients: time in the period \[s\] and the
@@ -299,6 +304,7 @@ impl DenseLu {
 #[derive(Default)]
 struct Newton {
     evaluations: u64,
+    march_steps: u64,
     iterations: usize,
     factorizations: usize,
     jacobian: Vec<f64>,
@@ -1113,7 +1119,7 @@ impl HarmonicBalance {
         // the ring teeth separating; residual 3 after 10 iterations). Then from the state the
         // march reaches after the shooting problem's run-in, as its own cold start does, its
         // next period sampled and analysed into coefficients (the counts hold all attempts).
-        match self.marched_start(omega, &mut newton.evaluations) {
+        match self.marched_start(omega, &mut newton) {
             Ok(x) => self.attempt(omega, x, &mut newton),
             Err(_) => solved,
         }
@@ -1138,14 +1144,15 @@ impl HarmonicBalance {
 
     /// The coefficients of the period the march from the static state reaches after the
     /// shooting problem's run-in periods ([`PeriodicProblem::cold_start`]): that period
-    /// sampled at the settings' N and analysed. `evaluations` counts the flows' force
+    /// sampled at the settings' N and analysed. `newton` counts the flows' steps and force
     /// evaluations.
-    fn marched_start(&mut self, omega: f64, evaluations: &mut u64) -> Result<Vec<f64>, PeriodicError> {
+    fn marched_start(&mut self, omega: f64, newton: &mut Newton) -> Result<Vec<f64>, PeriodicError> {
         let mut work = Work::default();
         let z = self.problem.cold_start(omega, &mut work)?;
         let ns = self.settings.samples;
         let (coordinates, _) = self.problem.sampled_flow(omega, &z, ns, &mut work)?;
-        *evaluations += work.rhs_evaluations;
+        newton.evaluations += work.rhs_evaluations;
+        newton.march_steps += work.steps;
         self.samples = ns;
         let (m, blocks) = (self.m, 2 * self.settings.harmonics + 1);
         let mut buffer = vec![Complex::new(0.0, 0.0); ns];
@@ -1207,6 +1214,7 @@ impl HarmonicBalance {
             last_step,
             factorizations: newton.factorizations,
             force_evaluations: newton.evaluations,
+            march_steps: newton.march_steps,
             crossings: self.crossings.clone(),
         })
     }
@@ -1421,7 +1429,11 @@ impl HarmonicBalance {
             time,
             mesh_force: force,
             meshes,
-            stats: Work { rhs_evaluations: orbit.force_evaluations, ..Work::default() },
+            stats: Work {
+                steps: orbit.march_steps,
+                rhs_evaluations: orbit.force_evaluations,
+                ..Work::default()
+            },
             end: State { input_speed: omega, q, v },
         })
     }
