@@ -1150,7 +1150,7 @@ impl HarmonicBalance {
         let mut work = Work::default();
         let z = self.problem.cold_start(omega, &mut work)?;
         let ns = self.settings.samples;
-        let (coordinates, _) = self.problem.sampled_flow(omega, &z, ns, &mut work)?;
+        let coordinates = self.problem.sampled_flow(omega, &z, ns, &mut work)?;
         newton.evaluations += work.rhs_evaluations;
         newton.march_steps += work.steps;
         self.samples = ns;

@@ -683,15 +683,15 @@ impl PeriodicProblem {
 
     /// The unknowns' coordinates (the first half of z: the relative
     /// coordinates over the static deflection scale) at `samples` equally
-    /// spaced times of one period's flow from `z`, sample-major, and the state
-    /// the flow ends in; `work` counts the flow.
+    /// spaced times of one period's flow from `z`, sample-major; `work` counts
+    /// the flow.
     fn sampled_flow(
         &mut self,
         omega: f64,
         z: &[f64],
         samples: usize,
         work: &mut Work,
-    ) -> Result<(Vec<f64>, Vec<f64>), PeriodicError> {
+    ) -> Result<Vec<f64>, PeriodicError> {
         // As [`Self::reduce`]'s coordinates, without borrowing the problem in the flow.
         let keep: Vec<usize> = (0..self.model.dim()).filter(|i| Some(*i) != self.eliminated).collect();
         let scale = self.q_scale;
@@ -699,8 +699,8 @@ impl PeriodicProblem {
         let mut observe = |_: f64, q: &[f64], _: &PlanetaryDynamics| {
             coordinates.extend(keep.iter().map(|i| q[*i] / scale));
         };
-        let end = self.flow(omega, z, work, Some((samples, &mut observe)))?;
-        Ok((coordinates, end))
+        self.flow(omega, z, work, Some((samples, &mut observe)))?;
+        Ok(coordinates)
     }
 
     /// The periodic state at `omega` [rad/s] by Newton's method with a
