@@ -187,9 +187,7 @@ fn periodic_point(
         "floquet_multipliers": multipliers.iter().map(|m| [m.re, m.im]).collect::<Vec<_>>(),
         "stable": stable,
     });
-    let mut ss = hb.steady_state(&orbit)?;
-    ss.stats.newton_iterations = orbit.iterations as u64;
-    Ok((ss, line, record))
+    Ok((hb.steady_state(&orbit)?, line, record))
 }
 
 pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {

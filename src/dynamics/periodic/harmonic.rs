@@ -517,12 +517,17 @@ impl<'o> Propagation<'o> {
         phi.copy_from_slice(ax);
     }
 
+    /// The model's event values at `t` on the orbit into `events`.
+    fn events_at(&mut self, frame: &mut RigidFrame<'_>, t: f64) {
+        self.state_at(t);
+        frame.events(t, &self.q, &self.v, &mut self.events);
+    }
+
     /// The largest event value of each mesh at `t` on the orbit, with the
     /// event that gives it (a mesh touches where its largest value is
     /// positive).
     fn mesh_events(&mut self, frame: &mut RigidFrame<'_>, t: f64) -> Vec<(f64, usize)> {
-        self.state_at(t);
-        frame.events(t, &self.q, &self.v, &mut self.events);
+        self.events_at(frame, t);
         let model = frame.model();
         let mut largest = vec![(f64::NEG_INFINITY, usize::MAX); model.mesh_count()];
         for (e, &g) in self.events.iter().enumerate() {
@@ -537,8 +542,7 @@ impl<'o> Propagation<'o> {
 
     /// Event `e`'s value at `t` on the orbit.
     fn event_value(&mut self, frame: &mut RigidFrame<'_>, t: f64, e: usize) -> f64 {
-        self.state_at(t);
-        frame.events(t, &self.q, &self.v, &mut self.events);
+        self.events_at(frame, t);
         self.events[e]
     }
 
@@ -554,14 +558,12 @@ impl<'o> Propagation<'o> {
         intervals: usize,
     ) -> (Vec<f64>, Vec<DampingSwitch>) {
         let (mut pairs, mut switches) = (Vec::new(), Vec::new());
-        self.state_at(0.0);
-        frame.events(0.0, &self.q, &self.v, &mut self.events);
+        self.events_at(frame, 0.0);
         let mut values_before = self.events.clone();
         let mut values_after = Vec::new();
         for j in 0..intervals {
             let (a, b) = (j as f64 * h, (j + 1) as f64 * h);
-            self.state_at(b);
-            frame.events(b, &self.q, &self.v, &mut self.events);
+            self.events_at(frame, b);
             values_after.clone_from(&self.events);
             for (e, (&ga, &gb)) in values_before.iter().zip(&values_after).enumerate() {
                 if (ga > 0.0) != (gb > 0.0) {
@@ -889,6 +891,26 @@ impl HarmonicBalance {
         }
     }
 
+    /// Fourier coefficients of the unknowns' m coordinates (blocks as in
+    /// [`HarmonicOrbit::coefficients`]) from N samples of each, sample-major.
+    fn analyse_samples(&self, values: &[f64]) -> Vec<f64> {
+        let (m, ns) = (self.m, self.samples);
+        let mut out = vec![0.0; m * (2 * self.settings.harmonics + 1)];
+        let mut buffer = vec![Complex::new(0.0, 0.0); ns];
+        let mut coefficients = vec![0.0; 2 * self.settings.harmonics + 1];
+        let mut column = vec![0.0; ns];
+        for a in 0..m {
+            for j in 0..ns {
+                column[j] = values[j * m + a];
+            }
+            self.analyse(&column, &mut buffer, &mut coefficients);
+            for (c, value) in coefficients.iter().enumerate() {
+                out[c * m + a] = *value;
+            }
+        }
+        out
+    }
+
     /// The scaled residual coefficients at `x`, and, when `jacobian` is
     /// given, its Jacobian of the plain N-sample sums (column-major, unknowns
     /// × unknowns). With `switches` the contact switches are located and
@@ -997,19 +1019,7 @@ impl HarmonicBalance {
         } else {
             Vec::new()
         };
-        let mut residual = vec![0.0; size];
-        let mut buffer = vec![Complex::new(0.0, 0.0); ns];
-        let mut coefficients = vec![0.0; 2 * h + 1];
-        let mut column = vec![0.0; ns];
-        for a in 0..m {
-            for j in 0..ns {
-                column[j] = r[j * m + a];
-            }
-            self.analyse(&column, &mut buffer, &mut coefficients);
-            for (c, value) in coefficients.iter().enumerate() {
-                residual[c * m + a] = *value;
-            }
-        }
+        let mut residual = self.analyse_samples(&r);
         add_back(&found, nu, h, &mut residual);
         if let Some(jac) = jacobian {
             jac.clear();
@@ -1154,16 +1164,7 @@ impl HarmonicBalance {
         newton.evaluations += work.rhs_evaluations;
         newton.march_steps += work.steps;
         self.samples = ns;
-        let (m, blocks) = (self.m, 2 * self.settings.harmonics + 1);
-        let mut buffer = vec![Complex::new(0.0, 0.0); ns];
-        let (mut column, mut out) = (vec![0.0; ns], vec![0.0; blocks]);
-        let mut x = vec![0.0; m * blocks];
-        for a in 0..m {
-            column.iter_mut().enumerate().for_each(|(j, y)| *y = coordinates[j * m + a]);
-            self.analyse(&column, &mut buffer, &mut out);
-            out.iter().enumerate().for_each(|(c, v)| x[c * m + a] = *v);
-        }
-        Ok(x)
+        Ok(self.analyse_samples(&coordinates))
     }
 
     /// [`Self::solve`] from the coefficients `x`, its plain run on N/2 samples when
@@ -1431,6 +1432,7 @@ impl HarmonicBalance {
             meshes,
             stats: Work {
                 steps: orbit.march_steps,
+                newton_iterations: orbit.iterations as u64,
                 rhs_evaluations: orbit.force_evaluations,
                 ..Work::default()
             },

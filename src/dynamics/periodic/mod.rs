@@ -692,15 +692,18 @@ impl PeriodicProblem {
         samples: usize,
         work: &mut Work,
     ) -> Result<Vec<f64>, PeriodicError> {
-        // As [`Self::reduce`]'s coordinates, without borrowing the problem in the flow.
-        let keep: Vec<usize> = (0..self.model.dim()).filter(|i| Some(*i) != self.eliminated).collect();
-        let scale = self.q_scale;
-        let mut coordinates = Vec::with_capacity(samples * keep.len());
-        let mut observe = |_: f64, q: &[f64], _: &PlanetaryDynamics| {
-            coordinates.extend(keep.iter().map(|i| q[*i] / scale));
-        };
+        let n = self.model.dim();
+        let mut relative = Vec::with_capacity(samples * n);
+        let mut observe = |_: f64, q: &[f64], _: &PlanetaryDynamics| relative.extend_from_slice(q);
         self.flow(omega, z, work, Some((samples, &mut observe)))?;
-        Ok(coordinates)
+        let zeros = vec![0.0; n];
+        Ok(relative
+            .chunks(n)
+            .flat_map(|q| {
+                let z = self.reduce(q, &zeros);
+                z[..z.len() / 2].to_vec()
+            })
+            .collect())
     }
 
     /// The periodic state at `omega` [rad/s] by Newton's method with a
