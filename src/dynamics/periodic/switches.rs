@@ -35,8 +35,13 @@ pub(super) struct Switch {
     kink: Vec<f64>,
     /// ∂t*/∂y_b of the switch's time, per coordinate b of the unknowns'
     /// space \[s per unit of the static deflection\]: −(∂h/∂y_b)/ḣ for the
-    /// crossing event's value h.
+    /// crossing event's value h (zeros until [`time_gradients`] fills it).
     time_gradient: Vec<f64>,
+    /// The crossing event and its rate ḣ over the located bracket.
+    event: usize,
+    rate: f64,
+    /// Whether `time_gradient` has been computed.
+    gradient: bool,
 }
 
 /// The series `x` (blocks of m = `y.len()` values as in
@@ -309,28 +314,39 @@ pub(super) fn locate(
                 "gives a non-finite residual at a contact switch: the iterate diverged",
             ));
         }
-        // ∂t*/∂y = −(∂h/∂y)/ḣ (for the Jacobian only): ḣ over the last bracket, ∂h/∂y by
-        // forward differences.
-        let mut time_gradient = vec![0.0; m];
-        if !gradients {
-            found.push(Switch { time, jump, kink, time_gradient });
-            continue;
-        }
+        found.push(Switch { time, jump, kink, time_gradient: vec![0.0; m], event: e, rate, gradient: false });
+    }
+    if gradients {
+        time_gradients(series, frame, &mut found, evaluations);
+    }
+    Ok(found)
+}
+
+/// Fills ∂t*/∂y = −(∂h/∂y)/ḣ of each switch not yet given it (for the Jacobian
+/// only): ḣ over the switch's last bracket, ∂h/∂y by forward differences of
+/// the crossing event on `series`, the series the switches were located on.
+pub(super) fn time_gradients(
+    series: &mut SeriesResidual<'_>,
+    frame: &mut RigidFrame<'_>,
+    switches: &mut [Switch],
+    evaluations: &mut u64,
+) {
+    for s in switches.iter_mut().filter(|s| !s.gradient) {
+        let (time, e, rate) = (s.time, s.event, s.rate);
         series.state(time);
         let base = series.event_here(frame, time, e);
-        for (b, g) in time_gradient.iter_mut().enumerate() {
+        for (b, g) in s.time_gradient.iter_mut().enumerate() {
             series.shift(b, DIFFERENCE);
             let moved = series.event_here(frame, time, e);
             series.shift(b, -DIFFERENCE);
             *g = -(moved - base) / DIFFERENCE / rate;
         }
-        *evaluations += m as u64 + 1;
-        if !rate.is_finite() || rate == 0.0 || time_gradient.iter().any(|g| !g.is_finite()) {
-            time_gradient.iter_mut().for_each(|g| *g = 0.0);
+        *evaluations += s.time_gradient.len() as u64 + 1;
+        if !rate.is_finite() || rate == 0.0 || s.time_gradient.iter().any(|g| !g.is_finite()) {
+            s.time_gradient.iter_mut().for_each(|g| *g = 0.0);
         }
-        found.push(Switch { time, jump, kink, time_gradient });
+        s.gradient = true;
     }
-    Ok(found)
 }
 
 /// Subtracts J·S(t − t*) + D·K(t − t*) of every switch from the N × m
@@ -390,6 +406,15 @@ pub(super) fn add_time_terms(switches: &[Switch], period: f64, harmonics: usize,
             basis[2 * k - 1] = cos;
             basis[2 * k] = sin;
         }
+        // The rows' factor: the test function's weight times the jump, one value per row.
+        let rows: Vec<f64> = basis
+            .iter()
+            .enumerate()
+            .flat_map(|(r, psi)| {
+                let weight = if r == 0 { -1.0 / period } else { -2.0 / period } * psi;
+                s.jump.iter().map(move |j| weight * j)
+            })
+            .collect();
         for (c, phi) in basis.iter().enumerate() {
             for b in 0..m {
                 let column = phi * s.time_gradient[b];
@@ -397,11 +422,8 @@ pub(super) fn add_time_terms(switches: &[Switch], period: f64, harmonics: usize,
                     continue;
                 }
                 let col = &mut jac[(c * m + b) * size..][..size];
-                for (r, psi) in basis.iter().enumerate() {
-                    let weight = if r == 0 { -1.0 / period } else { -2.0 / period } * psi * column;
-                    for a in 0..m {
-                        col[r * m + a] += weight * s.jump[a];
-                    }
+                for (x, row) in col.iter_mut().zip(&rows) {
+                    *x += column * row;
                 }
             }
         }
@@ -443,12 +465,18 @@ mod tests {
                 jump: vec![0.7, -0.2],
                 kink: vec![400.0, 90.0],
                 time_gradient: vec![0.0; 2],
+                event: 0,
+                rate: 1.0,
+                gradient: true,
             },
             Switch {
                 time: 186_122.0 / 262_144.0 * period,
                 jump: vec![0.0, 0.0],
                 kink: vec![-250.0, 610.0],
                 time_gradient: vec![0.0; 2],
+                event: 0,
+                rate: 1.0,
+                gradient: true,
             },
         ];
         let smooth =
