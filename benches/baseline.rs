@@ -28,6 +28,14 @@
 //! and E_h of the point (docs/ACCURACY.md) against long time marching (RK 5(4)
 //! at 1e-10, 300 mesh cycles of run-in). Medians of 3 runs (of 11 for the
 //! harmonic balance, whose points take milliseconds).
+//!
+//! The balance's point with its multipliers is also timed *paired*: in each of
+//! [`PAIRED_ROUNDS`] rounds the baseline runs once and our point (the median of
+//! 11) right after it, and the round's ratio is the one of those two; the
+//! median of the rounds' ratios is printed with their range. This machine's
+//! speed drifts by up to 1.7x over tens of seconds, and a ratio of two
+//! timings taken a minute apart carries that drift; two taken within a second
+//! of each other do not.
 //! Run: `PLANETWEAR_BASELINE=path/to/script.py cargo bench --bench baseline`.
 //! docs/PERFORMANCE.md records the figures.
 
@@ -52,29 +60,34 @@ const ROUNDS: usize = 3;
 /// point at 8000 rpm measured 8.4 ms in one run and 12.8 ms in the next).
 const BALANCE_ROUNDS: usize = 11;
 
+/// Rounds of the paired timing (the baseline once, then our point).
+const PAIRED_ROUNDS: usize = 5;
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
 
+/// One run of the baseline: the process's wall time and the time the script
+/// reports for its integration.
+fn baseline_once(python: &str, script: &str, rpm: f64) -> Option<(f64, f64)> {
+    let start = Instant::now();
+    let out = Command::new(python).arg(script).arg(format!("{rpm}")).output().ok()?;
+    let wall = start.elapsed().as_secs_f64();
+    if !out.status.success() {
+        eprintln!("baseline failed: {}", String::from_utf8_lossy(&out.stderr));
+        return None;
+    }
+    // "… 1.50 s wall for 3 input revolutions …"
+    let text = String::from_utf8_lossy(&out.stdout);
+    let seconds = text.split(" s wall").next()?.rsplit(' ').next()?.parse::<f64>().ok()?;
+    Some((wall, seconds))
+}
+
 /// Median process wall time and the time the script reports for its integration.
 fn baseline(python: &str, script: &str, rpm: f64) -> Option<(f64, f64)> {
-    let mut wall = Vec::new();
-    let mut inner = Vec::new();
-    for _ in 0..ROUNDS {
-        let start = Instant::now();
-        let out = Command::new(python).arg(script).arg(format!("{rpm}")).output().ok()?;
-        wall.push(start.elapsed().as_secs_f64());
-        if !out.status.success() {
-            eprintln!("baseline failed: {}", String::from_utf8_lossy(&out.stderr));
-            return None;
-        }
-        // "… 1.50 s wall for 3 input revolutions …"
-        let text = String::from_utf8_lossy(&out.stdout);
-        let seconds = text.split(" s wall").next()?.rsplit(' ').next()?.parse::<f64>().ok()?;
-        inner.push(seconds);
-    }
-    Some((median(wall), median(inner)))
+    let runs = (0..ROUNDS).map(|_| baseline_once(python, script, rpm)).collect::<Option<Vec<_>>>()?;
+    Some((median(runs.iter().map(|r| r.0).collect()), median(runs.iter().map(|r| r.1).collect())))
 }
 
 fn main() {
@@ -183,7 +196,8 @@ fn main() {
                 bi / frame_in_sweep
             ));
         }
-        balance_rows.push(balance_row(&model, omega, &grid, &r.measured.harmonics, bi));
+        let once = || baseline_once(&python, script.as_deref()?, rpm).map(|(_, integration)| integration);
+        balance_rows.push(balance_row(&model, omega, &grid, &r.measured.harmonics, bi, &once));
         println!(
             "| {rpm:.0} | {bw:.3} | {bi:.3} | {process:.3} | {cold:.4} | {in_sweep:.4} | {:.1} | {:.1} | {:.1} | {e_h:.1e} |",
             bw / process,
@@ -202,8 +216,8 @@ fn main() {
     }
     println!();
     println!("the same points by harmonic balance (dynamics::periodic::HarmonicBalance, H and N by HarmonicSettings::for_speed):");
-    println!("| rpm | H | N | baseline integration [s] | ours point, cold [s] | with its multipliers [s] | refined by shooting, with its multipliers [s] | ours per point in a sweep [s] | in a sweep with multipliers [s] | cold-point ratio | ratio with its multipliers | ratio refined by shooting | in-sweep ratio | in-sweep ratio with multipliers | E_h ours | E_h refined | largest |μ| ours | largest |μ| shooting | sweep points restarted cold, of them by the route |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| rpm | H | N | baseline integration [s] | ours point, cold [s] | with its multipliers [s] | refined by shooting, with its multipliers [s] | ours per point in a sweep [s] | in a sweep with multipliers [s] | cold-point ratio | ratio with its multipliers | paired ratio with its multipliers, median of 5 (range) | ratio refined by shooting | in-sweep ratio | in-sweep ratio with multipliers | E_h ours | E_h refined | largest |μ| ours | largest |μ| shooting | sweep points restarted cold, of them by the route |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for row in &balance_rows {
         println!("{row}");
     }
@@ -213,13 +227,16 @@ fn main() {
 /// The harmonic-balance row of one speed: the cold point, the point with its
 /// multipliers, the per-point time of the sweep `grid` (each point from the
 /// one before, H and N by the rule at each speed), E_h of both points against
-/// `reference`, and the ratios to the baseline's integration time `base`.
+/// `reference`, the ratios to the baseline's integration time `base`, and the
+/// paired ratio of the point with its multipliers (`baseline_once` runs the
+/// baseline once and gives its integration time; none without a baseline).
 fn balance_row(
     model: &PlanetaryDynamics,
     omega: f64,
     grid: &[f64],
     reference: &[planetwear::dynamics::spectrum::Harmonics],
     base: f64,
+    baseline_once: &dyn Fn() -> Option<f64>,
 ) -> String {
     // The reference's 60 samples per mesh cycle: the measured harmonics alias the force's
     // kinks by the sample count.
@@ -257,6 +274,28 @@ fn balance_row(
             })
             .collect(),
     );
+    // Paired: the baseline once, then our point with its multipliers (median of 11).
+    let mut paired: Vec<f64> = Vec::new();
+    for _ in 0..PAIRED_ROUNDS {
+        let Some(theirs) = baseline_once() else { break };
+        let ours = median(
+            (0..BALANCE_ROUNDS)
+                .map(|_| {
+                    let start = Instant::now();
+                    let balanced = hb.solve(omega, None).expect("balance point");
+                    hb.floquet_multipliers(&balanced, settings.samples).expect("multipliers");
+                    start.elapsed().as_secs_f64()
+                })
+                .collect(),
+        );
+        paired.push(theirs / ours);
+    }
+    let paired = if paired.is_empty() {
+        "no baseline".to_string()
+    } else {
+        let (low, high) = paired.iter().fold((f64::INFINITY, 0.0_f64), |(l, h), r| (l.min(*r), h.max(*r)));
+        format!("{:.1} ({low:.1} to {high:.1})", median(paired))
+    };
     let mut shot = None;
     let mut shooting = problem.clone();
     let with_multipliers = median(
@@ -317,7 +356,7 @@ fn balance_row(
     let (in_sweep_own, in_sweep) = (in_sweep(true), in_sweep(false));
     let rpm = omega * 30.0 / std::f64::consts::PI;
     format!(
-        "| {rpm:.0} | {} | {} | {base:.3} | {cold:.4} | {own:.4} | {with_multipliers:.4} | {in_sweep:.4} | {in_sweep_own:.4} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {e_balance:.1e} | {e_shot:.1e} | {own_mu:.4} | {:.4} | {restarted}, {failed} of {} |",
+        "| {rpm:.0} | {} | {} | {base:.3} | {cold:.4} | {own:.4} | {with_multipliers:.4} | {in_sweep:.4} | {in_sweep_own:.4} | {:.1} | {:.1} | {paired} | {:.1} | {:.1} | {:.1} | {e_balance:.1e} | {e_shot:.1e} | {own_mu:.4} | {:.4} | {restarted}, {failed} of {} |",
         settings.harmonics,
         settings.samples,
         base / cold,
