@@ -263,32 +263,26 @@ fn balance_row(
     };
     let e_balance = harmonic_error(&pick(&hb.steady_state(&orbit).expect("measure")), reference);
     let mut own_mu = 0.0;
-    let own = median(
-        (0..BALANCE_ROUNDS)
-            .map(|_| {
-                let start = Instant::now();
-                let balanced = hb.solve(omega, None).expect("balance point");
-                let mu = hb.floquet_multipliers(&balanced, settings.samples).expect("multipliers");
-                own_mu = mu[0].modulus();
-                start.elapsed().as_secs_f64()
-            })
-            .collect(),
-    );
-    // Paired: the baseline once, then our point with its multipliers (median of 11).
-    let mut paired: Vec<f64> = Vec::new();
-    for _ in 0..PAIRED_ROUNDS {
-        let Some(theirs) = baseline_once() else { break };
-        let ours = median(
+    // The point with its own multipliers, the median of BALANCE_ROUNDS.
+    let mut with_own_multipliers = |hb: &mut HarmonicBalance| {
+        median(
             (0..BALANCE_ROUNDS)
                 .map(|_| {
                     let start = Instant::now();
                     let balanced = hb.solve(omega, None).expect("balance point");
-                    hb.floquet_multipliers(&balanced, settings.samples).expect("multipliers");
+                    let mu = hb.floquet_multipliers(&balanced, settings.samples).expect("multipliers");
+                    own_mu = mu[0].modulus();
                     start.elapsed().as_secs_f64()
                 })
                 .collect(),
-        );
-        paired.push(theirs / ours);
+        )
+    };
+    let own = with_own_multipliers(&mut hb);
+    // Paired: the baseline once, then our point with its multipliers.
+    let mut paired: Vec<f64> = Vec::new();
+    for _ in 0..PAIRED_ROUNDS {
+        let Some(theirs) = baseline_once() else { break };
+        paired.push(theirs / with_own_multipliers(&mut hb));
     }
     let paired = if paired.is_empty() {
         "no baseline".to_string()

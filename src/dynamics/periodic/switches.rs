@@ -35,13 +35,11 @@ pub(super) struct Switch {
     kink: Vec<f64>,
     /// ∂t*/∂y_b of the switch's time, per coordinate b of the unknowns'
     /// space \[s per unit of the static deflection\]: −(∂h/∂y_b)/ḣ for the
-    /// crossing event's value h (zeros until [`time_gradients`] fills it).
-    time_gradient: Vec<f64>,
+    /// crossing event's value h; `None` until [`time_gradients`] computes it.
+    time_gradient: Option<Vec<f64>>,
     /// The crossing event and its rate ḣ over the located bracket.
     event: usize,
     rate: f64,
-    /// Whether `time_gradient` has been computed.
-    gradient: bool,
 }
 
 /// The series `x` (blocks of m = `y.len()` values as in
@@ -314,7 +312,7 @@ pub(super) fn locate(
                 "gives a non-finite residual at a contact switch: the iterate diverged",
             ));
         }
-        found.push(Switch { time, jump, kink, time_gradient: vec![0.0; m], event: e, rate, gradient: false });
+        found.push(Switch { time, jump, kink, time_gradient: None, event: e, rate });
     }
     if gradients {
         time_gradients(series, frame, &mut found, evaluations);
@@ -331,21 +329,23 @@ pub(super) fn time_gradients(
     switches: &mut [Switch],
     evaluations: &mut u64,
 ) {
-    for s in switches.iter_mut().filter(|s| !s.gradient) {
+    let m = series.row.len();
+    for s in switches.iter_mut().filter(|s| s.time_gradient.is_none()) {
         let (time, e, rate) = (s.time, s.event, s.rate);
         series.state(time);
         let base = series.event_here(frame, time, e);
-        for (b, g) in s.time_gradient.iter_mut().enumerate() {
+        let mut gradient = vec![0.0; m];
+        for (b, g) in gradient.iter_mut().enumerate() {
             series.shift(b, DIFFERENCE);
             let moved = series.event_here(frame, time, e);
             series.shift(b, -DIFFERENCE);
             *g = -(moved - base) / DIFFERENCE / rate;
         }
-        *evaluations += s.time_gradient.len() as u64 + 1;
-        if !rate.is_finite() || rate == 0.0 || s.time_gradient.iter().any(|g| !g.is_finite()) {
-            s.time_gradient.iter_mut().for_each(|g| *g = 0.0);
+        *evaluations += m as u64 + 1;
+        if !rate.is_finite() || rate == 0.0 || gradient.iter().any(|g| !g.is_finite()) {
+            gradient.iter_mut().for_each(|g| *g = 0.0);
         }
-        s.gradient = true;
+        s.time_gradient = Some(gradient);
     }
 }
 
@@ -397,6 +397,8 @@ pub(super) fn add_back(switches: &[Switch], nu: f64, harmonics: usize, residual:
 pub(super) fn add_time_terms(switches: &[Switch], period: f64, harmonics: usize, jac: &mut [f64]) {
     let nu = 2.0 * std::f64::consts::PI / period;
     for s in switches {
+        // Without its time gradient (a residual's switch only) a switch adds no term.
+        let Some(gradient) = &s.time_gradient else { continue };
         let m = s.jump.len();
         let size = m * (2 * harmonics + 1);
         // The basis at t*: 1, cos kνt*, sin kνt*.
@@ -417,7 +419,7 @@ pub(super) fn add_time_terms(switches: &[Switch], period: f64, harmonics: usize,
             .collect();
         for (c, phi) in basis.iter().enumerate() {
             for b in 0..m {
-                let column = phi * s.time_gradient[b];
+                let column = phi * gradient[b];
                 if column == 0.0 {
                     continue;
                 }
@@ -464,19 +466,17 @@ mod tests {
                 time: 78_643.0 / 262_144.0 * period,
                 jump: vec![0.7, -0.2],
                 kink: vec![400.0, 90.0],
-                time_gradient: vec![0.0; 2],
+                time_gradient: None,
                 event: 0,
                 rate: 1.0,
-                gradient: true,
             },
             Switch {
                 time: 186_122.0 / 262_144.0 * period,
                 jump: vec![0.0, 0.0],
                 kink: vec![-250.0, 610.0],
-                time_gradient: vec![0.0; 2],
+                time_gradient: None,
                 event: 0,
                 rate: 1.0,
-                gradient: true,
             },
         ];
         let smooth =
