@@ -8,11 +8,30 @@
 # pinned in tests/python/requirements.txt, and the project's Python package
 # python/planetwear_fmu (editable).
 # Run by scripts/study.sh and by scripts/test.sh (with --tests: valgrind is
-# needed only by the tests); safe to run again.
+# needed only by the tests); safe to run again. --system does only the
+# Debian packages and --python only the virtual environment (scripts/test.sh
+# sets up the environment while the Rust steps run).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
-if ! compgen -G '/usr/lib/llvm-*/lib/libclang.so' >/dev/null && ! compgen -G '/usr/lib/*/libclang.so' >/dev/null; then
+tests=false system=true python=true
+for arg in "$@"; do
+    case $arg in
+        --tests) tests=true ;;
+        --system) python=false ;;
+        --python) system=false ;;
+        *)
+            echo "scripts/setup.sh: unknown option $arg (allowed: --tests, --system, --python)" >&2
+            exit 2
+            ;;
+    esac
+done
+if ! $system && ! $python; then
+    echo "scripts/setup.sh: --system and --python exclude each other (neither: both)" >&2
+    exit 2
+fi
+
+if $system && ! compgen -G '/usr/lib/llvm-*/lib/libclang.so' >/dev/null && ! compgen -G '/usr/lib/*/libclang.so' >/dev/null; then
     if [ "$(id -u)" = 0 ]; then
         echo "installing libclang-dev (needed by bindgen for the FMI bindings)"
         apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libclang-dev >/dev/null
@@ -22,7 +41,7 @@ if ! compgen -G '/usr/lib/llvm-*/lib/libclang.so' >/dev/null && ! compgen -G '/u
     fi
 fi
 
-if [ "${1:-}" = --tests ] && ! command -v valgrind >/dev/null; then
+if $system && $tests && ! command -v valgrind >/dev/null; then
     if [ "$(id -u)" = 0 ]; then
         echo "installing valgrind (the test command fuzzes the FMU under memcheck)"
         apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq valgrind >/dev/null
@@ -32,6 +51,7 @@ if [ "${1:-}" = --tests ] && ! command -v valgrind >/dev/null; then
     fi
 fi
 
+$python || exit 0
 req=tests/python/requirements.txt
 stamp=.venv/.requirements.sha256
 want=$(cat "$req" python/pyproject.toml | sha256sum | cut -d' ' -f1)
