@@ -27,6 +27,7 @@
 //! time integrator's located events is measured, not assumed
 //! (docs/PERIODIC.md).
 
+use std::cell::RefCell;
 use std::sync::Arc;
 
 use rustfft::{num_complex::Complex, Fft, FftPlanner};
@@ -245,17 +246,31 @@ pub fn highest_frequency(model: &PlanetaryDynamics, omega: f64) -> f64 {
     largest.sqrt() / (2.0 * std::f64::consts::PI)
 }
 
-/// rustfft's forward and inverse plans of one length.
+/// rustfft's forward and inverse plans of one length, with their scratch
+/// (`Fft::process` allocates it at every call otherwise).
 struct Plans {
     forward: Arc<dyn Fft<f64>>,
     inverse: Arc<dyn Fft<f64>>,
+    scratch: RefCell<Vec<Complex<f64>>>,
 }
 
 impl Plans {
     /// The plans of length `samples`.
     fn new(samples: usize) -> Self {
         let mut planner = FftPlanner::new();
-        Self { forward: planner.plan_fft_forward(samples), inverse: planner.plan_fft_inverse(samples) }
+        let (forward, inverse) = (planner.plan_fft_forward(samples), planner.plan_fft_inverse(samples));
+        let len = forward.get_inplace_scratch_len().max(inverse.get_inplace_scratch_len());
+        Self { forward, inverse, scratch: RefCell::new(vec![Complex::new(0.0, 0.0); len]) }
+    }
+
+    /// The forward transform of `buffer` in place.
+    fn forward(&self, buffer: &mut [Complex<f64>]) {
+        self.forward.process_with_scratch(buffer, &mut self.scratch.borrow_mut());
+    }
+
+    /// The inverse transform of `buffer` in place.
+    fn inverse(&self, buffer: &mut [Complex<f64>]) {
+        self.inverse.process_with_scratch(buffer, &mut self.scratch.borrow_mut());
     }
 
     /// The plans of the settings' samples and, where the plain run takes half of them, of those.
@@ -337,14 +352,20 @@ struct Newton {
 /// (n × m, column-major); `xp` (n × m) receives XP.
 fn project(p: &[f64], x: &nalgebra::DMatrix<f64>, m: usize, xp: &mut [f64], out: &mut [f64]) {
     let n = x.nrows();
-    for b in 0..m {
-        for i in 0..n {
-            xp[i + n * b] = (0..n).map(|l| x[(i, l)] * p[l + n * b]).sum();
+    let x = x.as_slice();
+    // Column b of XP as the sum of X's columns weighted by P's column b, in the
+    // order of the former dot products and from their start, −0 (the same rounding).
+    for (xp_b, p_b) in xp.chunks_exact_mut(n).zip(p.chunks_exact(n)).take(m) {
+        xp_b.fill(-0.0);
+        for (x_l, &w) in x.chunks_exact(n).zip(p_b) {
+            for (o, &v) in xp_b.iter_mut().zip(x_l) {
+                *o += v * w;
+            }
         }
     }
-    for b in 0..m {
-        for a in 0..m {
-            out[a + m * b] = (0..n).map(|i| p[i + n * a] * xp[i + n * b]).sum();
+    for (out_b, xp_b) in out.chunks_exact_mut(m).zip(xp.chunks_exact(n)) {
+        for (o, p_a) in out_b.iter_mut().zip(p.chunks_exact(n)) {
+            *o = p_a.iter().zip(xp_b).map(|(a, b)| a * b).sum();
         }
     }
 }
@@ -873,7 +894,7 @@ impl HarmonicBalance {
             buffer[k] += z;
             buffer[n - k] += z.conj();
         }
-        self.plans().inverse.process(buffer);
+        self.plans().inverse(buffer);
         for (o, z) in out.iter_mut().zip(buffer.iter()) {
             *o = z.re;
         }
@@ -918,7 +939,7 @@ impl HarmonicBalance {
         for (z, v) in buffer.iter_mut().zip(values) {
             *z = Complex::new(*v, 0.0);
         }
-        self.plans().forward.process(buffer);
+        self.plans().forward(buffer);
         let scale = 1.0 / ns as f64;
         out[0] = buffer[0].re * scale;
         for k in 1..=self.settings.harmonics {
@@ -1096,7 +1117,7 @@ impl HarmonicBalance {
                         for (z, v) in spectrum.iter_mut().zip(seq) {
                             *z = Complex::new(*v, 0.0);
                         }
-                        self.plans().forward.process(&mut spectrum);
+                        self.plans().forward(&mut spectrum);
                         let scale = q_scale * row[a] * if kind == 1 { nu } else { 1.0 } / ns as f64;
                         for pp in 0..top {
                             let z = spectrum[pp % ns];
@@ -1518,6 +1539,39 @@ mod tests {
     use crate::contact::ltca::SetModel;
     use crate::dynamics::periodic::ShootingSettings;
     use crate::scene::{Fidelity, Scene};
+
+    #[test]
+    fn the_projection_is_p_transposed_x_p_summed_as_dot_products() {
+        // PᵀXP of a 6 × 6 X and a 6 × 5 P, entries of mixed signs and sizes (zeros
+        // included, as in the tangents), against the triple sums in the order of the
+        // former dot products: equal to the last bit, so that the balance's Jacobian
+        // does not change with the loop's form.
+        let (n, m) = (6, 5);
+        let value = |k: usize| {
+            let v = ((k * 7919) % 104_729) as f64 / 104_729.0 - 0.5;
+            if k % 5 == 0 {
+                0.0
+            } else {
+                v * 10f64.powi((k % 7) as i32 - 3)
+            }
+        };
+        let x = nalgebra::DMatrix::from_fn(n, n, |i, l| value(3 + i + n * l));
+        let p: Vec<f64> = (0..n * m).map(|k| value(101 + k)).collect();
+        let (mut xp, mut out) = (vec![0.0; n * m], vec![0.0; m * m]);
+        project(&p, &x, m, &mut xp, &mut out);
+        for b in 0..m {
+            let column: Vec<f64> = (0..n).map(|i| (0..n).map(|l| x[(i, l)] * p[l + n * b]).sum()).collect();
+            for a in 0..m {
+                let expected: f64 = (0..n).map(|i| p[i + n * a] * column[i]).sum();
+                assert_eq!(
+                    out[a + m * b].to_bits(),
+                    expected.to_bits(),
+                    "({a}, {b}): {} against {expected}",
+                    out[a + m * b]
+                );
+            }
+        }
+    }
 
     fn balance(harmonics: usize, samples: usize, rpm: f64) -> (HarmonicBalance, f64) {
         let mut scene = Scene::example_2004();
