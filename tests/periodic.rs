@@ -973,6 +973,37 @@ mod harmonic_balance {
         assert!(a.largest.0 > 1.0, "11 700 rpm: unstable, |μ| {:.5}", a.largest.0);
     }
 
+    /// At 9600 rpm (κ = 0) Newton stalls from the static state and from the
+    /// march's period alike (the period-1 orbit is unstable and the march
+    /// quasi-periodic there): the cold start then starts from the orbit of a
+    /// neighbouring speed (measured: from 9648 rpm, 0.5 % above), and that
+    /// orbit is shooting's (measured E_h 5.6e-5, largest |μ| 1.0980 against
+    /// shooting's 1.1016 from the balance's state, both unstable). A point
+    /// that converges from its static state takes no neighbour (3000 rpm).
+    #[test]
+    fn harmonic_balance_starts_from_a_neighbouring_speed_where_both_cold_starts_stall() {
+        let shooting = problem(3000.0, 0);
+        let settings = HarmonicSettings::for_speed(&shooting, 3000.0 * RPM);
+        let orbit = HarmonicBalance::new(shooting, settings).unwrap().solve(3000.0 * RPM, None).unwrap();
+        assert_eq!(orbit.neighbour, None, "3000 rpm converges from its static state");
+        let omega = 9600.0 * RPM;
+        let (mut hb, balanced, mu, shot) = multipliers_both_ways(problem(9600.0, 0), omega);
+        let near = balanced.neighbour.expect("9600 rpm starts from a neighbouring speed");
+        assert!((near / omega - 1.0).abs() <= 0.021, "a neighbour within 2 %: {:.1} rpm", near / RPM);
+        let e = harmonic_error(
+            &pick(&hb.steady_state(&balanced).unwrap()),
+            &pick(&problem(9600.0, 0).steady_state(&shot).unwrap()),
+        );
+        let (ours, theirs) = (mu[0].modulus(), shot.largest_multiplier());
+        eprintln!(
+            "9600 rpm from {:.1} rpm: E_h {e:.3e}, largest |μ| {ours:.4}, shooting {theirs:.4}",
+            near / RPM
+        );
+        assert!(e <= 1e-3, "9600 rpm: E_h {e:.3e} against shooting's orbit");
+        assert!(ours > 1.0 && theirs > 1.0, "unstable: {ours:.4}, {theirs:.4}");
+        assert!((ours - theirs).abs() <= 1e-2, "{ours:.4} against {theirs:.4}");
+    }
+
     #[test]
     fn harmonic_balance_agrees_with_shooting_on_worn_flanks() {
         assert_balance_agrees(3000.0, 6, 0.0, 1e-3);

@@ -169,13 +169,17 @@ fn periodic_point(
     let multipliers = hb.floquet_multipliers(&orbit, settings.samples)?;
     let mu = multipliers.first().map_or(0.0, |m| m.modulus());
     let stable = all_inside_unit_circle(&multipliers);
+    // Where neither the static state nor the march's period led Newton to the orbit, the
+    // solve started from a neighbouring speed's orbit: the line says which.
+    let neighbour = orbit.neighbour.map(rad_per_s_to_rpm);
     let line = format!(
-        "harmonic balance: H = {} harmonics, N = {} samples, {} Newton iterations, {} Jacobians; \
+        "harmonic balance: H = {} harmonics, N = {} samples, {} Newton iterations, {} Jacobians{}; \
          largest Floquet multiplier |μ| = {mu:.4} from the orbit's tangents ({})",
         settings.harmonics,
         settings.samples,
         orbit.iterations,
         orbit.factorizations,
+        neighbour.map_or(String::new(), |r| format!(" (started from the orbit at {r:.1} rpm)")),
         if stable { "stable" } else { "unstable: time marching leaves this orbit" }
     );
     let record = serde_json::json!({
@@ -184,6 +188,7 @@ fn periodic_point(
         "samples": settings.samples,
         "newton_iterations": orbit.iterations,
         "jacobians": orbit.factorizations,
+        "started_from_rpm": neighbour,
         "floquet_multipliers": multipliers.iter().map(|m| [m.re, m.im]).collect::<Vec<_>>(),
         "stable": stable,
     });

@@ -113,6 +113,14 @@ pub const SCAN_INTERVALS_PER_STEP: usize = 4;
 /// 15 %, 262; 1e-1: 13 %, 262).
 pub const HANDOVER_STEP: f64 = 1e-2;
 
+/// Relative offsets of the speeds whose orbits, each solved from its own static state, a
+/// cold start takes as its start, in this order, where neither the static state nor the
+/// march's period leads Newton to a root ([`HarmonicBalance::solve`]). Measured on the
+/// torsional example (docs/PERIODIC.md §2): at κ = 0, 9600 rpm the orbit from 25 rpm above
+/// converges and from below does not; at κ = 6, 8150 rpm only from 100 rpm or 200 rpm above,
+/// 8200 rpm from 50 or 100 above, 11 500 rpm from 25 to 100 rpm either side.
+pub const NEIGHBOUR_OFFSETS: [f64; 6] = [0.005, -0.005, 0.01, -0.01, 0.02, -0.02];
+
 /// Successive Newton iterations that do not halve the residual after which
 /// the harmonic balance gives up (they cycle, see [`HarmonicBalance::solve`]).
 pub const STALLED_ITERATIONS: usize = 4;
@@ -220,6 +228,11 @@ pub struct HarmonicOrbit {
     /// ([`HarmonicBalance::solve`]; 0 when none).
     #[serde(default)]
     pub march_steps: u64,
+    /// The neighbouring speed [rad/s] whose orbit the solve started from where neither the
+    /// static state nor the march's period led Newton to a root ([`NEIGHBOUR_OFFSETS`]);
+    /// `None` otherwise.
+    #[serde(default)]
+    pub neighbour: Option<f64>,
     /// Where tooth pairs start or stop touching as located at the last
     /// residual evaluation, at most the last Newton step (within the
     /// tolerance) from these coefficients: time in the period \[s\] and the
@@ -1182,8 +1195,9 @@ impl HarmonicBalance {
 
     /// The periodic state at `omega` [rad/s] by Newton's method with a
     /// backtracking line search from the coefficients `guess` (a cold start
-    /// when `None`: the static state, and where Newton fails from there the
-    /// march's period after the shooting problem's run-in; a guess with
+    /// when `None`: the static state, where Newton fails from there the march's
+    /// period after the shooting problem's run-in, and where that fails too the
+    /// orbits of neighbouring speeds ([`NEIGHBOUR_OFFSETS`]); a guess with
     /// another number of harmonics gives its common harmonics).
     pub fn solve(&mut self, omega: f64, guess: Option<&[f64]>) -> Result<HarmonicOrbit, PeriodicError> {
         let x = match guess {
@@ -1204,17 +1218,47 @@ impl HarmonicBalance {
             None => self.cold_start(omega),
         };
         let mut newton = Newton::default();
-        let solved = self.attempt(omega, x, &mut newton);
-        if guess.is_some() || solved.is_ok() {
+        if guess.is_some() {
+            return self.attempt(omega, x, &mut newton);
+        }
+        let solved = self.cold_attempt(omega, x, &mut newton);
+        if solved.is_ok() {
             return solved;
         }
-        // A cold start that fails: Newton from the static state can stall where the response
-        // lies far from it (4100 rpm on the torsional example: a fourth-harmonic resonance,
-        // the ring teeth separating; residual 3 after 10 iterations). Then from the state the
-        // march reaches after the shooting problem's run-in, as its own cold start does, its
-        // next period sampled and analysed into coefficients (the counts hold all attempts).
-        match self.marched_start(omega, &mut newton) {
-            Ok(x) => self.attempt(omega, x, &mut newton),
+        // Both fail at a few speeds where the orbit lies far from the static state and the
+        // march does not approach it (κ = 0, 9600 rpm: the period-1 orbit unstable, the march
+        // quasi-periodic): then from the orbit of a neighbouring speed, found as this one
+        // would be, as a sweep's warm start ([`NEIGHBOUR_OFFSETS`]).
+        for offset in NEIGHBOUR_OFFSETS {
+            let near = omega * (1.0 + offset);
+            let start = self.cold_start(near);
+            let Ok(neighbour) = self.cold_attempt(near, start, &mut newton) else { continue };
+            if let Ok(orbit) = self.attempt(omega, neighbour.coefficients, &mut newton) {
+                return Ok(HarmonicOrbit { neighbour: Some(near), ..orbit });
+            }
+        }
+        solved
+    }
+
+    /// [`Self::attempt`] from the static state's coefficients `x` and, where that fails,
+    /// from the march's period. Newton from the static state can stall where the response
+    /// lies far from it (4100 rpm on the torsional example: a fourth-harmonic resonance,
+    /// the ring teeth separating; residual 3 after 10 iterations). Then from the state the
+    /// march reaches after the shooting problem's run-in, as its own cold start does, its
+    /// next period sampled and analysed into coefficients (the counts hold all attempts;
+    /// the error is the static start's).
+    fn cold_attempt(
+        &mut self,
+        omega: f64,
+        x: Vec<f64>,
+        newton: &mut Newton,
+    ) -> Result<HarmonicOrbit, PeriodicError> {
+        let solved = self.attempt(omega, x, newton);
+        if solved.is_ok() {
+            return solved;
+        }
+        match self.marched_start(omega, newton) {
+            Ok(x) => self.attempt(omega, x, newton).or(solved),
             Err(_) => solved,
         }
     }
@@ -1300,6 +1344,7 @@ impl HarmonicBalance {
             factorizations: newton.factorizations,
             force_evaluations: newton.evaluations,
             march_steps: newton.march_steps,
+            neighbour: None,
             crossings: self.crossings.clone(),
         })
     }
