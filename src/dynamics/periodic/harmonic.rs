@@ -113,12 +113,13 @@ pub const SCAN_INTERVALS_PER_STEP: usize = 4;
 /// 15 %, 262; 1e-1: 13 %, 262).
 pub const HANDOVER_STEP: f64 = 1e-2;
 
-/// Relative offsets of the speeds whose orbits, each solved from its own static state, a
-/// cold start takes as its start, in this order, where neither the static state nor the
-/// march's period leads Newton to a root ([`HarmonicBalance::solve`]). Measured on the
-/// torsional example (docs/PERIODIC.md §2): at κ = 0, 9600 rpm the orbit from 25 rpm above
-/// converges and from below does not; at κ = 6, 8150 rpm only from 100 rpm or 200 rpm above,
-/// 8200 rpm from 50 or 100 above, 11 500 rpm from 25 to 100 rpm either side.
+/// Relative offsets of the speeds whose orbits, each found as a cold start is (from its
+/// static state, else its march), a cold start takes as its start, in this order, where
+/// neither the static state nor the march's period leads Newton to a root
+/// ([`HarmonicBalance::solve`]). Measured on the torsional example's 50 rpm grids
+/// (docs/PERIODIC.md §2): the four speeds that failed converge, κ = 0 at 9600 rpm from
+/// 0.5 % above, κ = 6 at 8150 rpm from 2 % above, 8200 rpm from 1 % above and 11 500 rpm
+/// from 0.5 % above (8150 and 8200 rpm after the closer offsets failed).
 pub const NEIGHBOUR_OFFSETS: [f64; 6] = [0.005, -0.005, 0.01, -0.01, 0.02, -0.02];
 
 /// Successive Newton iterations that do not halve the residual after which
