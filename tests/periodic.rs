@@ -987,12 +987,13 @@ mod harmonic_balance {
         let orbit = HarmonicBalance::new(shooting, settings).unwrap().solve(3000.0 * RPM, None).unwrap();
         assert_eq!(orbit.neighbour, None, "3000 rpm converges from its static state");
         let omega = 9600.0 * RPM;
-        let (mut hb, balanced, mu, shot) = multipliers_both_ways(problem(9600.0, 0), omega);
+        let mut shooting = problem(9600.0, 0);
+        let (mut hb, balanced, mu, shot) = multipliers_both_ways(shooting.clone(), omega);
         let near = balanced.neighbour.expect("9600 rpm starts from a neighbouring speed");
         assert!((near / omega - 1.0).abs() <= 0.021, "a neighbour within 2 %: {:.1} rpm", near / RPM);
         let e = harmonic_error(
             &pick(&hb.steady_state(&balanced).unwrap()),
-            &pick(&problem(9600.0, 0).steady_state(&shot).unwrap()),
+            &pick(&shooting.steady_state(&shot).unwrap()),
         );
         let (ours, theirs) = (mu[0].modulus(), shot.largest_multiplier());
         eprintln!(

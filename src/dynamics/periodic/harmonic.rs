@@ -1201,6 +1201,7 @@ impl HarmonicBalance {
     /// orbits of neighbouring speeds ([`NEIGHBOUR_OFFSETS`]); a guess with
     /// another number of harmonics gives its common harmonics).
     pub fn solve(&mut self, omega: f64, guess: Option<&[f64]>) -> Result<HarmonicOrbit, PeriodicError> {
+        let mut newton = Newton::default();
         let x = match guess {
             // Another H's coefficients: the common harmonics, the rest zero.
             Some(g) if g.len() % self.m == 0 && (g.len() / self.m) % 2 == 1 => {
@@ -1216,45 +1217,41 @@ impl HarmonicBalance {
                     "must hold m(2H' + 1) coefficients for some H' (m coordinates)",
                 ))
             }
-            None => self.cold_start(omega),
+            None => return self.solve_cold(omega, &mut newton),
         };
-        let mut newton = Newton::default();
-        if guess.is_some() {
-            return self.attempt(omega, x, &mut newton);
-        }
-        let solved = self.cold_attempt(omega, x, &mut newton);
+        self.attempt(omega, x, &mut newton)
+    }
+
+    /// [`Self::solve`] without a guess: [`Self::cold_attempt`] at `omega`, and where that
+    /// fails, from the orbits of neighbouring speeds. Both starts fail at a few speeds where
+    /// the orbit lies far from the static state and the march does not approach it (κ = 0,
+    /// 9600 rpm: the period-1 orbit unstable, the march quasi-periodic): then from the orbit
+    /// of a neighbouring speed, found as this one would be, as a sweep's warm start
+    /// ([`NEIGHBOUR_OFFSETS`]). The error is the static start's at `omega`.
+    fn solve_cold(&mut self, omega: f64, newton: &mut Newton) -> Result<HarmonicOrbit, PeriodicError> {
+        let solved = self.cold_attempt(omega, newton);
         if solved.is_ok() {
             return solved;
         }
-        // Both fail at a few speeds where the orbit lies far from the static state and the
-        // march does not approach it (κ = 0, 9600 rpm: the period-1 orbit unstable, the march
-        // quasi-periodic): then from the orbit of a neighbouring speed, found as this one
-        // would be, as a sweep's warm start ([`NEIGHBOUR_OFFSETS`]).
         for offset in NEIGHBOUR_OFFSETS {
             let near = omega * (1.0 + offset);
-            let start = self.cold_start(near);
-            let Ok(neighbour) = self.cold_attempt(near, start, &mut newton) else { continue };
-            if let Ok(orbit) = self.attempt(omega, neighbour.coefficients, &mut newton) {
+            let Ok(neighbour) = self.cold_attempt(near, newton) else { continue };
+            if let Ok(orbit) = self.attempt(omega, neighbour.coefficients, newton) {
                 return Ok(HarmonicOrbit { neighbour: Some(near), ..orbit });
             }
         }
         solved
     }
 
-    /// [`Self::attempt`] from the static state's coefficients `x` and, where that fails,
+    /// [`Self::attempt`] from the static state ([`Self::cold_start`]) and, where that fails,
     /// from the march's period. Newton from the static state can stall where the response
     /// lies far from it (4100 rpm on the torsional example: a fourth-harmonic resonance,
     /// the ring teeth separating; residual 3 after 10 iterations). Then from the state the
     /// march reaches after the shooting problem's run-in, as its own cold start does, its
     /// next period sampled and analysed into coefficients (the counts hold all attempts;
     /// the error is the static start's).
-    fn cold_attempt(
-        &mut self,
-        omega: f64,
-        x: Vec<f64>,
-        newton: &mut Newton,
-    ) -> Result<HarmonicOrbit, PeriodicError> {
-        let solved = self.attempt(omega, x, newton);
+    fn cold_attempt(&mut self, omega: f64, newton: &mut Newton) -> Result<HarmonicOrbit, PeriodicError> {
+        let solved = self.attempt(omega, self.cold_start(omega), newton);
         if solved.is_ok() {
             return solved;
         }
