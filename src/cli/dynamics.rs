@@ -173,12 +173,14 @@ fn periodic_point(
     // solve started from a neighbouring speed's orbit: the line says which.
     let neighbour = orbit.neighbour.map(rad_per_s_to_rpm);
     let line = format!(
-        "harmonic balance: H = {} harmonics, N = {} samples, {} Newton iterations, {} Jacobians{}; \
+        "harmonic balance: H = {} harmonics, N = {} samples, {} Newton iterations, {} Jacobians{}{}; \
          largest Floquet multiplier |μ| = {mu:.4} from the orbit's tangents ({})",
         settings.harmonics,
         settings.samples,
         orbit.iterations,
         orbit.factorizations,
+        // Beyond the dense LU's size the steps are GMRES's: how many products they took.
+        if orbit.products > 0 { format!(" ({} GMRES products)", orbit.products) } else { String::new() },
         neighbour.map_or(String::new(), |r| format!(" (started from the orbit at {r:.1} rpm)")),
         if stable { "stable" } else { "unstable: time marching leaves this orbit" }
     );
@@ -188,6 +190,7 @@ fn periodic_point(
         "samples": settings.samples,
         "newton_iterations": orbit.iterations,
         "jacobians": orbit.factorizations,
+        "gmres_products": orbit.products,
         "started_from_rpm": neighbour,
         "floquet_multipliers": multipliers.iter().map(|m| [m.re, m.im]).collect::<Vec<_>>(),
         "stable": stable,

@@ -37,14 +37,16 @@
 //! multipliers; the orbit is stable when all lie inside the unit circle.
 
 mod harmonic;
+mod krylov;
 mod switches;
 mod variational;
 
 pub use harmonic::{
-    highest_frequency, HarmonicBalance, HarmonicOrbit, HarmonicSettings, HANDOVER_STEP,
+    highest_frequency, HarmonicBalance, HarmonicOrbit, HarmonicSettings, DENSE_UNKNOWNS, HANDOVER_STEP,
     HARMONICS_PER_MODE_ORDER, MAX_UNKNOWNS, MIN_HARMONICS, NEIGHBOUR_OFFSETS, SAMPLES_PER_HARMONIC,
     SCAN_INTERVALS_PER_STEP, STALLED_ITERATIONS,
 };
+pub use krylov::{KRYLOV_BAND, KRYLOV_ITERATIONS, KRYLOV_TOLERANCE};
 
 use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};

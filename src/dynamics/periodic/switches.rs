@@ -395,12 +395,29 @@ pub(super) fn add_back(switches: &[Switch], nu: f64, harmonics: usize, residual:
 /// move the residual only through the samples' folding of smooth terms, and
 /// the plain sums' Jacobian holds the rest.
 pub(super) fn add_time_terms(switches: &[Switch], period: f64, harmonics: usize, jac: &mut [f64]) {
+    for (rows, columns) in time_terms(switches, period, harmonics) {
+        let size = rows.len();
+        for (c, column) in columns.iter().enumerate() {
+            if *column == 0.0 {
+                continue;
+            }
+            let col = &mut jac[c * size..][..size];
+            for (x, row) in col.iter_mut().zip(&rows) {
+                *x += column * row;
+            }
+        }
+    }
+}
+
+/// The terms [`add_time_terms`] adds, each a rank-one matrix u vᵀ as the pair (u, v):
+/// u the test functions' weights at the switch time times the jump (one value per row),
+/// v the basis functions at the switch time times the time gradient (one per column).
+pub(super) fn time_terms(switches: &[Switch], period: f64, harmonics: usize) -> Vec<(Vec<f64>, Vec<f64>)> {
     let nu = 2.0 * std::f64::consts::PI / period;
+    let mut terms = Vec::new();
     for s in switches {
         // Without its time gradient (a residual's switch only) a switch adds no term.
         let Some(gradient) = &s.time_gradient else { continue };
-        let m = s.jump.len();
-        let size = m * (2 * harmonics + 1);
         // The basis at t*: 1, cos kνt*, sin kνt*.
         let mut basis = vec![1.0; 2 * harmonics + 1];
         for k in 1..=harmonics {
@@ -417,19 +434,10 @@ pub(super) fn add_time_terms(switches: &[Switch], period: f64, harmonics: usize,
                 s.jump.iter().map(move |j| weight * j)
             })
             .collect();
-        for (c, phi) in basis.iter().enumerate() {
-            for b in 0..m {
-                let column = phi * gradient[b];
-                if column == 0.0 {
-                    continue;
-                }
-                let col = &mut jac[(c * m + b) * size..][..size];
-                for (x, row) in col.iter_mut().zip(&rows) {
-                    *x += column * row;
-                }
-            }
-        }
+        let columns: Vec<f64> = basis.iter().flat_map(|phi| gradient.iter().map(move |g| phi * g)).collect();
+        terms.push((rows, columns));
     }
+    terms
 }
 
 #[cfg(test)]
