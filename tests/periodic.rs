@@ -932,6 +932,12 @@ mod harmonic_balance {
         assert_balance_agrees(3000.0, 0, 0.0, 1e-3);
     }
 
+    /// The point had more unknowns than the dense LU takes, and GMRES took the steps.
+    fn assert_solved_by_gmres(a: &Agreement) {
+        let (unknowns, products) = (a.unknowns, a.products);
+        assert!(unknowns > DENSE_UNKNOWNS && products > 0, "{unknowns} unknowns, {products} products");
+    }
+
     /// At 600 rpm the rule keeps H = 180 harmonics, 1805 unknowns, beyond
     /// what the dense LU takes (`DENSE_UNKNOWNS`): GMRES solves Newton's
     /// steps on the Jacobian as an operator, and the orbit agrees with
@@ -939,12 +945,7 @@ mod harmonic_balance {
     #[test]
     fn harmonic_balance_by_gmres_agrees_with_shooting_at_low_speed() {
         let a = balance_error(600.0, 0, None);
-        assert!(
-            a.unknowns > DENSE_UNKNOWNS && a.products > 0,
-            "{} unknowns, {} products",
-            a.unknowns,
-            a.products
-        );
+        assert_solved_by_gmres(&a);
         assert!(a.e <= 1e-3, "600 rpm: E_h {:.3e}", a.e);
         assert_eq!(a.separation, 0.0, "600 rpm: the teeth stay in contact");
         assert_multipliers_agree(&a, 1e-3);
@@ -957,12 +958,7 @@ mod harmonic_balance {
     #[test]
     fn harmonic_balance_solves_the_transverse_torsional_example() {
         let a = balance_error_of(&Scene::example_2004(), 3000.0, 0, None);
-        assert!(
-            a.unknowns > DENSE_UNKNOWNS && a.products > 0,
-            "{} unknowns, {} products",
-            a.unknowns,
-            a.products
-        );
+        assert_solved_by_gmres(&a);
         assert!(a.e <= 1e-3, "transverse–torsional, 3000 rpm: E_h {:.3e}", a.e);
         assert_multipliers_agree(&a, 1e-3);
     }

@@ -1,5 +1,5 @@
-//! Newton steps of the harmonic balance without its dense LU: restarted-free
-//! GMRES on the Jacobian as an operator, preconditioned by the sparse LU of
+//! Newton steps of the harmonic balance without its dense LU: GMRES without
+//! restarts on the Jacobian as an operator, preconditioned by the sparse LU of
 //! the Jacobian's band of neighbouring harmonics (docs/PERIODIC.md §2).
 //!
 //! The balance's Jacobian couples every kept harmonic with every other
@@ -98,12 +98,12 @@ impl BandPattern {
         let size = self.first.len();
         let structure = SymbolicSparseColMatRef::new_checked(size, size, &self.col_ptr, None, &self.row_idx);
         Lu::try_new_with_symbolic(self.symbolic.clone(), SparseColMatRef::new(structure, values)).map_err(
-            |e| {
-                PeriodicError::invalid(
-                    "harmonic-balance iterate",
-                    f64::NAN,
-                    &format!("band LU failed: {e:?}"),
-                )
+            |e| PeriodicError::InvalidRequest {
+                name: "harmonic-balance Jacobian".into(),
+                value: format!("its band of ±{} harmonics", self.band),
+                reason: format!(
+                    "faer's sparse LU of it failed ({e:?}): the iterate diverged or the band is singular"
+                ),
             },
         )
     }
@@ -302,5 +302,21 @@ mod tests {
             200,
         );
         assert_eq!(exact.products, 1, "{exact:?}");
+    }
+
+    /// A singular band (all zeros) factorises, but its solve is not finite: GMRES with it
+    /// stops at once and returns a step that is not finite, which Newton reports as not
+    /// converged, rather than looping or panicking.
+    #[test]
+    fn a_singular_band_gives_a_step_that_is_not_finite() {
+        let (m, h) = (2, 4);
+        let pattern = BandPattern::new(m, h, 1).unwrap();
+        let lu = pattern.factorize(&vec![0.0; pattern.len()]).unwrap();
+        let n = m * (2 * h + 1);
+        let a = matrix(n);
+        let b = vec![1.0; n];
+        let (x, report) = gmres(|v, out| times(&a, v, out), |v| precondition(&lu, v), &b, 1e-10, 200);
+        assert!(x.iter().any(|v| !v.is_finite()), "{x:?}");
+        assert!(report.products <= 1, "{report:?}");
     }
 }
