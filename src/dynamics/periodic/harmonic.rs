@@ -27,13 +27,13 @@
 //! time integrator's located events is measured, not assumed
 //! (docs/PERIODIC.md).
 
-use std::cell::RefCell;
-use std::sync::Arc;
-
-use rustfft::{num_complex::Complex, Fft, FftPlanner};
+use rustfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
 
-use super::krylov::{gmres, precondition, BandPattern, KRYLOV_BAND, KRYLOV_ITERATIONS, KRYLOV_TOLERANCE};
+use super::krylov::{
+    gmres, precondition, BandPattern, Inertia, Operator, KRYLOV_BAND, KRYLOV_ITERATIONS, KRYLOV_TOLERANCE,
+};
+use super::series::{analyse_with, synthesize_with, Plans};
 use super::switches::{
     add_back, add_time_terms, illinois, locate, series_state, subtract, time_gradients, time_terms,
     SeriesResidual, Switch,
@@ -293,96 +293,11 @@ pub fn highest_frequency(model: &PlanetaryDynamics, omega: f64) -> f64 {
     largest.sqrt() / (2.0 * std::f64::consts::PI)
 }
 
-/// rustfft's forward and inverse plans of one length, with their scratch
-/// (`Fft::process` allocates it at every call otherwise).
-struct Plans {
-    forward: Arc<dyn Fft<f64>>,
-    inverse: Arc<dyn Fft<f64>>,
-    scratch: RefCell<Vec<Complex<f64>>>,
-}
-
-impl Plans {
-    /// The plans of length `samples`.
-    fn new(samples: usize) -> Self {
-        let mut planner = FftPlanner::new();
-        let (forward, inverse) = (planner.plan_fft_forward(samples), planner.plan_fft_inverse(samples));
-        let len = forward.get_inplace_scratch_len().max(inverse.get_inplace_scratch_len());
-        Self { forward, inverse, scratch: RefCell::new(vec![Complex::new(0.0, 0.0); len]) }
-    }
-
-    /// The forward transform of `buffer` in place.
-    fn forward(&self, buffer: &mut [Complex<f64>]) {
-        self.forward.process_with_scratch(buffer, &mut self.scratch.borrow_mut());
-    }
-
-    /// The inverse transform of `buffer` in place.
-    fn inverse(&self, buffer: &mut [Complex<f64>]) {
-        self.inverse.process_with_scratch(buffer, &mut self.scratch.borrow_mut());
-    }
-
-    /// The same plans with scratch of their own.
-    fn share(&self) -> Self {
-        let scratch = RefCell::new(vec![Complex::new(0.0, 0.0); self.scratch.borrow().len()]);
-        Self { forward: Arc::clone(&self.forward), inverse: Arc::clone(&self.inverse), scratch }
-    }
-
-    /// The samples' length.
-    fn len(&self) -> usize {
-        self.forward.len()
-    }
-
-    /// The plans of the settings' samples and, where the plain run takes half of them, of those.
-    fn of(settings: &HarmonicSettings) -> (Self, Option<Self>) {
-        let half = settings.samples / 2;
-        let coarse = settings.samples % 2 == 0 && half >= PLAIN_SAMPLES_PER_HARMONIC * settings.harmonics;
-        (Self::new(settings.samples), coarse.then(|| Self::new(half)))
-    }
-}
-
-/// N = `plans`' length samples of a series of H = `harmonics` harmonics: `coefficient(c)`
-/// gives its entry of coefficient block c, `out` receives the N values y(t_j).
-fn synthesize_with(
-    plans: &Plans,
-    harmonics: usize,
-    coefficient: impl Fn(usize) -> f64,
-    buffer: &mut [Complex<f64>],
-    out: &mut [f64],
-) {
-    let n = plans.len();
-    buffer.iter_mut().for_each(|z| *z = Complex::new(0.0, 0.0));
-    buffer[0] = Complex::new(coefficient(0), 0.0);
-    for k in 1..=harmonics {
-        let (a, b) = (coefficient(2 * k - 1), coefficient(2 * k));
-        let z = Complex::new(0.5 * a, -0.5 * b);
-        buffer[k] += z;
-        buffer[n - k] += z.conj();
-    }
-    plans.inverse(buffer);
-    for (o, z) in out.iter_mut().zip(buffer.iter()) {
-        *o = z.re;
-    }
-}
-
-/// The first 2H + 1 Fourier coefficients (a₀, a_k, b_k) of N = `plans`' length samples
-/// `values` of one quantity.
-fn analyse_with(
-    plans: &Plans,
-    harmonics: usize,
-    values: &[f64],
-    buffer: &mut [Complex<f64>],
-    out: &mut [f64],
-) {
-    let ns = plans.len();
-    for (z, v) in buffer.iter_mut().zip(values) {
-        *z = Complex::new(*v, 0.0);
-    }
-    plans.forward(buffer);
-    let scale = 1.0 / ns as f64;
-    out[0] = buffer[0].re * scale;
-    for k in 1..=harmonics {
-        out[2 * k - 1] = 2.0 * buffer[k].re * scale;
-        out[2 * k] = -2.0 * buffer[k].im * scale;
-    }
+/// The plans of the settings' samples and, where the plain run takes half of them, of those.
+fn plans_of(settings: &HarmonicSettings) -> (Plans, Option<Plans>) {
+    let half = settings.samples / 2;
+    let coarse = settings.samples % 2 == 0 && half >= PLAIN_SAMPLES_PER_HARMONIC * settings.harmonics;
+    (Plans::new(settings.samples), coarse.then(|| Plans::new(half)))
 }
 
 /// faer's LU with partial pivoting of a square matrix, factorised in place in
@@ -438,108 +353,6 @@ impl DenseLu {
         let lu = self.factor.as_ref();
         solve_in_place(lu, lu, permutation, x.as_mut(), par, MemStack::new(&mut memory));
         (0..n).map(|i| x[(i, 0)]).collect()
-    }
-}
-
-/// The balance's Jacobian at one point as an operator, for GMRES (module `krylov`):
-/// its product with a vector from the tangent sequences sample by sample (two transforms
-/// per coordinate), the inertia per harmonic and the switches' rank-one time terms; and
-/// the sparse LU of its band of neighbouring harmonics as the preconditioner.
-struct Operator {
-    m: usize,
-    harmonics: usize,
-    /// The transforms of the evaluation's N samples.
-    plans: Plans,
-    /// ν [rad/s], the deflection scale, PᵀMP and the rows' scale (as [`Inertia`]).
-    nu: f64,
-    q_scale: f64,
-    mass: Vec<f64>,
-    row: Vec<f64>,
-    /// The evaluation's tangent sequences, as [`HarmonicBalance::evaluate`] keeps them.
-    tangents: Vec<f64>,
-    /// The switches' time terms u vᵀ.
-    terms: Vec<(Vec<f64>, Vec<f64>)>,
-    /// The band's pattern, values and LU.
-    pattern: BandPattern,
-    band: Vec<f64>,
-    lu: faer::sparse::linalg::solvers::Lu<usize, f64>,
-}
-
-impl Operator {
-    /// `out` = J `d`.
-    fn apply(&self, d: &[f64], out: &mut [f64]) {
-        let (m, h) = (self.m, self.harmonics);
-        let plans = &self.plans;
-        let ns = plans.len();
-        let mut buffer = vec![Complex::new(0.0, 0.0); ns];
-        // δy and δẏ of each coordinate, coordinate-major.
-        let (mut y, mut yd) = (vec![0.0; ns * m], vec![0.0; ns * m]);
-        let nu = self.nu;
-        for b in 0..m {
-            synthesize_with(plans, h, |c| d[c * m + b], &mut buffer, &mut y[b * ns..][..ns]);
-            synthesize_with(
-                plans,
-                h,
-                |c| {
-                    let k = c.div_ceil(2) as f64;
-                    match c {
-                        0 => 0.0,
-                        // ẏ: a_k → k ν b_k, b_k → −k ν a_k.
-                        c if c % 2 == 1 => k * nu * d[(c + 1) * m + b],
-                        c => -k * nu * d[(c - 1) * m + b],
-                    }
-                },
-                &mut buffer,
-                &mut yd[b * ns..][..ns],
-            );
-        }
-        let mut g = vec![0.0; ns];
-        let mut coefficients = vec![0.0; 2 * h + 1];
-        for a in 0..m {
-            g.iter_mut().for_each(|v| *v = 0.0);
-            for b in 0..m {
-                let k = &self.tangents[(b * m + a) * ns..][..ns];
-                let c = &self.tangents[((m + b) * m + a) * ns..][..ns];
-                let (yb, ydb) = (&y[b * ns..][..ns], &yd[b * ns..][..ns]);
-                for j in 0..ns {
-                    g[j] += k[j] * yb[j] + c[j] * ydb[j];
-                }
-            }
-            analyse_with(plans, h, &g, &mut buffer, &mut coefficients);
-            for (cc, value) in coefficients.iter().enumerate() {
-                out[cc * m + a] = self.q_scale * self.row[a] * value;
-            }
-        }
-        let inertia = Inertia { mass: &self.mass, row: &self.row, nu, q_scale: self.q_scale };
-        for cc in 1..=2 * h {
-            for a in 0..m {
-                out[cc * m + a] += (0..m).map(|b| inertia.at(cc, a, b) * d[cc * m + b]).sum::<f64>();
-            }
-        }
-        for (u, v) in &self.terms {
-            let along: f64 = v.iter().zip(d).map(|(p, q)| p * q).sum();
-            out.iter_mut().zip(u).for_each(|(o, w)| *o += along * w);
-        }
-    }
-}
-
-/// The inertia terms of the balance's Jacobian: −k²ν² PᵀMP on harmonic k, scaled to the row.
-struct Inertia<'a> {
-    /// PᵀMP, m × m column-major.
-    mass: &'a [f64],
-    /// The rows' scale.
-    row: &'a [f64],
-    nu: f64,
-    q_scale: f64,
-}
-
-impl Inertia<'_> {
-    /// The entry (a, b) of coefficient block `cc`'s inertia.
-    #[inline]
-    fn at(&self, cc: usize, a: usize, b: usize) -> f64 {
-        let k = cc.div_ceil(2) as f64;
-        let m = self.row.len();
-        -k * k * self.mass[a + m * b] * self.row[a] * self.nu * self.nu * self.q_scale
     }
 }
 
@@ -1122,7 +935,7 @@ impl HarmonicBalance {
                 reduced_mass[a + m * b] = (0..n).map(|i| p[i + n * a] * mass[i] * p[i + n * b]).sum();
             }
         }
-        let (full, half) = Plans::of(&settings);
+        let (full, half) = plans_of(&settings);
         Ok(Self {
             problem,
             settings,
@@ -1157,7 +970,7 @@ impl HarmonicBalance {
         settings.check()?;
         check_unknowns(self.m, &settings)?;
         if settings.samples != self.settings.samples || settings.harmonics != self.settings.harmonics {
-            (self.full, self.half) = Plans::of(&settings);
+            (self.full, self.half) = plans_of(&settings);
         }
         self.settings = settings;
         self.samples = settings.samples;

@@ -1,6 +1,7 @@
-//! Newton steps of the harmonic balance without its dense LU: GMRES without
-//! restarts on the Jacobian as an operator, preconditioned by the sparse LU of
-//! the Jacobian's band of neighbouring harmonics (docs/PERIODIC.md §2).
+//! Newton steps of the harmonic balance without its dense LU: the Jacobian as
+//! an operator (`Operator`), GMRES without restarts on it, preconditioned by
+//! the sparse LU of the Jacobian's band of neighbouring harmonics
+//! (docs/PERIODIC.md §2).
 //!
 //! The balance's Jacobian couples every kept harmonic with every other
 //! through the Fourier coefficients of the tangent stiffness and damping
@@ -16,7 +17,9 @@
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use rustfft::num_complex::Complex;
 
+use super::series::{analyse_with, synthesize_with, Plans};
 use super::PeriodicError;
 
 /// Harmonics on either side of each harmonic that the preconditioner keeps of
@@ -215,6 +218,108 @@ pub(super) fn gmres(
     }
     precondition(&mut x);
     (x, GmresReport { products: k })
+}
+
+/// The balance's Jacobian at one point as an operator, for GMRES (module `krylov`):
+/// its product with a vector from the tangent sequences sample by sample (two transforms
+/// per coordinate), the inertia per harmonic and the switches' rank-one time terms; and
+/// the sparse LU of its band of neighbouring harmonics as the preconditioner.
+pub(super) struct Operator {
+    pub(super) m: usize,
+    pub(super) harmonics: usize,
+    /// The transforms of the evaluation's N samples.
+    pub(super) plans: Plans,
+    /// ν [rad/s], the deflection scale, PᵀMP and the rows' scale (as [`Inertia`]).
+    pub(super) nu: f64,
+    pub(super) q_scale: f64,
+    pub(super) mass: Vec<f64>,
+    pub(super) row: Vec<f64>,
+    /// The evaluation's tangent sequences, as `HarmonicBalance::evaluate` keeps them.
+    pub(super) tangents: Vec<f64>,
+    /// The switches' time terms u vᵀ.
+    pub(super) terms: Vec<(Vec<f64>, Vec<f64>)>,
+    /// The band's pattern, values and LU.
+    pub(super) pattern: BandPattern,
+    pub(super) band: Vec<f64>,
+    pub(super) lu: faer::sparse::linalg::solvers::Lu<usize, f64>,
+}
+
+impl Operator {
+    /// `out` = J `d`.
+    pub(super) fn apply(&self, d: &[f64], out: &mut [f64]) {
+        let (m, h) = (self.m, self.harmonics);
+        let plans = &self.plans;
+        let ns = plans.len();
+        let mut buffer = vec![Complex::new(0.0, 0.0); ns];
+        // δy and δẏ of each coordinate, coordinate-major.
+        let (mut y, mut yd) = (vec![0.0; ns * m], vec![0.0; ns * m]);
+        let nu = self.nu;
+        for b in 0..m {
+            synthesize_with(plans, h, |c| d[c * m + b], &mut buffer, &mut y[b * ns..][..ns]);
+            synthesize_with(
+                plans,
+                h,
+                |c| {
+                    let k = c.div_ceil(2) as f64;
+                    match c {
+                        0 => 0.0,
+                        // ẏ: a_k → k ν b_k, b_k → −k ν a_k.
+                        c if c % 2 == 1 => k * nu * d[(c + 1) * m + b],
+                        c => -k * nu * d[(c - 1) * m + b],
+                    }
+                },
+                &mut buffer,
+                &mut yd[b * ns..][..ns],
+            );
+        }
+        let mut g = vec![0.0; ns];
+        let mut coefficients = vec![0.0; 2 * h + 1];
+        for a in 0..m {
+            g.iter_mut().for_each(|v| *v = 0.0);
+            for b in 0..m {
+                let k = &self.tangents[(b * m + a) * ns..][..ns];
+                let c = &self.tangents[((m + b) * m + a) * ns..][..ns];
+                let (yb, ydb) = (&y[b * ns..][..ns], &yd[b * ns..][..ns]);
+                for j in 0..ns {
+                    g[j] += k[j] * yb[j] + c[j] * ydb[j];
+                }
+            }
+            analyse_with(plans, h, &g, &mut buffer, &mut coefficients);
+            for (cc, value) in coefficients.iter().enumerate() {
+                out[cc * m + a] = self.q_scale * self.row[a] * value;
+            }
+        }
+        let inertia = Inertia { mass: &self.mass, row: &self.row, nu, q_scale: self.q_scale };
+        for cc in 1..=2 * h {
+            for a in 0..m {
+                out[cc * m + a] += (0..m).map(|b| inertia.at(cc, a, b) * d[cc * m + b]).sum::<f64>();
+            }
+        }
+        for (u, v) in &self.terms {
+            let along: f64 = v.iter().zip(d).map(|(p, q)| p * q).sum();
+            out.iter_mut().zip(u).for_each(|(o, w)| *o += along * w);
+        }
+    }
+}
+
+/// The inertia terms of the balance's Jacobian: −k²ν² PᵀMP on harmonic k, scaled to the row.
+pub(super) struct Inertia<'a> {
+    /// PᵀMP, m × m column-major.
+    pub(super) mass: &'a [f64],
+    /// The rows' scale.
+    pub(super) row: &'a [f64],
+    pub(super) nu: f64,
+    pub(super) q_scale: f64,
+}
+
+impl Inertia<'_> {
+    /// The entry (a, b) of coefficient block `cc`'s inertia.
+    #[inline]
+    pub(super) fn at(&self, cc: usize, a: usize, b: usize) -> f64 {
+        let k = cc.div_ceil(2) as f64;
+        let m = self.row.len();
+        -k * k * self.mass[a + m * b] * self.row[a] * self.nu * self.nu * self.q_scale
+    }
 }
 
 #[cfg(test)]

@@ -38,6 +38,7 @@
 
 mod harmonic;
 mod krylov;
+mod series;
 mod switches;
 mod variational;
 
