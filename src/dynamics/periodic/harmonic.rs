@@ -92,7 +92,8 @@ pub const MIN_HARMONICS: usize = 32;
 /// [`DENSE_UNKNOWNS`] its memory is the tangent sequences, 2m²N values, and
 /// GMRES's basis, at most [`KRYLOV_ITERATIONS`] vectors of the unknowns: at
 /// this bound with the transverse–torsional example's 19 coordinates (H =
-/// 526, N = 8416) 49 MB and 32 MB. The example needs 6365 at 3000 rpm.
+/// 525, N = 8400, 19 969 unknowns) 48 MB and 32 MB. The example needs 6365
+/// at 3000 rpm.
 pub const MAX_UNKNOWNS: usize = 20_000;
 
 /// Most unknowns the harmonic balance solves with the dense LU of its
