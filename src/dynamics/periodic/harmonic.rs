@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 use super::krylov::{
     gmres, precondition, BandPattern, Inertia, Operator, KRYLOV_BAND, KRYLOV_ITERATIONS, KRYLOV_TOLERANCE,
 };
-use super::series::{analyse_with, synthesize_with, Plans};
+use super::series::{analyse_with, derivative_coefficient, synthesize_with, Plans};
 use super::switches::{
     add_back, add_time_terms, illinois, locate, series_state, subtract, time_gradients, time_terms,
     SeriesResidual, Switch,
@@ -424,17 +424,17 @@ fn assemble(
     }
 }
 
-/// The Jacobian an evaluation assembles for Newton's step: dense, factorised by LU, or as
-/// the operator GMRES takes where the unknowns exceed [`DENSE_UNKNOWNS`] (none before the
-/// first evaluation).
+/// The Jacobian an evaluation assembles for Newton's step: dense (column-major), with its
+/// LU's storage, or as the operator GMRES takes where the unknowns exceed
+/// [`DENSE_UNKNOWNS`] (none before the first evaluation).
 enum Jacobian {
-    Dense(Vec<f64>),
+    Dense { matrix: Vec<f64>, lu: DenseLu },
     Operator(Option<Box<Operator>>),
 }
 
 impl Default for Jacobian {
     fn default() -> Self {
-        Self::Dense(Vec::new())
+        Self::Dense { matrix: Vec::new(), lu: DenseLu::default() }
     }
 }
 
@@ -448,15 +448,14 @@ struct Newton {
     /// Products with the Jacobian in GMRES (none with the dense LU).
     products: usize,
     jacobian: Jacobian,
-    lu: DenseLu,
 }
 
 impl Newton {
     /// Factorises the Jacobian of the last evaluation: the dense one's LU (the operator's
     /// evaluation factorised its band).
     fn factorize(&mut self, size: usize) {
-        if let Jacobian::Dense(jac) = &self.jacobian {
-            self.lu.factorize(jac, size);
+        if let Jacobian::Dense { matrix, lu } = &mut self.jacobian {
+            lu.factorize(matrix, size);
         }
         self.factorizations += 1;
     }
@@ -464,7 +463,7 @@ impl Newton {
     /// The Newton step −J⁻¹ r.
     fn step(&mut self, r: &[f64]) -> Vec<f64> {
         match &self.jacobian {
-            Jacobian::Dense(_) => self.lu.step(r),
+            Jacobian::Dense { lu, .. } => lu.step(r),
             // No evaluation has set the operator: no step (Newton stops on it).
             Jacobian::Operator(None) => vec![f64::NAN; r.len()],
             Jacobian::Operator(Some(op)) => {
@@ -889,11 +888,8 @@ pub struct HarmonicBalance {
     /// Jacobian (about 1.5 MB at 3000 rpm), tangent sequences and LU afresh.
     jacobian: Jacobian,
     tangents: Vec<f64>,
-    lu: DenseLu,
     /// Most unknowns solved with the dense LU ([`DENSE_UNKNOWNS`]).
     dense_unknowns: usize,
-    /// The harmonics on either side the operator's preconditioner keeps ([`KRYLOV_BAND`]).
-    band: usize,
     /// The crossings of the last evaluation with the switches projected.
     crossings: Vec<(f64, usize)>,
     /// The last evaluation, when it projected the switches: a Jacobian asked for
@@ -950,9 +946,7 @@ impl HarmonicBalance {
             highest: None,
             jacobian: Jacobian::default(),
             dense_unknowns: DENSE_UNKNOWNS,
-            band: KRYLOV_BAND,
             tangents: Vec::new(),
-            lu: DenseLu::default(),
             crossings: Vec::new(),
             projected: None,
         })
@@ -1031,10 +1025,8 @@ impl HarmonicBalance {
                         let k = c.div_ceil(2) as f64;
                         match (d, c) {
                             (0, _) => x[c * m + a],
+                            (1, c) => derivative_coefficient(|c| x[c * m + a], c, nu),
                             (_, 0) => 0.0,
-                            // ẏ: a_k → k ν b_k, b_k → −k ν a_k.
-                            (1, c) if c % 2 == 1 => k * nu * x[(c + 1) * m + a],
-                            (1, c) => -k * nu * x[(c - 1) * m + a],
                             _ => -k * k * nu * nu * x[c * m + a],
                         }
                     },
@@ -1248,7 +1240,7 @@ impl HarmonicBalance {
             let spectra = self.tangent_spectra(&tangents, &row, nu);
             let inertia = Inertia { mass: &self.reduced_mass, row: &row, nu, q_scale };
             match jacobian {
-                Jacobian::Dense(jac) => {
+                Jacobian::Dense { matrix: jac, .. } => {
                     jac.clear();
                     jac.resize(size * size, 0.0);
                     assemble(m, h, h, &spectra, &inertia, |r, c, v| jac[r + size * c] += v);
@@ -1257,11 +1249,11 @@ impl HarmonicBalance {
                 Jacobian::Operator(slot) => {
                     // The last operator's pattern and storage where they fit.
                     let (pattern, mut band, mut kept) = match slot.take() {
-                        Some(op) if op.pattern.is(m, h, self.band) => {
+                        Some(op) if op.pattern.is(m, h, KRYLOV_BAND) => {
                             let op = *op;
                             (op.pattern, op.band, op.tangents)
                         }
-                        _ => (BandPattern::new(m, h, self.band)?, Vec::new(), Vec::new()),
+                        _ => (BandPattern::new(m, h, KRYLOV_BAND)?, Vec::new(), Vec::new()),
                     };
                     band.clear();
                     band.resize(pattern.len(), 0.0);
@@ -1420,11 +1412,10 @@ impl HarmonicBalance {
         newton: &mut Newton,
     ) -> Result<HarmonicOrbit, PeriodicError> {
         newton.jacobian = std::mem::take(&mut self.jacobian);
-        newton.lu = std::mem::take(&mut self.lu);
         // The form this size of system takes (the storage of the other form is dropped).
         let krylov = x.len() > self.dense_unknowns;
         if krylov != matches!(newton.jacobian, Jacobian::Operator(_)) {
-            newton.jacobian = if krylov { Jacobian::Operator(None) } else { Jacobian::Dense(Vec::new()) };
+            newton.jacobian = if krylov { Jacobian::Operator(None) } else { Jacobian::default() };
         }
         // Near the root of the plain sums first (to [`HANDOVER_STEP`]); then, from there, the
         // root with the contact switches' jumps and kinks projected exactly on the full N
@@ -1447,7 +1438,6 @@ impl HarmonicBalance {
             self.newton(omega, x, r, true, newton)
         });
         self.jacobian = std::mem::take(&mut newton.jacobian);
-        self.lu = std::mem::take(&mut newton.lu);
         let (x, r, last_step) = projected?;
         Ok(HarmonicOrbit {
             speed: omega,
@@ -1917,7 +1907,7 @@ mod tests {
     /// The dense Jacobian's entries.
     fn dense(jacobian: Jacobian) -> Vec<f64> {
         match jacobian {
-            Jacobian::Dense(jac) => jac,
+            Jacobian::Dense { matrix, .. } => matrix,
             Jacobian::Operator(_) => panic!("a dense Jacobian was asked for"),
         }
     }

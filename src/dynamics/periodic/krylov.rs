@@ -19,7 +19,7 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use rustfft::num_complex::Complex;
 
-use super::series::{analyse_with, synthesize_with, Plans};
+use super::series::{analyse_with, derivative_coefficient, synthesize_with, Plans};
 use super::PeriodicError;
 
 /// Harmonics on either side of each harmonic that the preconditioner keeps of
@@ -256,21 +256,8 @@ impl Operator {
         let nu = self.nu;
         for b in 0..m {
             synthesize_with(plans, h, |c| d[c * m + b], &mut buffer, &mut y[b * ns..][..ns]);
-            synthesize_with(
-                plans,
-                h,
-                |c| {
-                    let k = c.div_ceil(2) as f64;
-                    match c {
-                        0 => 0.0,
-                        // ẏ: a_k → k ν b_k, b_k → −k ν a_k.
-                        c if c % 2 == 1 => k * nu * d[(c + 1) * m + b],
-                        c => -k * nu * d[(c - 1) * m + b],
-                    }
-                },
-                &mut buffer,
-                &mut yd[b * ns..][..ns],
-            );
+            let velocity = |c| derivative_coefficient(|c| d[c * m + b], c, nu);
+            synthesize_with(plans, h, velocity, &mut buffer, &mut yd[b * ns..][..ns]);
         }
         let mut g = vec![0.0; ns];
         let mut coefficients = vec![0.0; 2 * h + 1];

@@ -69,6 +69,17 @@ pub(super) fn synthesize_with(
     }
 }
 
+/// Coefficient block `c` of the time derivative of the series whose blocks `coefficient`
+/// gives, at ν = `nu` \[rad/s\]: a_k → k ν b_k, b_k → −k ν a_k, the constant 0.
+pub(super) fn derivative_coefficient(coefficient: impl Fn(usize) -> f64, c: usize, nu: f64) -> f64 {
+    let k = c.div_ceil(2) as f64;
+    match c {
+        0 => 0.0,
+        c if c % 2 == 1 => k * nu * coefficient(c + 1),
+        c => -k * nu * coefficient(c - 1),
+    }
+}
+
 /// The first 2H + 1 Fourier coefficients (a₀, a_k, b_k) of N = `plans`' length samples
 /// `values` of one quantity.
 pub(super) fn analyse_with(
