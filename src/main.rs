@@ -249,6 +249,11 @@ struct SweepArgs {
     /// restarts past it by marching; default 10 nominal steps.
     #[arg(long, value_name = "RPM")]
     max_back: Option<f64>,
+    /// Continuation only: the periodic states by shooting (the default) or by
+    /// harmonic-balance (the Fourier coefficients at the rule's harmonics, each point's
+    /// multipliers from the balance's own monodromy; docs/PERIODIC.md §3).
+    #[arg(long, value_name = "SOLVER")]
+    solver: Option<String>,
     /// Continuation only: also run the marching sweep up and down on the same grid and set
     /// each of its jumps beside the nearest fold, period doubling or change of stability
     /// (jumps.md, and "jumps" in sweep.json).

@@ -16,8 +16,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dynamics::periodic::{
-    floquet_multipliers, max_abs, newton_converged, solve_dense, Linearization, PeriodicError, PeriodicOrbit,
-    PeriodicProblem,
+    floquet_multipliers, max_abs, newton_converged, refit, solve_dense, ArcLinear, ArcWork, HarmonicBalance,
+    HarmonicOrbit, Linearization, PeriodicError, PeriodicOrbit, PeriodicProblem,
 };
 use crate::dynamics::response::Work;
 
@@ -375,10 +375,9 @@ const RESTART_PERIODS: usize = 34;
 /// Speeds, one nominal step apart, at which a restart is tried before the run ends.
 const RESTART_TRIES: usize = 4;
 
-/// The state of a restart at `omega`: marching from `z` until the change
-/// over a period is at most 1e-3 of the state scales (or
-/// [`RESTART_PERIODS`] periods), then Newton.
-fn restart(
+/// The state marching reaches at `omega` from `z`: periods until one changes
+/// the state by at most 1e-3 of the state scales, at most [`RESTART_PERIODS`].
+fn march(
     problem: &mut PeriodicProblem,
     omega: f64,
     z: &[f64],
@@ -394,10 +393,275 @@ fn restart(
             break;
         }
     }
-    let orbit = problem.solve(omega, Some(&z)).ok()?;
-    add(work, &orbit.work);
-    *flows += orbit.flows;
-    Some(orbit.z)
+    Some(z)
+}
+
+/// What a continuation run follows a branch with ([`follow_branch`]): the
+/// shooting problem ([`PeriodicProblem`]) or the harmonic balance
+/// ([`BalanceBranch`]). The run's unknowns are Y = (x, λ): the solver's own x
+/// (the relative state at the period's start, or Fourier coefficients) and
+/// the speed in nominal steps λ = ω / Δω, last.
+pub trait BranchSolver {
+    /// The linearization at an accepted point: its tangent and the first
+    /// chord of the next step's corrector.
+    type Linear;
+
+    /// The first point at `omega` [rad/s] (λ in units of `unit`): its orbit
+    /// (with the work of the whole solve), its x and its linearization.
+    fn start(
+        &mut self,
+        omega: f64,
+        unit: f64,
+    ) -> Result<(PeriodicOrbit, Vec<f64>, Self::Linear), PeriodicError>;
+
+    /// The unit tangent of the branch at `linear`'s point, oriented along `orient`.
+    fn tangent(&mut self, linear: &Self::Linear, unit: f64, orient: &[f64]) -> Vec<f64>;
+
+    /// Newton's corrections from `predicted` on G = 0 and cᵀ(Y − `predicted`) = 0
+    /// (c = `constraint`), on `linear` or, when `fresh`, on a linearization
+    /// at `predicted`; `limits` are the nominal step and the most corrections,
+    /// `counts` the step's work and flows. The corrected Y and the
+    /// corrections it took, or `None`.
+    fn correct(
+        &mut self,
+        linear: &Self::Linear,
+        fresh: bool,
+        constraint: &[f64],
+        predicted: &[f64],
+        limits: (f64, usize),
+        counts: (&mut Work, &mut usize),
+    ) -> Option<(Vec<f64>, usize)>;
+
+    /// The x of a periodic state at `omega` [rad/s] reached by marching from
+    /// `from` (the x of the furthest point), then Newton; `None` where there is none.
+    fn restart(&mut self, omega: f64, from: &[f64], work: &mut Work, flows: &mut usize) -> Option<Vec<f64>>;
+
+    /// The orbit at the corrected `point` = (x, ω [rad/s], the nominal step
+    /// [rad/s]) with its multipliers (`counts`: the step's work and flows, the
+    /// linearization's added), and its linearization.
+    fn accept(
+        &mut self,
+        point: (&[f64], f64, f64),
+        corrections: usize,
+        counts: (&mut Work, &mut usize),
+    ) -> Result<(PeriodicOrbit, Self::Linear), PeriodicError>;
+
+    /// Brings `vectors` (each Y, λ last) to the unknowns the solver takes at
+    /// `omega` [rad/s] before a step; whether they changed (the last
+    /// linearization then no longer fits them).
+    fn fit(&mut self, _omega: f64, _vectors: &mut [&mut Vec<f64>]) -> bool {
+        false
+    }
+}
+
+impl BranchSolver for PeriodicProblem {
+    type Linear = Linearization;
+
+    fn start(
+        &mut self,
+        omega: f64,
+        _unit: f64,
+    ) -> Result<(PeriodicOrbit, Vec<f64>, Linearization), PeriodicError> {
+        let (first, lin) = self.solve_linearized(omega, None)?;
+        let z = first.z.clone();
+        Ok((first, z, lin))
+    }
+
+    fn tangent(&mut self, linear: &Linearization, unit: f64, orient: &[f64]) -> Vec<f64> {
+        tangent(linear, unit, orient)
+    }
+
+    fn correct(
+        &mut self,
+        linear: &Linearization,
+        fresh: bool,
+        constraint: &[f64],
+        predicted: &[f64],
+        (unit, max_corrections): (f64, usize),
+        (work, flows): (&mut Work, &mut usize),
+    ) -> Option<(Vec<f64>, usize)> {
+        let tol = self.settings().newton_tolerance;
+        let mut corrector = Corrector { unit, tol, max_corrections, work, flows };
+        // After a failed correction the chord matrix is taken at the
+        // predicted point instead of the last accepted one (a contact that
+        // starts or ends between the two changes the linearization).
+        let chord = if fresh {
+            corrector.chord_at(self, predicted, linear, constraint)
+        } else {
+            bordered(linear, unit, constraint)
+        };
+        corrector.correct(self, &chord, constraint, predicted)
+    }
+
+    fn restart(&mut self, omega: f64, from: &[f64], work: &mut Work, flows: &mut usize) -> Option<Vec<f64>> {
+        let z = march(self, omega, from, work, flows)?;
+        let orbit = self.solve(omega, Some(&z)).ok()?;
+        add(work, &orbit.work);
+        *flows += orbit.flows;
+        Some(orbit.z)
+    }
+
+    fn accept(
+        &mut self,
+        (z, omega, _): (&[f64], f64, f64),
+        corrections: usize,
+        (work, flows): (&mut Work, &mut usize),
+    ) -> Result<(PeriodicOrbit, Linearization), PeriodicError> {
+        let lin = self.linearize(omega, z, work)?;
+        *flows += self.linearization_flows();
+        let multipliers = floquet_multipliers(&lin.monodromy, z.len())?;
+        let orbit = PeriodicOrbit {
+            speed: omega,
+            period: self.period(omega),
+            cycles: self.cycles(),
+            z: z.to_vec(),
+            residual: max_abs(&lin.residual),
+            newton_iterations: corrections,
+            multipliers,
+            flows: *flows,
+            work: *work,
+        };
+        Ok((orbit, lin))
+    }
+}
+
+/// The harmonic balance as a [`BranchSolver`]: x are the Fourier
+/// coefficients at the number of harmonics the rule gives at each point's
+/// speed ([`HarmonicBalance::arc_fit`]), corrected by Newton on the bordered
+/// balance (`HarmonicBalance::arc_correct`), each point's multipliers from
+/// the balance's own monodromy over the settings' N intervals.
+pub struct BalanceBranch<'a> {
+    balance: &'a mut HarmonicBalance,
+    /// The balance's orbits of the points accepted, in the order of the
+    /// branch's points (for their forces: [`HarmonicBalance::steady_state`]).
+    pub orbits: Vec<HarmonicOrbit>,
+}
+
+impl<'a> BalanceBranch<'a> {
+    /// Continuation on `balance`.
+    pub fn new(balance: &'a mut HarmonicBalance) -> Self {
+        Self { balance, orbits: Vec::new() }
+    }
+
+    /// The balance.
+    pub fn balance(&mut self) -> &mut HarmonicBalance {
+        self.balance
+    }
+
+    /// The branch point's orbit at `x` and `omega` with its multipliers, kept in [`Self::orbits`].
+    fn orbit(
+        &mut self,
+        omega: f64,
+        x: &[f64],
+        linear: &ArcLinear,
+        corrections: usize,
+        arc: &ArcWork,
+        (work, flows): (&mut Work, &mut usize),
+    ) -> Result<PeriodicOrbit, PeriodicError> {
+        let orbit = self.balance.arc_orbit(omega, x, linear, corrections, arc);
+        let intervals = self.balance.settings().samples;
+        let multipliers = self.balance.floquet_multipliers(&orbit, intervals)?;
+        let z = self.balance.initial_unknowns(&orbit);
+        self.orbits.push(orbit);
+        Ok(PeriodicOrbit {
+            speed: omega,
+            period: self.balance.problem().period(omega),
+            cycles: self.balance.problem().cycles(),
+            z,
+            residual: linear.residual(),
+            newton_iterations: corrections,
+            multipliers,
+            flows: *flows,
+            work: *work,
+        })
+    }
+}
+
+/// `arc`'s force evaluations and corrections into `work`.
+fn add_arc(work: &mut Work, arc: &ArcWork) {
+    work.rhs_evaluations += arc.evaluations;
+    work.newton_iterations += arc.corrections as u64;
+}
+
+impl BranchSolver for BalanceBranch<'_> {
+    type Linear = ArcLinear;
+
+    fn start(
+        &mut self,
+        omega: f64,
+        unit: f64,
+    ) -> Result<(PeriodicOrbit, Vec<f64>, ArcLinear), PeriodicError> {
+        self.balance.arc_fit(omega)?;
+        let solved = self.balance.solve(omega, None)?;
+        let mut work = Work {
+            steps: solved.march_steps,
+            rhs_evaluations: solved.force_evaluations,
+            newton_iterations: solved.iterations as u64,
+            ..Work::default()
+        };
+        let mut arc = ArcWork::default();
+        let x = solved.coefficients;
+        let linear = self.balance.arc_linearize(omega, &x, unit, &mut arc)?;
+        add_arc(&mut work, &arc);
+        let orbit = self.orbit(omega, &x, &linear, solved.iterations, &arc, (&mut work, &mut 0))?;
+        Ok((orbit, x, linear))
+    }
+
+    fn tangent(&mut self, linear: &ArcLinear, _unit: f64, orient: &[f64]) -> Vec<f64> {
+        self.balance.arc_tangent(linear, orient)
+    }
+
+    fn correct(
+        &mut self,
+        linear: &ArcLinear,
+        fresh: bool,
+        constraint: &[f64],
+        predicted: &[f64],
+        limits: (f64, usize),
+        (work, _): (&mut Work, &mut usize),
+    ) -> Option<(Vec<f64>, usize)> {
+        let mut arc = ArcWork::default();
+        let found = self.balance.arc_correct(linear, fresh, constraint, predicted, limits, &mut arc);
+        add_arc(work, &arc);
+        found
+    }
+
+    fn restart(&mut self, omega: f64, from: &[f64], work: &mut Work, flows: &mut usize) -> Option<Vec<f64>> {
+        let z = self.balance.state_of(omega, from);
+        let z = march(self.balance.problem_mut(), omega, &z, work, flows)?;
+        self.balance.arc_fit(omega).ok()?;
+        let orbit = self.balance.solve_from_state(omega, &z).ok()?;
+        work.rhs_evaluations += orbit.force_evaluations;
+        work.steps += orbit.march_steps;
+        work.newton_iterations += orbit.iterations as u64;
+        Some(orbit.coefficients)
+    }
+
+    fn accept(
+        &mut self,
+        (x, omega, unit): (&[f64], f64, f64),
+        corrections: usize,
+        (work, flows): (&mut Work, &mut usize),
+    ) -> Result<(PeriodicOrbit, ArcLinear), PeriodicError> {
+        let mut arc = ArcWork::default();
+        let linear = self.balance.arc_linearize(omega, x, unit, &mut arc)?;
+        add_arc(work, &arc);
+        let orbit = self.orbit(omega, x, &linear, corrections, &arc, (work, flows))?;
+        Ok((orbit, linear))
+    }
+
+    fn fit(&mut self, omega: f64, vectors: &mut [&mut Vec<f64>]) -> bool {
+        match self.balance.arc_fit(omega) {
+            Ok(true) => {
+                let unknowns = self.balance.unknowns();
+                for v in vectors.iter_mut() {
+                    **v = refit(v, unknowns, true);
+                }
+                true
+            }
+            _ => false,
+        }
+    }
 }
 
 /// Follows the branch of periodic states of `problem` from `settings.from`
@@ -421,6 +685,16 @@ fn restart(
 pub fn continue_branch(
     problem: &mut PeriodicProblem,
     settings: &ContinuationSettings,
+    progress: impl FnMut(&BranchPoint),
+) -> Result<Branch, ContinuationError> {
+    follow_branch(problem, settings, progress)
+}
+
+/// [`continue_branch`] with any [`BranchSolver`]: the shooting problem, or
+/// the harmonic balance ([`BalanceBranch`]).
+pub fn follow_branch<S: BranchSolver>(
+    solver: &mut S,
+    settings: &ContinuationSettings,
     mut progress: impl FnMut(&BranchPoint),
 ) -> Result<Branch, ContinuationError> {
     settings.check()?;
@@ -428,15 +702,13 @@ pub fn continue_branch(
     let direction = (settings.to - settings.from).signum();
     let lambda_end = settings.to / unit;
     let lambda_start = settings.from / unit;
-    let tol = problem.settings().newton_tolerance;
-    let (first, mut lin) = problem.solve_linearized(settings.from, None)?;
-    let m = first.z.len();
+    let (first, x0, mut lin) = solver.start(settings.from, unit)?;
     let mut total = first.work;
     let mut flows = first.flows;
-    let mut seed = vec![0.0; m + 1];
-    seed[m] = direction;
-    let mut t = tangent(&lin, unit, &seed);
-    let mut y: Vec<f64> = first.z.iter().copied().chain([settings.from / unit]).collect();
+    let mut seed = vec![0.0; x0.len() + 1];
+    seed[x0.len()] = direction;
+    let mut t = solver.tangent(&lin, unit, &seed);
+    let mut y: Vec<f64> = x0.into_iter().chain([settings.from / unit]).collect();
     // The point furthest towards `to`, where a restart begins.
     let mut furthest = y.clone();
     // Speed travelled (in nominal steps) since the furthest point last moved on.
@@ -446,7 +718,7 @@ pub fn continue_branch(
         stable: first.is_stable(),
         orbit: first,
         segment: 0,
-        speed_slope: t[m] * unit,
+        speed_slope: t[t.len() - 1] * unit,
         after_gap: false,
     }];
     progress(&points[0]);
@@ -458,6 +730,12 @@ pub fn continue_branch(
     let mut retracing = false;
     let mut ended = String::from("reached the last speed");
     while points.len() < settings.max_points {
+        // The unknowns the solver takes at this speed (the balance's harmonics).
+        let speed_now = y[y.len() - 1] * unit;
+        if solver.fit(speed_now, &mut [&mut y, &mut t, &mut furthest]) {
+            refresh = true;
+        }
+        let m = y.len() - 1;
         // The last step lands on the last speed exactly (speed fixed instead
         // of the arclength); no step changes the speed by more than a nominal step.
         let mut last = false;
@@ -478,26 +756,12 @@ pub fn continue_branch(
         };
         let mut work = Work::default();
         let mut step_flows = 0;
-        let mut corrector = Corrector {
-            unit,
-            tol,
-            max_corrections: settings.max_corrections,
-            work: &mut work,
-            flows: &mut step_flows,
-        };
-        // After a failed correction the chord matrix is taken at the
-        // predicted point instead of the last accepted one (a contact that
-        // starts or ends between the two changes the linearization).
+        let limits = (unit, settings.max_corrections);
         let mut gap = None;
         let mut accepted = if retracing {
             None
         } else {
-            let chord = if refresh {
-                corrector.chord_at(problem, &predicted, &lin, &constraint)
-            } else {
-                bordered(&lin, unit, &constraint)
-            };
-            corrector.correct(problem, &chord, &constraint, &predicted)
+            solver.correct(&lin, refresh, &constraint, &predicted, limits, (&mut work, &mut step_flows))
         };
         if accepted.is_none() && !retracing {
             ds *= 0.5;
@@ -508,12 +772,13 @@ pub fn continue_branch(
                 continue;
             }
             // The leaps: along the tangent, corrected from their far end with twice the corrections.
-            corrector.max_corrections = 2 * settings.max_corrections;
             for leap in [1.0, 2.0] {
                 let h = leap * one_step.min(1.0);
                 let far: Vec<f64> = y.iter().zip(&t).map(|(a, b)| a + h * b).collect();
-                let chord = corrector.chord_at(problem, &far, &lin, &t);
-                if let Some(found) = corrector.correct(problem, &chord, &t, &far) {
+                let limits = (unit, 2 * settings.max_corrections);
+                if let Some(found) =
+                    solver.correct(&lin, true, &t, &far, limits, (&mut work, &mut step_flows))
+                {
                     accepted = Some(found);
                     gap = Some(GapKind::Leap);
                     break;
@@ -543,7 +808,7 @@ pub fn continue_branch(
                 let beyond = (lambda - lambda_end) * direction >= 0.0;
                 let lambda = if beyond { lambda_end } else { lambda };
                 tried.push(lambda * unit);
-                if let Some(z) = restart(problem, lambda * unit, &furthest[..m], &mut work, &mut step_flows) {
+                if let Some(z) = solver.restart(lambda * unit, &furthest[..m], &mut work, &mut step_flows) {
                     accepted = Some((z.into_iter().chain([lambda]).collect(), 0));
                     gap = Some(GapKind::Restart);
                     last = beyond;
@@ -567,41 +832,25 @@ pub fn continue_branch(
         }
         let Some((x, corrections)) = accepted else { unreachable!("a failed step has ended the run") };
         refresh = false;
-        let omega = x[m] * unit;
-        let new_lin = match problem.linearize(omega, &x[..m], &mut work) {
-            Ok(l) => l,
-            Err(e) => {
-                add(&mut total, &work);
-                flows += step_flows;
-                ended = format!("stopped at {omega:.4} rad/s: {e}");
-                break;
-            }
-        };
-        step_flows += problem.linearization_flows();
+        let k = x.len() - 1;
+        let omega = x[k] * unit;
+        let (orbit, new_lin) =
+            match solver.accept((&x[..k], omega, unit), corrections, (&mut work, &mut step_flows)) {
+                Ok(accepted) => accepted,
+                Err(e) => {
+                    add(&mut total, &work);
+                    flows += step_flows;
+                    ended = format!("stopped at {omega:.4} rad/s: {e}");
+                    break;
+                }
+            };
         add(&mut total, &work);
         flows += step_flows;
         // After a restart the tangent points towards `to`; otherwise along the branch.
+        let mut seed = vec![0.0; x.len()];
+        seed[k] = direction;
         let orient = if gap == Some(GapKind::Restart) { &seed } else { &t };
-        let new_t = tangent(&new_lin, unit, orient);
-        let multipliers = match floquet_multipliers(&new_lin.monodromy, m) {
-            Ok(mu) => mu,
-            Err(e) => {
-                // The step's work is counted above.
-                ended = format!("stopped at {omega:.4} rad/s: {e}");
-                break;
-            }
-        };
-        let orbit = PeriodicOrbit {
-            speed: omega,
-            period: problem.period(omega),
-            cycles: problem.cycles(),
-            z: x[..m].to_vec(),
-            residual: max_abs(&new_lin.residual),
-            newton_iterations: corrections,
-            multipliers,
-            flows: step_flows,
-            work,
-        };
+        let new_t = solver.tangent(&new_lin, unit, orient);
         let i = points.len();
         if let Some(kind) = gap {
             gaps.push(Gap { kind, from: y[m] * unit, to: omega, point: i });
@@ -619,16 +868,16 @@ pub fn continue_branch(
                     .iter()
                     .any(|e| e.kind == BifurcationKind::Fold && (e.speed - b.speed).abs() <= 0.1 * unit)
             });
-            if new_t[m] * t[m] < 0.0 {
+            if new_t[k] * t[m] < 0.0 {
                 segment += 1;
             }
         }
-        let prev_lambda = if gap.is_some() { x[m] } else { y[m] };
+        let prev_lambda = if gap.is_some() { x[k] } else { y[m] };
         let point = BranchPoint {
             stable: orbit.is_stable(),
             orbit,
             segment,
-            speed_slope: new_t[m] * unit,
+            speed_slope: new_t[k] * unit,
             after_gap: gap.is_some(),
         };
         progress(&point);
@@ -636,11 +885,14 @@ pub fn continue_branch(
         y = x;
         t = new_t;
         lin = new_lin;
-        if (y[m] - furthest[m]) * direction > 0.0 {
+        if furthest.len() != y.len() {
+            furthest = refit(&furthest, y.len() - 1, true);
+        }
+        if (y[k] - furthest[k]) * direction > 0.0 {
             furthest = y.clone();
             travel = 0.0;
         } else {
-            travel += (y[m] - prev_lambda).abs();
+            travel += (y[k] - prev_lambda).abs();
         }
         ds = if gap.is_some() {
             1.0
@@ -651,7 +903,7 @@ pub fn continue_branch(
         } else {
             ds
         };
-        if last || (y[m] - lambda_end) * direction >= 0.0 {
+        if last || (y[k] - lambda_end) * direction >= 0.0 {
             break;
         }
     }

@@ -1,13 +1,14 @@
 //! `planetwear sweep --method continuation`: periodic steady states by
-//! shooting, followed in speed by pseudo-arclength continuation
+//! shooting or by harmonic balance (`--solver`), followed in speed by pseudo-arclength continuation
 //! (docs/PERIODIC.md); the CSV and charts of the marching sweep plus
 //! stability, branch segment and Floquet multipliers.
 
 use planetwear::analysis::continuation::{
-    branch_events, continue_branch, marching_jumps, nearest_event, on_one_stable_branch, BifurcationKind,
-    Branch, BranchEvent, ContinuationSettings, CurvePoint, GapKind,
+    branch_events, continue_branch, follow_branch, marching_jumps, nearest_event, on_one_stable_branch,
+    BalanceBranch, BifurcationKind, Branch, BranchEvent, BranchPoint, ContinuationSettings, CurvePoint,
+    GapKind,
 };
-use planetwear::dynamics::periodic::{PeriodicProblem, ShootingSettings};
+use planetwear::dynamics::periodic::{HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings};
 use planetwear::dynamics::response::{sweep, Direction, SteadyState};
 use planetwear::report::continuation::{
     continuation_csv, jumps_markdown, write_continuation_response, ContinuationRun, JumpRow,
@@ -43,9 +44,16 @@ pub(crate) fn sweep_continuation(
         json,
         max_back,
         against_march,
+        solver,
         ..
     }: SweepArgs,
 ) -> Result<()> {
+    let balance = match solver.as_deref() {
+        None | Some("shooting") => false,
+        Some("harmonic-balance") => true,
+        Some(other) => bail!("--solver {other}: allowed are shooting, harmonic-balance"),
+    };
+    let solver_name = if balance { "harmonic-balance" } else { "shooting" };
     let (set, run_settings) = validated_with_run(&load_scene(&scene)?)?;
     // The grid of the marching sweep: the same rules for the same flags (and
     // the grid of `--against-march`).
@@ -93,15 +101,28 @@ pub(crate) fn sweep_continuation(
             if let Some(back) = back {
                 settings.max_back = back;
             }
-            let branch = continue_branch(&mut problem, &settings, |p| {
+            let progress = |p: &BranchPoint| {
                 let at = ((rad_per_s_to_rpm(p.orbit.speed) - a).abs() / step) as u64;
                 done[k].store(at.min(per_run), Ordering::Relaxed);
                 bar.set_position(done.iter().map(|d| d.load(Ordering::Relaxed)).sum());
-            })?;
-            let mut states = Vec::with_capacity(branch.points.len());
-            for p in &branch.points {
-                states.push(problem.steady_state(&p.orbit)?);
-            }
+            };
+            let mut states = Vec::new();
+            let branch = if balance {
+                let mut hb = HarmonicBalance::new(problem, HarmonicSettings::default())?;
+                let mut solver = BalanceBranch::new(&mut hb);
+                let branch = follow_branch(&mut solver, &settings, progress)?;
+                let orbits = std::mem::take(&mut solver.orbits);
+                for orbit in &orbits {
+                    states.push(hb.steady_state(orbit)?);
+                }
+                branch
+            } else {
+                let branch = continue_branch(&mut problem, &settings, progress)?;
+                for p in &branch.points {
+                    states.push(problem.steady_state(&p.orbit)?);
+                }
+                branch
+            };
             Ok(Run { direction: name, branch, states })
         })
         .collect::<Result<Vec<Run>>>()?;
@@ -171,6 +192,7 @@ pub(crate) fn sweep_continuation(
     let summary = serde_json::json!({
         "scene": set.name(),
         "method": "continuation",
+        "solver": solver_name,
         "points": runs.iter().map(|r| r.branch.points.len()).sum::<usize>(),
         "wall_time_s": wall,
         "flows": runs.iter().map(|r| r.branch.flows).sum::<usize>(),
@@ -195,14 +217,26 @@ pub(crate) fn sweep_continuation(
     for r in &runs {
         let (a, b) = if r.direction == "up" { (from, to) } else { (to, from) };
         let branch = &r.branch;
-        outln!(
-            "{}: {} periodic states from {a} to {b} rpm ({} flows over one period, {} steps); {}",
-            r.direction,
-            branch.points.len(),
-            branch.flows,
-            branch.work.steps,
-            branch.ended,
-        )?;
+        if balance {
+            outln!(
+                "{}: {} periodic states from {a} to {b} rpm by harmonic balance ({} force evaluations; \
+                 {} flows over one period in its restarts); {}",
+                r.direction,
+                branch.points.len(),
+                branch.work.rhs_evaluations,
+                branch.flows,
+                branch.ended,
+            )?;
+        } else {
+            outln!(
+                "{}: {} periodic states from {a} to {b} rpm ({} flows over one period, {} steps); {}",
+                r.direction,
+                branch.points.len(),
+                branch.flows,
+                branch.work.steps,
+                branch.ended,
+            )?;
+        }
         for b in &branch.bifurcations {
             let kind = match b.kind {
                 BifurcationKind::Fold => "fold",

@@ -27,6 +27,10 @@
 //! time integrator's located events is measured, not assumed
 //! (docs/PERIODIC.md).
 
+mod arc;
+
+pub use arc::{refit, ArcLinear, ArcWork, ARC_CHORD_CONTRACTION, SPEED_DIFFERENCE};
+
 use rustfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
 
@@ -897,6 +901,9 @@ pub struct HarmonicBalance {
     /// iteration that contracted too little) takes its residual and switches
     /// instead of locating them again.
     projected: Option<Projected>,
+    /// Counts the continuation's linearizations, the last of which the
+    /// Jacobian is (module `arc`).
+    arc_generation: u64,
 }
 
 /// A projected residual evaluation kept for the Jacobian at the same point.
@@ -949,6 +956,7 @@ impl HarmonicBalance {
             tangents: Vec::new(),
             crossings: Vec::new(),
             projected: None,
+            arc_generation: 0,
         })
     }
 
