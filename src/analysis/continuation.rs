@@ -448,9 +448,10 @@ pub trait BranchSolver {
 
     /// Brings `vectors` (each Y, λ last) to the unknowns the solver takes at
     /// `omega` [rad/s] before a step; whether they changed (the last
-    /// linearization then no longer fits them).
-    fn fit(&mut self, _omega: f64, _vectors: &mut [&mut Vec<f64>]) -> bool {
-        false
+    /// linearization then no longer fits them), or why the solver cannot
+    /// take that speed (the run ends there).
+    fn fit(&mut self, _omega: f64, _vectors: &mut [&mut Vec<f64>]) -> Result<bool, PeriodicError> {
+        Ok(false)
     }
 }
 
@@ -650,17 +651,17 @@ impl BranchSolver for BalanceBranch<'_> {
         Ok((orbit, linear))
     }
 
-    fn fit(&mut self, omega: f64, vectors: &mut [&mut Vec<f64>]) -> bool {
-        match self.balance.arc_fit(omega) {
-            Ok(true) => {
-                let unknowns = self.balance.unknowns();
-                for v in vectors.iter_mut() {
-                    **v = refit(v, unknowns, true);
-                }
-                true
+    /// The rule's harmonics at `omega`; an error where they would exceed
+    /// what the balance takes ([`crate::dynamics::periodic::MAX_UNKNOWNS`]).
+    fn fit(&mut self, omega: f64, vectors: &mut [&mut Vec<f64>]) -> Result<bool, PeriodicError> {
+        let changed = self.balance.arc_fit(omega)?;
+        if changed {
+            let unknowns = self.balance.unknowns();
+            for v in vectors.iter_mut() {
+                **v = refit(v, unknowns, true);
             }
-            _ => false,
         }
+        Ok(changed)
     }
 }
 
@@ -732,8 +733,12 @@ pub fn follow_branch<S: BranchSolver>(
     while points.len() < settings.max_points {
         // The unknowns the solver takes at this speed (the balance's harmonics).
         let speed_now = y[y.len() - 1] * unit;
-        if solver.fit(speed_now, &mut [&mut y, &mut t, &mut furthest]) {
-            refresh = true;
+        match solver.fit(speed_now, &mut [&mut y, &mut t, &mut furthest]) {
+            Ok(changed) => refresh |= changed,
+            Err(e) => {
+                ended = format!("stopped at {speed_now:.4} rad/s: {e}");
+                break;
+            }
         }
         let m = y.len() - 1;
         // The last step lands on the last speed exactly (speed fixed instead
