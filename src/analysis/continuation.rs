@@ -544,11 +544,6 @@ impl<'a> BalanceBranch<'a> {
         Self { balance, orbits: Vec::new() }
     }
 
-    /// The balance.
-    pub fn balance(&mut self) -> &mut HarmonicBalance {
-        self.balance
-    }
-
     /// The branch point's orbit at `x` and `omega` with its multipliers, kept in [`Self::orbits`].
     fn orbit(
         &mut self,
@@ -653,13 +648,13 @@ impl BranchSolver for BalanceBranch<'_> {
 
     /// The rule's harmonics at `omega`; an error where they would exceed
     /// what the balance takes ([`crate::dynamics::periodic::MAX_UNKNOWNS`]).
+    /// Every vector of another length (the run's furthest point, after a
+    /// restart took other harmonics) is brought to them too.
     fn fit(&mut self, omega: f64, vectors: &mut [&mut Vec<f64>]) -> Result<bool, PeriodicError> {
         let changed = self.balance.arc_fit(omega)?;
-        if changed {
-            let unknowns = self.balance.unknowns();
-            for v in vectors.iter_mut() {
-                **v = refit(v, unknowns, true);
-            }
+        let unknowns = self.balance.unknowns();
+        for v in vectors.iter_mut().filter(|v| v.len() != unknowns + 1) {
+            **v = refit(v, unknowns, true);
         }
         Ok(changed)
     }
@@ -890,10 +885,9 @@ pub fn follow_branch<S: BranchSolver>(
         y = x;
         t = new_t;
         lin = new_lin;
-        if furthest.len() != y.len() {
-            furthest = refit(&furthest, y.len() - 1, true);
-        }
-        if (y[k] - furthest[k]) * direction > 0.0 {
+        // The furthest point's λ is its last entry (its x may hold other harmonics
+        // until the next step's fit).
+        if (y[k] - furthest[furthest.len() - 1]) * direction > 0.0 {
             furthest = y.clone();
             travel = 0.0;
         } else {

@@ -1321,10 +1321,7 @@ impl HarmonicBalance {
         let x = match guess {
             // Another H's coefficients: the common harmonics, the rest zero.
             Some(g) if g.len() % self.m == 0 && (g.len() / self.m) % 2 == 1 => {
-                let mut x = vec![0.0; self.unknowns()];
-                let common = g.len().min(x.len());
-                x[..common].copy_from_slice(&g[..common]);
-                x
+                refit(g, self.unknowns(), false)
             }
             Some(g) => {
                 return Err(PeriodicError::invalid(
@@ -1409,6 +1406,21 @@ impl HarmonicBalance {
         Ok(self.analyse_samples(&coordinates))
     }
 
+    /// The kept Jacobian's storage, taken from the balance, in the form a system of
+    /// `unknowns` takes (the storage of the other form is dropped): the dense LU's up to
+    /// [`DENSE_UNKNOWNS`], the operator's beyond.
+    fn take_jacobian(&mut self, unknowns: usize) -> Jacobian {
+        let jacobian = std::mem::take(&mut self.jacobian);
+        let krylov = unknowns > self.dense_unknowns;
+        if krylov == matches!(jacobian, Jacobian::Operator(_)) {
+            jacobian
+        } else if krylov {
+            Jacobian::Operator(None)
+        } else {
+            Jacobian::default()
+        }
+    }
+
     /// [`Self::solve`] from the coefficients `x`, its plain run on N/2 samples when
     /// `half`; `newton` counts the work and keeps the Jacobian's storage (taken from the
     /// balance and handed back to it).
@@ -1419,12 +1431,7 @@ impl HarmonicBalance {
         half: bool,
         newton: &mut Newton,
     ) -> Result<HarmonicOrbit, PeriodicError> {
-        newton.jacobian = std::mem::take(&mut self.jacobian);
-        // The form this size of system takes (the storage of the other form is dropped).
-        let krylov = x.len() > self.dense_unknowns;
-        if krylov != matches!(newton.jacobian, Jacobian::Operator(_)) {
-            newton.jacobian = if krylov { Jacobian::Operator(None) } else { Jacobian::default() };
-        }
+        newton.jacobian = self.take_jacobian(x.len());
         // Near the root of the plain sums first (to [`HANDOVER_STEP`]); then, from there, the
         // root with the contact switches' jumps and kinks projected exactly on the full N
         // samples (module `switches`), which lies 2e-4 to 1.2e-3 of the coefficients from the
@@ -1546,14 +1553,21 @@ impl HarmonicBalance {
 
     /// The orbit's relative state at t = 0 as the shooting problem's unknowns.
     pub fn initial_unknowns(&self, orbit: &HarmonicOrbit) -> Vec<f64> {
+        self.unknowns_of(&orbit.coefficients, orbit.period)
+    }
+
+    /// The relative state at t = 0 of the coefficients `coefficients` (of any number of
+    /// harmonics) of a series of period `period` \[s\], as the shooting problem's unknowns.
+    fn unknowns_of(&self, coefficients: &[f64], period: f64) -> Vec<f64> {
         let m = self.m;
-        let nu = 2.0 * std::f64::consts::PI / orbit.period;
+        let harmonics = (coefficients.len() / m - 1) / 2;
+        let nu = 2.0 * std::f64::consts::PI / period;
         let ratio = self.problem.q_scale / self.problem.v_scale;
         let mut z = vec![0.0; 2 * m];
         for a in 0..m {
-            let x = |c: usize| orbit.coefficients[c * m + a];
-            z[a] = x(0) + (1..=orbit.harmonics).map(|k| x(2 * k - 1)).sum::<f64>();
-            z[m + a] = ratio * (1..=orbit.harmonics).map(|k| k as f64 * nu * x(2 * k)).sum::<f64>();
+            let x = |c: usize| coefficients[c * m + a];
+            z[a] = x(0) + (1..=harmonics).map(|k| x(2 * k - 1)).sum::<f64>();
+            z[m + a] = ratio * (1..=harmonics).map(|k| k as f64 * nu * x(2 * k)).sum::<f64>();
         }
         z
     }

@@ -83,11 +83,7 @@ impl HarmonicBalance {
             ));
         }
         self.samples = self.settings.samples;
-        let mut newton = Newton { jacobian: std::mem::take(&mut self.jacobian), ..Newton::default() };
-        let krylov = x.len() > self.dense_unknowns;
-        if krylov != matches!(newton.jacobian, Jacobian::Operator(_)) {
-            newton.jacobian = if krylov { Jacobian::Operator(None) } else { Jacobian::default() };
-        }
+        let mut newton = Newton { jacobian: self.take_jacobian(x.len()), ..Newton::default() };
         let evaluated = self.evaluate(omega, x, Some(&mut newton.jacobian), &mut work.evaluations, true);
         let residual = match evaluated {
             Ok(r) => r,
@@ -139,35 +135,14 @@ impl HarmonicBalance {
 
     /// Whether `linear` is the linearization whose Jacobian the balance holds
     /// at its present number of harmonics.
-    pub fn arc_current(&self, linear: &ArcLinear) -> bool {
+    fn arc_current(&self, linear: &ArcLinear) -> bool {
         linear.generation == self.arc_generation && linear.harmonics == self.settings.harmonics
     }
 
-    /// The step (δx, δλ) of the bordered system at the residual `r` with the
-    /// constraint row `constraint` (cₓ, c_λ) and its right-hand side `g`, on
-    /// `linear`'s Jacobian, which the balance must hold ([`Self::arc_current`]).
-    fn arc_step(
-        &mut self,
-        linear: &ArcLinear,
-        r: &[f64],
-        constraint: &[f64],
-        g: f64,
-        work: &mut ArcWork,
-    ) -> Vec<f64> {
-        let n = r.len();
-        let mut newton = Newton { jacobian: std::mem::take(&mut self.jacobian), ..Newton::default() };
-        let b = newton.step(r);
-        work.products += newton.products;
-        self.jacobian = std::mem::take(&mut newton.jacobian);
-        let a = &linear.solved_derivative;
-        let (cx, cl) = constraint.split_at(n);
-        let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(p, q)| p * q).sum::<f64>();
-        let dl = (g - dot(cx, &b)) / (cl[0] - dot(cx, a));
-        b.iter().zip(a).map(|(bi, ai)| bi - dl * ai).chain([dl]).collect()
-    }
-
-    /// H_k `v` for the bordered system's right-hand side `v` = (v_R, v_c):
-    /// the bordered solve on `linear`'s Jacobian with the `updates` a ỹᵀ added.
+    /// H_k `v` for the bordered system's right-hand side `v` = (v_R, v_c): the
+    /// bordered solve on `linear`'s Jacobian, which the balance must hold
+    /// ([`Self::arc_current`]), by block elimination (b = J⁻¹v_R, δλ = (v_c −
+    /// cₓᵀb) / (c_λ − cₓᵀa), δx = b − δλ a), with the `updates` a ỹᵀ added.
     fn arc_apply(
         &mut self,
         linear: &ArcLinear,
@@ -177,8 +152,17 @@ impl HarmonicBalance {
         work: &mut ArcWork,
     ) -> Vec<f64> {
         let n = v.len() - 1;
+        // step(r) = −J⁻¹r.
         let minus: Vec<f64> = v[..n].iter().map(|x| -x).collect();
-        let mut out = self.arc_step(linear, &minus, constraint, v[n], work);
+        let mut newton = Newton { jacobian: std::mem::take(&mut self.jacobian), ..Newton::default() };
+        let b = newton.step(&minus);
+        work.products += newton.products;
+        self.jacobian = std::mem::take(&mut newton.jacobian);
+        let a = &linear.solved_derivative;
+        let (cx, cl) = constraint.split_at(n);
+        let dot = |u: &[f64], w: &[f64]| u.iter().zip(w).map(|(p, q)| p * q).sum::<f64>();
+        let dl = (v[n] - dot(cx, &b)) / (cl[0] - dot(cx, a));
+        let mut out: Vec<f64> = b.iter().zip(a).map(|(bi, ai)| bi - dl * ai).chain([dl]).collect();
         for (a, y) in updates {
             let along: f64 = y.iter().zip(v).map(|(p, q)| p * q).sum();
             out.iter_mut().zip(a).for_each(|(o, ai)| *o += along * ai);
@@ -350,23 +334,7 @@ impl HarmonicBalance {
     /// The relative state at t = 0 (the shooting problem's unknowns) of the
     /// coefficients `x` at `omega` [rad/s] ([`Self::initial_unknowns`]).
     pub fn state_of(&self, omega: f64, x: &[f64]) -> Vec<f64> {
-        let orbit = HarmonicOrbit {
-            speed: omega,
-            period: self.problem.period(omega),
-            cycles: self.problem.cycles,
-            harmonics: (x.len() / self.m - 1) / 2,
-            coefficients: x.to_vec(),
-            iterations: 0,
-            residual: 0.0,
-            last_step: 0.0,
-            factorizations: 0,
-            products: 0,
-            force_evaluations: 0,
-            march_steps: 0,
-            neighbour: None,
-            crossings: Vec::new(),
-        };
-        self.initial_unknowns(&orbit)
+        self.unknowns_of(x, self.problem.period(omega))
     }
 
     /// The shooting problem, to march on (the continuation's restarts).
