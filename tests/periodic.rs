@@ -497,6 +497,54 @@ fn the_run_command_solves_a_point_by_each_method() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Where `MAX_RULE_HARMONICS` holds the rule's H (the transverse–torsional
+/// example at 500 rpm: the rule's 1002), `run --method harmonic-balance` says
+/// so on its line and in its record, beside the H it kept.
+#[test]
+fn the_run_command_says_where_the_cap_holds_the_rules_harmonics() {
+    let bin = env!("CARGO_BIN_EXE_planetwear");
+    let run = |extra: &[&str]| {
+        let mut args =
+            vec!["run", "--scene", "example-2004", "--speed", "500", "--method", "harmonic-balance"];
+        args.extend_from_slice(extra);
+        let out = std::process::Command::new(bin).args(&args).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let doc: serde_json::Value = serde_json::from_str(&run(&["--json"])).unwrap();
+    let rule = doc["solver"]["rule_harmonics"].as_u64().expect("the rule's H in the record");
+    assert_eq!(doc["solver"]["harmonics"], 512);
+    assert!(rule > 512, "the rule asks {rule} at 500 rpm (measured 1002)");
+    let text = run(&[]);
+    let line = text.lines().find(|l| l.contains("harmonic balance: H = ")).expect("the balance's line");
+    assert!(line.contains(&format!("H = 512 harmonics (the rule's {rule} held at 512")), "{line}");
+}
+
+/// The continuation's line and summary give the highest speed at which
+/// `MAX_RULE_HARMONICS` held the rule's H (the torsional example below about
+/// 210 rpm: 150 → 200 rpm, every point held).
+#[test]
+fn the_continuation_command_says_where_the_cap_holds_the_rules_harmonics() {
+    let dir = std::env::temp_dir().join(format!("planetwear-periodic-cap-{}", std::process::id()));
+    let scene = torsional_scene_file(&dir);
+    let out_dir = dir.join("out");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_planetwear"))
+        .args(["sweep", "--scene", scene.to_str().unwrap(), "--from", "150", "--to", "200", "--step", "25"])
+        .args(["--direction", "up", "--method", "continuation", "--solver", "harmonic-balance", "--out"])
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("sweep.json")).unwrap()).unwrap();
+    let run = &summary["runs"][0];
+    let held = run["rule_harmonics_held_up_to_rpm"].as_f64().expect("where the cap held");
+    assert!((held - 200.0).abs() < 1e-6, "held up to {held} rpm");
+    assert!(text.contains("the rule's H held at 512 up to 200.0 rpm"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `--direction both` runs the continuation up from --from and down from
 /// --to, side by side: the summary lists both runs, the CSV's `run` column
 /// tells their rows apart, and the up run's fold lies in the marching
@@ -707,6 +755,8 @@ fn the_continuation_command_continues_the_harmonic_balance() {
     let runs = summary["runs"].as_array().unwrap();
     assert_eq!(runs.len(), 1);
     assert_eq!(runs[0]["ended"], "reached the last speed");
+    // The rule's H (32 here) is nowhere held by the cap.
+    assert!(runs[0]["rule_harmonics_held_up_to_rpm"].is_null(), "{}", runs[0]);
     let folds = json_folds(&runs[0]);
     assert!(folds.iter().any(|f| (f - 9569.3).abs() <= 1.0), "{folds:?}");
     let csv = std::fs::read_to_string(out.join("sweep_continuation.csv")).unwrap();
@@ -718,6 +768,7 @@ fn the_continuation_command_continues_the_harmonic_balance() {
     assert!(text.status.success());
     let text = String::from_utf8_lossy(&text.stdout);
     assert!(text.contains("rpm by harmonic balance (") && text.contains("force evaluations"), "{text}");
+    assert!(!text.contains("held at"), "{text}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -960,7 +1011,7 @@ mod harmonic_balance {
     use planetwear::dynamics::equations::PlanetaryDynamics;
     use planetwear::dynamics::periodic::{
         max_abs, HarmonicBalance, HarmonicOrbit, HarmonicSettings, Multiplier, PeriodicError, PeriodicOrbit,
-        PeriodicProblem, ShootingSettings, DENSE_UNKNOWNS,
+        PeriodicProblem, ShootingSettings, DENSE_UNKNOWNS, MAX_RULE_HARMONICS,
     };
     use planetwear::dynamics::response::{SteadyState, Work};
 
@@ -1112,6 +1163,25 @@ mod harmonic_balance {
         let a = balance_error_of(&Scene::example_2004(), 3000.0, 0, None);
         assert_solved_by_gmres(&a);
         assert!(a.e <= 1e-3, "transverse–torsional, 3000 rpm: E_h {:.3e}", a.e);
+        assert_multipliers_agree(&a, 1e-3);
+    }
+
+    /// Below about 1000 rpm the rule asks the transverse–torsional example
+    /// for more harmonics than `MAX_RULE_HARMONICS` (500 rpm: 1002); held at
+    /// 512 (19 475 unknowns) the orbit still agrees with shooting's (measured
+    /// E_h 7.6e-6), as the cap's reason says (docs/PERIODIC.md §2).
+    #[test]
+    fn the_transverse_torsional_balance_held_at_the_cap_agrees_with_shooting() {
+        let omega = 500.0 * RPM;
+        let mut hb =
+            HarmonicBalance::new(problem_of(&Scene::example_2004(), 500.0, 0), HarmonicSettings::default())
+                .unwrap();
+        let rule = hb.rule_harmonics(omega);
+        assert!(rule > 2 * MAX_RULE_HARMONICS - 100, "the rule asks {rule} at 500 rpm");
+        assert_eq!(hb.settings_for_speed(omega).harmonics, MAX_RULE_HARMONICS);
+        let a = balance_error_of(&Scene::example_2004(), 500.0, 0, None);
+        assert_eq!(a.unknowns, 19 * (2 * MAX_RULE_HARMONICS + 1));
+        assert!(a.e <= 1e-3, "transverse–torsional, 500 rpm, H held at 512: E_h {:.3e}", a.e);
         assert_multipliers_agree(&a, 1e-3);
     }
 

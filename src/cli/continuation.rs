@@ -8,7 +8,9 @@ use planetwear::analysis::continuation::{
     BalanceBranch, BifurcationKind, Branch, BranchEvent, BranchPoint, ContinuationSettings, CurvePoint,
     GapKind,
 };
-use planetwear::dynamics::periodic::{HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings};
+use planetwear::dynamics::periodic::{
+    HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings, MAX_RULE_HARMONICS,
+};
 use planetwear::dynamics::response::{sweep, Direction, SteadyState};
 use planetwear::report::continuation::{
     continuation_csv, jumps_markdown, write_continuation_response, ContinuationRun, JumpRow,
@@ -107,6 +109,7 @@ pub(crate) fn sweep_continuation(
                 bar.set_position(done.iter().map(|d| d.load(Ordering::Relaxed)).sum());
             };
             let mut states = Vec::new();
+            let mut held = None;
             let branch = if balance {
                 let mut hb = HarmonicBalance::new(problem, HarmonicSettings::default())?;
                 let mut solver = BalanceBranch::new(&mut hb);
@@ -114,6 +117,9 @@ pub(crate) fn sweep_continuation(
                 let orbits = std::mem::take(&mut solver.orbits);
                 for orbit in &orbits {
                     states.push(hb.steady_state(orbit)?);
+                    if hb.rule_harmonics(orbit.speed) > orbit.harmonics {
+                        held = Some(held.unwrap_or(0.0_f64).max(rad_per_s_to_rpm(orbit.speed)));
+                    }
                 }
                 branch
             } else {
@@ -123,7 +129,7 @@ pub(crate) fn sweep_continuation(
                 }
                 branch
             };
-            Ok(Run { direction: name, branch, states })
+            Ok(Run { direction: name, branch, states, held })
         })
         .collect::<Result<Vec<Run>>>()?;
     bar.finish_and_clear();
@@ -220,11 +226,14 @@ pub(crate) fn sweep_continuation(
         if balance {
             outln!(
                 "{}: {} periodic states from {a} to {b} rpm by harmonic balance ({} force evaluations; \
-                 {} flows over one period in its restarts); {}",
+                 {} flows over one period in its restarts{}); {}",
                 r.direction,
                 branch.points.len(),
                 branch.work.rhs_evaluations,
                 branch.flows,
+                r.held.map_or(String::new(), |rpm| format!(
+                    "; the rule's H held at {MAX_RULE_HARMONICS} up to {rpm:.1} rpm: docs/PERIODIC.md §2"
+                )),
                 branch.ended,
             )?;
         } else {
@@ -274,6 +283,9 @@ struct Run {
     direction: &'static str,
     branch: Branch,
     states: Vec<SteadyState>,
+    /// The highest speed [rpm] of the balance's points whose rule's H
+    /// `MAX_RULE_HARMONICS` held.
+    held: Option<f64>,
 }
 
 impl Run {
@@ -316,6 +328,7 @@ impl Run {
             "bifurcations": bifurcations,
             "gaps": gaps,
             "unstable_rpm": unstable_ranges(branch),
+            "rule_harmonics_held_up_to_rpm": self.held,
         })
     }
 }

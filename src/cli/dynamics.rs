@@ -130,7 +130,8 @@ fn periodic_point(
     method: &str,
 ) -> Result<(SteadyState, String, serde_json::Value)> {
     use planetwear::dynamics::periodic::{
-        all_inside_unit_circle, HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings,
+        all_inside_unit_circle, highest_frequency, HarmonicBalance, HarmonicSettings, PeriodicProblem,
+        ShootingSettings, MAX_RULE_HARMONICS,
     };
     let rpm = rad_per_s_to_rpm(omega);
     let settings = ShootingSettings { samples_per_mesh_cycle: samples, ..ShootingSettings::default() };
@@ -156,7 +157,15 @@ fn periodic_point(
         ss.stats.newton_iterations = orbit.newton_iterations as u64;
         return Ok((ss, line, record));
     }
-    let settings = HarmonicSettings::for_speed(&problem, omega);
+    // The rule's H, and whether MAX_RULE_HARMONICS held it (the line and the record say so).
+    let (highest, period) = (highest_frequency(problem.model(), omega), problem.period(omega));
+    let settings = HarmonicSettings::for_frequency(highest, period);
+    let rule = HarmonicSettings::rule_harmonics(highest, period);
+    let held = if rule > settings.harmonics {
+        format!(" (the rule's {rule} held at {MAX_RULE_HARMONICS}: docs/PERIODIC.md §2)")
+    } else {
+        String::new()
+    };
     let mut hb = HarmonicBalance::new(problem, settings).with_context(|| {
         format!("harmonic balance at {rpm} rpm (H from the model's highest natural frequency)")
     })?;
@@ -173,7 +182,7 @@ fn periodic_point(
     // solve started from a neighbouring speed's orbit: the line says which.
     let neighbour = orbit.neighbour.map(rad_per_s_to_rpm);
     let line = format!(
-        "harmonic balance: H = {} harmonics, N = {} samples, {} Newton iterations, {} Jacobians{}{}; \
+        "harmonic balance: H = {} harmonics{held}, N = {} samples, {} Newton iterations, {} Jacobians{}{}; \
          largest Floquet multiplier |μ| = {mu:.4} from the orbit's tangents ({})",
         settings.harmonics,
         settings.samples,
@@ -187,6 +196,7 @@ fn periodic_point(
     let record = serde_json::json!({
         "method": "harmonic-balance",
         "harmonics": settings.harmonics,
+        "rule_harmonics": rule,
         "samples": settings.samples,
         "newton_iterations": orbit.iterations,
         "jacobians": orbit.factorizations,

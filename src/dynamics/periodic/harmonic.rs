@@ -92,6 +92,19 @@ pub const HARMONICS_PER_MODE_ORDER: f64 = 2.5;
 /// 32; 13 000 rpm: 7.8e-4 with 24, 7.6e-4 with 32).
 pub const MIN_HARMONICS: usize = 32;
 
+/// The most harmonics [`HarmonicSettings::for_speed`] keeps, whatever the
+/// rule asks: the transverse–torsional example's 19 coordinates then take
+/// 19 × 1025 = 19 475 unknowns, within [`MAX_UNKNOWNS`]. The rule's factor was
+/// measured on the torsional planets' modes; the transverse–torsional model's
+/// highest modes (98–113 kHz) ask for more than its orbits need below about
+/// 1000 rpm, where the cap holds H. Measured there against shooting's orbit
+/// (docs/PERIODIC.md §2): 500 rpm, the rule's 1002 held at 512, E_h 7.6e-6;
+/// 800 rpm, 626 held at 512, E_h 1.0e-6 (1000 rpm, the rule's 501, 7.6e-7).
+/// The torsional example's rule reaches the cap only below about 210 rpm
+/// (100 rpm: the rule's 1078 held at 512, E_h 1.6e-4 against shooting's orbit).
+/// Where it holds, the command line says so ([`HarmonicSettings::rule_harmonics`]).
+pub const MAX_RULE_HARMONICS: usize = 512;
+
 /// Most unknowns m(2H + 1) the harmonic balance takes. Beyond
 /// [`DENSE_UNKNOWNS`] its memory is the tangent sequences, 2m²N values, and
 /// GMRES's basis, at most [`KRYLOV_ITERATIONS`] vectors of the unknowns: at
@@ -179,7 +192,7 @@ pub const PLAIN_SAMPLES_PER_HARMONIC: usize = 8;
 impl HarmonicSettings {
     /// The settings for the period at `omega` [rad/s] of `problem`:
     /// H = max([`MIN_HARMONICS`], ⌈[`HARMONICS_PER_MODE_ORDER`] · f_hi T⌉), at
-    /// most 512, and N = [`SAMPLES_PER_HARMONIC`] · H samples.
+    /// most [`MAX_RULE_HARMONICS`], and N = [`SAMPLES_PER_HARMONIC`] · H samples.
     pub fn for_speed(problem: &PeriodicProblem, omega: f64) -> Self {
         Self::for_frequency(highest_frequency(problem.model(), omega), problem.period(omega))
     }
@@ -187,9 +200,16 @@ impl HarmonicSettings {
     /// [`Self::for_speed`] with the highest natural frequency `highest` \[Hz\]
     /// given, for the period `period` \[s\].
     pub fn for_frequency(highest: f64, period: f64) -> Self {
-        let order = highest * period;
-        let h = ((HARMONICS_PER_MODE_ORDER * order).ceil() as usize).clamp(MIN_HARMONICS, 512);
+        let h = Self::rule_harmonics(highest, period).min(MAX_RULE_HARMONICS);
         Self { harmonics: h, samples: SAMPLES_PER_HARMONIC * h, ..Self::default() }
+    }
+
+    /// The harmonics the rule asks for the highest natural frequency
+    /// `highest` \[Hz\] and the period `period` \[s\], before
+    /// [`MAX_RULE_HARMONICS`] holds them: max([`MIN_HARMONICS`],
+    /// ⌈[`HARMONICS_PER_MODE_ORDER`] · f_hi T⌉).
+    pub fn rule_harmonics(highest: f64, period: f64) -> usize {
+        ((HARMONICS_PER_MODE_ORDER * highest * period).ceil() as usize).max(MIN_HARMONICS)
     }
 
     /// Refuses settings that cannot work, naming the setting and the range.
@@ -964,8 +984,20 @@ impl HarmonicBalance {
     /// frequency computed once (at the first call's speed: it hardly moves
     /// with speed) and kept.
     pub fn settings_for_speed(&mut self, omega: f64) -> HarmonicSettings {
-        let highest = *self.highest.get_or_insert_with(|| highest_frequency(self.problem.model(), omega));
-        HarmonicSettings::for_frequency(highest, self.problem.period(omega))
+        HarmonicSettings::for_frequency(self.highest_frequency(omega), self.problem.period(omega))
+    }
+
+    /// The highest natural frequency \[Hz\], computed at the first call's
+    /// `omega` [rad/s] and kept.
+    fn highest_frequency(&mut self, omega: f64) -> f64 {
+        *self.highest.get_or_insert_with(|| highest_frequency(self.problem.model(), omega))
+    }
+
+    /// [`HarmonicSettings::rule_harmonics`] at `omega` [rad/s], with the
+    /// highest natural frequency [`Self::settings_for_speed`] keeps: more than
+    /// the settings' H where [`MAX_RULE_HARMONICS`] holds them.
+    pub fn rule_harmonics(&mut self, omega: f64) -> usize {
+        HarmonicSettings::rule_harmonics(self.highest_frequency(omega), self.problem.period(omega))
     }
 
     /// Changes the settings (harmonics, samples) for the next solves.
@@ -1712,6 +1744,24 @@ mod tests {
     use crate::contact::ltca::SetModel;
     use crate::dynamics::periodic::ShootingSettings;
     use crate::scene::{Fidelity, Scene};
+
+    /// The rule's H grows with the highest mode's order in the period, at
+    /// least MIN_HARMONICS; the settings keep it up to MAX_RULE_HARMONICS and
+    /// hold it there, with 16 samples per harmonic kept.
+    #[test]
+    fn the_rules_harmonics_follow_the_modes_order_up_to_the_cap() {
+        let (highest, period) = (20_000.0, 1e-3);
+        assert_eq!(HarmonicSettings::rule_harmonics(highest, period), 50);
+        assert_eq!(HarmonicSettings::rule_harmonics(highest, 0.5 * period), 25_usize.max(MIN_HARMONICS));
+        let held = HarmonicSettings::for_frequency(highest, 20.0 * period);
+        assert_eq!(HarmonicSettings::rule_harmonics(highest, 20.0 * period), 1000);
+        assert_eq!(
+            (held.harmonics, held.samples),
+            (MAX_RULE_HARMONICS, SAMPLES_PER_HARMONIC * MAX_RULE_HARMONICS)
+        );
+        let kept = HarmonicSettings::for_frequency(highest, 4.0 * period);
+        assert_eq!((kept.harmonics, kept.samples), (200, 200 * SAMPLES_PER_HARMONIC));
+    }
 
     #[test]
     fn the_projection_is_p_transposed_x_p_summed_as_dot_products() {
