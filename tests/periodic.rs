@@ -710,6 +710,13 @@ fn continuation_on_the_harmonic_balance_follows_the_rules_harmonics() {
     for w in branch.points.windows(2) {
         assert!(w[1].orbit.speed > w[0].orbit.speed);
     }
+    // Each step takes the rule's H at the speed it starts from, the last point's: a point
+    // keeps the harmonics of the one before it (measured 20 of the 25 points one or two
+    // harmonics above the rule at their own speed, none below, on this up run).
+    for w in orbits.windows(2) {
+        assert_eq!(w[1].harmonics, hb.rule_harmonics(w[0].speed), "{:.1} rpm", w[1].speed / RPM);
+        assert!(w[1].harmonics.abs_diff(hb.rule_harmonics(w[1].speed)) <= 2, "{:.1} rpm", w[1].speed / RPM);
+    }
     // The last point against the balance solved cold at its speed (the rule's H).
     let omega = last.speed;
     let settings = hb.settings_for_speed(omega);
@@ -1177,7 +1184,7 @@ mod harmonic_balance {
             HarmonicBalance::new(problem_of(&Scene::example_2004(), 500.0, 0), HarmonicSettings::default())
                 .unwrap();
         let rule = hb.rule_harmonics(omega);
-        assert!(rule > 2 * MAX_RULE_HARMONICS - 100, "the rule asks {rule} at 500 rpm");
+        assert!(rule > MAX_RULE_HARMONICS, "the rule asks {rule} at 500 rpm");
         assert_eq!(hb.settings_for_speed(omega).harmonics, MAX_RULE_HARMONICS);
         let a = balance_error_of(&Scene::example_2004(), 500.0, 0, None);
         assert_eq!(a.unknowns, 19 * (2 * MAX_RULE_HARMONICS + 1));

@@ -527,8 +527,10 @@ impl BranchSolver for PeriodicProblem {
 }
 
 /// The harmonic balance as a [`BranchSolver`]: x are the Fourier
-/// coefficients at the number of harmonics the rule gives at each point's
-/// speed ([`HarmonicBalance::arc_fit`]), corrected by Newton on the bordered
+/// coefficients at the number of harmonics the rule gives at the speed each
+/// step starts from, the last point's ([`HarmonicBalance::arc_fit`]; a point
+/// keeps the harmonics of the one before it, within the rule's change over
+/// one step), corrected by Newton on the bordered
 /// balance (`HarmonicBalance::arc_correct`), each point's multipliers from
 /// the balance's own monodromy over the settings' N intervals.
 pub struct BalanceBranch<'a> {

@@ -117,7 +117,11 @@ pub(crate) fn sweep_continuation(
                 let orbits = std::mem::take(&mut solver.orbits);
                 for orbit in &orbits {
                     states.push(hb.steady_state(orbit)?);
-                    if hb.rule_harmonics(orbit.speed) > orbit.harmonics {
+                    // Only the cap, not the step's fit (the rule's H at the predicted speed,
+                    // one harmonic off where the corrector moved it across a change).
+                    if orbit.harmonics == MAX_RULE_HARMONICS
+                        && hb.rule_harmonics(orbit.speed) > MAX_RULE_HARMONICS
+                    {
                         held = Some(held.unwrap_or(0.0_f64).max(rad_per_s_to_rpm(orbit.speed)));
                     }
                 }
