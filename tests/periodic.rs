@@ -710,12 +710,27 @@ fn continuation_on_the_harmonic_balance_follows_the_rules_harmonics() {
     for w in branch.points.windows(2) {
         assert!(w[1].orbit.speed > w[0].orbit.speed);
     }
-    // Each step takes the rule's H at the speed it starts from, the last point's: a point
-    // keeps the harmonics of the one before it (measured 20 of the 25 points one or two
-    // harmonics above the rule at their own speed, none below, on this up run).
+    // A step rising in speed takes the rule's H at the speed it starts from, the last
+    // point's: a point keeps the harmonics of the one before it (measured 20 of the 25
+    // points one or two harmonics above the rule at their own speed, none below).
     for w in orbits.windows(2) {
         assert_eq!(w[1].harmonics, hb.rule_harmonics(w[0].speed), "{:.1} rpm", w[1].speed / RPM);
         assert!(w[1].harmonics.abs_diff(hb.rule_harmonics(w[1].speed)) <= 2, "{:.1} rpm", w[1].speed / RPM);
+    }
+    // A step falling in speed takes the rule's H one nominal step below its start: no point
+    // of the down run keeps fewer harmonics than the rule at its own speed, nor more than
+    // the rule one step below it.
+    let down = ContinuationSettings::new(to * RPM, from * RPM, 50.0 * RPM);
+    let mut solver = BalanceBranch::new(&mut hb);
+    let branch = follow_branch(&mut solver, &down, |_| {}).unwrap();
+    let orbits = std::mem::take(&mut solver.orbits);
+    assert_eq!(branch.ended, "reached the last speed");
+    let above = orbits.iter().filter(|o| o.harmonics > hb.rule_harmonics(o.speed)).count();
+    eprintln!("down: {above} of {} points above the rule at their own speed", orbits.len());
+    for o in &orbits[1..] {
+        let rpm = o.speed / RPM;
+        assert!(o.harmonics >= hb.rule_harmonics(o.speed), "{rpm:.1} rpm: H {}", o.harmonics);
+        assert!(o.harmonics <= hb.rule_harmonics(o.speed - 50.0 * RPM), "{rpm:.1} rpm: H {}", o.harmonics);
     }
     // The last point against the balance solved cold at its speed (the rule's H).
     let omega = last.speed;

@@ -446,11 +446,12 @@ pub trait BranchSolver {
         counts: (&mut Work, &mut usize),
     ) -> Result<(PeriodicOrbit, Self::Linear), PeriodicError>;
 
-    /// Brings `vectors` (each Y, λ last) to the unknowns the solver takes at
-    /// `omega` [rad/s] before a step; whether they changed (the last
-    /// linearization then no longer fits them), or why the solver cannot
-    /// take that speed (the run ends there).
-    fn fit(&mut self, _omega: f64, _vectors: &mut [&mut Vec<f64>]) -> Result<bool, PeriodicError> {
+    /// Brings `vectors` (each Y, λ last) to the unknowns the solver takes
+    /// for a step whose points lie between the speeds `speeds` = (low, high)
+    /// [rad/s]; whether they changed (the last linearization then no longer
+    /// fits them), or why the solver cannot take those speeds (the run ends
+    /// there).
+    fn fit(&mut self, _speeds: (f64, f64), _vectors: &mut [&mut Vec<f64>]) -> Result<bool, PeriodicError> {
         Ok(false)
     }
 }
@@ -527,10 +528,11 @@ impl BranchSolver for PeriodicProblem {
 }
 
 /// The harmonic balance as a [`BranchSolver`]: x are the Fourier
-/// coefficients at the number of harmonics the rule gives at the speed each
-/// step starts from, the last point's ([`HarmonicBalance::arc_fit`]; a point
-/// keeps the harmonics of the one before it, within the rule's change over
-/// one step), corrected by Newton on the bordered
+/// coefficients at the number of harmonics the rule gives at the lowest
+/// speed each step can reach ([`HarmonicBalance::arc_fit`]: the last point's
+/// where the branch rises in speed, one nominal step below it where it
+/// falls; so a point keeps at least the rule's at its own speed, and at most
+/// the rule's change over one step more), corrected by Newton on the bordered
 /// balance (`HarmonicBalance::arc_correct`), each point's multipliers from
 /// the balance's own monodromy over the settings' N intervals.
 pub struct BalanceBranch<'a> {
@@ -648,12 +650,14 @@ impl BranchSolver for BalanceBranch<'_> {
         Ok((orbit, linear))
     }
 
-    /// The rule's harmonics at `omega`; an error where they would exceed
-    /// what the balance takes ([`crate::dynamics::periodic::MAX_UNKNOWNS`]).
-    /// Every vector of another length (the run's furthest point, after a
-    /// restart took other harmonics) is brought to them too.
-    fn fit(&mut self, omega: f64, vectors: &mut [&mut Vec<f64>]) -> Result<bool, PeriodicError> {
-        let changed = self.balance.arc_fit(omega)?;
+    /// The rule's harmonics at the lower speed, the most the step's points
+    /// ask (the rule's H falls with the speed), so that no point keeps fewer
+    /// than the rule at its own; an error where they would exceed what the
+    /// balance takes ([`crate::dynamics::periodic::MAX_UNKNOWNS`]). Every
+    /// vector of another length (the run's furthest point, after a restart
+    /// took other harmonics) is brought to them too.
+    fn fit(&mut self, (low, _): (f64, f64), vectors: &mut [&mut Vec<f64>]) -> Result<bool, PeriodicError> {
+        let changed = self.balance.arc_fit(low)?;
         let unknowns = self.balance.unknowns();
         for v in vectors.iter_mut().filter(|v| v.len() != unknowns + 1) {
             **v = refit(v, unknowns, true);
@@ -728,9 +732,15 @@ pub fn follow_branch<S: BranchSolver>(
     let mut retracing = false;
     let mut ended = String::from("reached the last speed");
     while points.len() < settings.max_points {
-        // The unknowns the solver takes at this speed (the balance's harmonics).
+        // The unknowns the solver takes for the coming step (the balance's harmonics):
+        // its points lie within one nominal step of this speed, on the tangent's side.
         let speed_now = y[y.len() - 1] * unit;
-        match solver.fit(speed_now, &mut [&mut y, &mut t, &mut furthest]) {
+        let speeds = if t[t.len() - 1] < 0.0 {
+            ((speed_now - settings.step).max(0.5 * speed_now), speed_now)
+        } else {
+            (speed_now, speed_now + settings.step)
+        };
+        match solver.fit(speeds, &mut [&mut y, &mut t, &mut furthest]) {
             Ok(changed) => refresh |= changed,
             Err(e) => {
                 ended = format!("stopped at {speed_now:.4} rad/s: {e}");

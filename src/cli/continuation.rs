@@ -117,8 +117,8 @@ pub(crate) fn sweep_continuation(
                 let orbits = std::mem::take(&mut solver.orbits);
                 for orbit in &orbits {
                     states.push(hb.steady_state(orbit)?);
-                    // Only the cap: a point keeps the rule's H of the speed its step started
-                    // from, the point before it, one or two harmonics off the rule at its own.
+                    // Only the cap: elsewhere a point may keep more harmonics than the rule at
+                    // its own speed (the rule's at the lowest speed its step could reach).
                     if orbit.harmonics == MAX_RULE_HARMONICS
                         && hb.rule_harmonics(orbit.speed) > MAX_RULE_HARMONICS
                     {
