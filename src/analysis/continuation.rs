@@ -733,7 +733,8 @@ pub fn follow_branch<S: BranchSolver>(
     let mut ended = String::from("reached the last speed");
     while points.len() < settings.max_points {
         // The unknowns the solver takes for the coming step (the balance's harmonics):
-        // its points lie within one nominal step of this speed, on the tangent's side.
+        // its points lie within one nominal step of this speed, on the tangent's side (the
+        // lower bound kept at half this speed where a nominal step is larger than it).
         let speed_now = y[y.len() - 1] * unit;
         let speeds = if t[t.len() - 1] < 0.0 {
             ((speed_now - settings.step).max(0.5 * speed_now), speed_now)
