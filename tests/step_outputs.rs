@@ -139,7 +139,12 @@ fn at_steps_of_many_mesh_cycles_the_peak_sees_what_the_endpoint_misses() {
     assert!(missed + 3 >= checked, "the endpoint missed the step's peak in {missed} of {checked} mesh-steps");
 }
 
-/// Without load the meshes separate: the flags say so.
+/// Without load the meshes separate: the flags say so, and the step's
+/// smallest mesh force is zero, or negative where the rattle has driven the
+/// back flanks together within the step (which of the two the fifth step
+/// shows turns on the rattle's phase, and that on the last bits of the
+/// contact tables: −2520 N with today's, zero with tables that differ from
+/// them by 2e-17 m).
 #[test]
 fn an_unloaded_set_reports_separated_meshes() {
     let mut scene = Scene::example_2004();
@@ -151,7 +156,8 @@ fn an_unloaded_set_reports_separated_meshes() {
     }
     let e = sim.step_extremes();
     assert!(e.any_separated(MeshKind::SunPlanet) && e.any_separated(MeshKind::RingPlanet), "{e:?}");
-    assert_eq!(e.mesh(0, MeshKind::SunPlanet).unwrap().min, 0.0);
+    let least = e.mesh(0, MeshKind::SunPlanet).unwrap().min;
+    assert!(least <= 0.0, "the smallest sun-mesh force of the step {least} N");
     assert!(e.mesh(sim.gear_set().planet_angles().len(), MeshKind::SunPlanet).is_none());
 }
 
