@@ -640,8 +640,9 @@ fn bifurcation_speeds(branch: &Branch, kind: BifurcationKind) -> Vec<f64> {
 /// rpm, period doublings 9452.8 / 9447.6 and 9785.3 / 9789.6 rpm, and with
 /// tables that differ from today's by 2e-17 m 9453.1 / 9453.7 and
 /// 9786.0 / 9786.4 rpm).
-/// The lower fold is a corner: the teeth graze there, and shooting's largest
-/// multiplier jumps from 1.141 to 0.780 across it. The balance's corrector,
+/// The lower fold is not smooth: across it the real multiplier nearest +1
+/// jumps from 1.141 to 0.780 (`planetwear sweep --method continuation` on
+/// the scene, shooting) instead of passing through it. The balance's corrector,
 /// which converges linearly, turns it or cannot pass it within the smallest
 /// step and restarts by marching from it; which of the two turns on the last
 /// bits of the separation tables (turned at 9429.9 rpm with tables that
