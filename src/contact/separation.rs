@@ -191,17 +191,22 @@ impl RadialIndex {
         self.r2.extend(self.pts.iter().map(|p| p[0] * p[0] + p[1] * p[1]));
         let r2_min = self.r2.iter().cloned().fold(f64::INFINITY, f64::min);
         let r2_max = self.r2.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-        let width = ((r2_max - r2_min) / BUCKETS as f64).max(1e-24);
+        let inv_width = 1.0 / ((r2_max - r2_min) / BUCKETS as f64).max(1e-24);
         self.r2_min = r2_min;
-        self.inv_width = 1.0 / width;
-        let bucket = |v: f64| (((v - r2_min) * (1.0 / width)) as usize).min(BUCKETS - 1);
+        self.inv_width = inv_width;
+        // The buckets segment i spans, first and last.
+        let r2 = &self.r2;
+        let span = |i: usize| {
+            let bucket = |v: f64| (((v - r2_min) * inv_width) as usize).min(BUCKETS - 1);
+            (bucket(r2[i].min(r2[i + 1])), bucket(r2[i].max(r2[i + 1])))
+        };
         // Counting pass, then the fill pass into the slots the counts give.
         self.starts.clear();
         self.starts.resize(BUCKETS + 1, 0);
         let segments = self.pts.len().saturating_sub(1);
         for i in 0..segments {
-            let (a, b) = (self.r2[i].min(self.r2[i + 1]), self.r2[i].max(self.r2[i + 1]));
-            for count in &mut self.starts[bucket(a) + 1..=bucket(b) + 1] {
+            let (lo, hi) = span(i);
+            for count in &mut self.starts[lo + 1..=hi + 1] {
                 *count += 1;
             }
         }
@@ -213,8 +218,8 @@ impl RadialIndex {
         let mut next: [u32; BUCKETS] = [0; BUCKETS];
         next.copy_from_slice(&self.starts[..BUCKETS]);
         for i in 0..segments {
-            let (a, b) = (self.r2[i].min(self.r2[i + 1]), self.r2[i].max(self.r2[i + 1]));
-            for slot in &mut next[bucket(a)..=bucket(b)] {
+            let (lo, hi) = span(i);
+            for slot in &mut next[lo..=hi] {
                 self.segments[*slot as usize] = i as u32;
                 *slot += 1;
             }
