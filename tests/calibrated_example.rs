@@ -9,6 +9,7 @@ use planetwear::analysis::study::calibrate::{
 use planetwear::analysis::study::validation::{validate, ValidationPlan, Verdict};
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::scene::units::rad_per_s_to_rpm;
 use planetwear::scene::{ChamferSpec, Fidelity, Scene};
 
 /// Loaded contact ratio of the sun–planet mesh and its involute path's, and
@@ -213,6 +214,30 @@ fn the_reduced_validation_keeps_its_frequency_and_wear_shape_rows() {
     for r in asserted {
         let expected = if KNOWN_FAILING.contains(&r.id.as_str()) { Verdict::Fail } else { Verdict::Pass };
         assert_eq!(r.verdict, expected, "{}: study {}, ours {} ({})", r.id, r.study, r.ours, r.tolerance);
+    }
+    // The forced-response rows are read twice: the finer sweeps start below
+    // the lowest speed where the directions differ (the jump) and run to the
+    // grid's end; below it the curves are the first sweeps'.
+    let from = v.check_from.expect("the reduced plan reads the sweeps twice");
+    let jump = v.row("jump-softening").and_then(|r| r.value).expect("the reduced sweeps jump");
+    assert!(from < jump, "second reading from {from} rpm, the jump's branches from {jump} rpm");
+    assert_eq!(v.check_curves.len(), 4);
+    for (first, again) in v.curves.iter().zip(&v.check_curves) {
+        assert_eq!(first.points.len(), again.points.len());
+        let mut moved = 0;
+        for (a, b) in first.points.iter().zip(&again.points) {
+            assert_eq!(a.speed, b.speed);
+            if rad_per_s_to_rpm(a.speed) < from - 1e-6 {
+                assert_eq!(a, b, "below {from} rpm the curves are the first sweeps'");
+            } else if a.rms != b.rms {
+                moved += 1;
+            }
+        }
+        assert!(moved > 0, "the finer sweeps changed no figure of κ = {} {:?}", first.kappa, first.direction);
+    }
+    for id in ["peak-8500", "peak-10750", "jump-softening", "separation-large-peak", "wear-new-peaks"] {
+        let r = v.row(id).unwrap();
+        assert!(r.error.contains("at a third of the tolerance"), "{id}: {}", r.error);
     }
     // Every row has a figure, a tolerance and a time.
     for r in &v.rows {

@@ -17,18 +17,15 @@ pub(crate) fn validate_command(ValidateArgs { out, quick, scene }: ValidateArgs)
     );
     planetwear::report::validation::write_report(&v, &out, set.sun().face_width, &command)?;
     for r in &v.rows {
-        outln!(
-            "{:<5} {:<40} ours {}",
-            if r.verdict == planetwear::analysis::study::validation::Verdict::Pass { "pass" } else { "FAIL" },
-            r.id,
-            r.ours
-        )?;
+        outln!("{:<9} {:<40} ours {}", r.verdict.word(), r.id, r.ours)?;
     }
-    let failing = planetwear::report::validation::failing(&v);
+    let count = |verdict| v.rows.iter().filter(|r| r.verdict == verdict).count();
+    use planetwear::analysis::study::validation::Verdict;
     outln!(
-        "{} of {} rows pass ({:.0} s); report {}",
-        v.rows.len() - failing.len(),
+        "{} of {} rows pass, {} undecided ({:.0} s); report {}",
+        count(Verdict::Pass),
         v.rows.len(),
+        count(Verdict::Undecided),
         v.seconds,
         out.join("VALIDATION.md").display()
     )?;

@@ -541,10 +541,28 @@ pub fn sweep_windowed(
     speeds: &[f64],
     keep_histories: &[f64],
     window: Window,
+    progress: impl FnMut(usize),
+) -> Result<Sweep, ResponseError> {
+    sweep_from(set, run, model, direction, speeds, keep_histories, window, None, progress)
+}
+
+/// [`sweep_windowed`] whose first point starts from `start` (a state of
+/// another sweep at a neighbouring speed) instead of the static deflection:
+/// a stretch of a sweep run again, entering it as the sweep did.
+#[allow(clippy::too_many_arguments)]
+pub fn sweep_from(
+    set: &GearSet,
+    run: &RunSettings,
+    model: &mut PlanetaryDynamics,
+    direction: Direction,
+    speeds: &[f64],
+    keep_histories: &[f64],
+    window: Window,
+    start: Option<&State>,
     mut progress: impl FnMut(usize),
 ) -> Result<Sweep, ResponseError> {
     let mut points = Vec::with_capacity(speeds.len());
-    let mut state: Option<State> = None;
+    let mut state: Option<State> = start.cloned();
     for (i, omega) in speeds.iter().enumerate() {
         let mut ss = steady_state_windowed(model, set, run, *omega, state.as_ref(), window, |_, _| {})?;
         state = Some(ss.end.clone());
