@@ -34,7 +34,7 @@ use planetwear::analysis::continuation::{
 use planetwear::analysis::frame_sweep::{frame_sweep, FrameSweepSettings};
 use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::periodic::{HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings};
-use planetwear::dynamics::response::{sweep_windowed, Direction, Sweep, Window};
+use planetwear::dynamics::response::{sweep_from, Direction, Sweep, Window};
 use planetwear::dynamics::solver::SecondOrderSystem;
 use planetwear::model::gear::GearSet;
 use planetwear::scene::units::rpm_to_rad_per_s;
@@ -103,7 +103,7 @@ fn main() {
                 (i, Sweep { direction: dir, points })
             } else {
                 let mut m = models[i].clone();
-                (i, sweep_windowed(&set, &run, &mut m, dir, grid, &[], window, |_| {}).expect("sweep"))
+                (i, sweep_from(&set, &run, &mut m, dir, grid, &[], window, None, |_| {}).expect("sweep"))
             }
         })
         .collect();

@@ -528,27 +528,13 @@ pub fn sweep(
     keep_histories: &[f64],
     progress: impl FnMut(usize),
 ) -> Result<Sweep, ResponseError> {
-    sweep_windowed(set, run, model, direction, speeds, keep_histories, Window::Fixed, progress)
+    sweep_from(set, run, model, direction, speeds, keep_histories, Window::Fixed, None, progress)
 }
 
-/// [`sweep`] with the window of every point chosen by `window`.
-#[allow(clippy::too_many_arguments)]
-pub fn sweep_windowed(
-    set: &GearSet,
-    run: &RunSettings,
-    model: &mut PlanetaryDynamics,
-    direction: Direction,
-    speeds: &[f64],
-    keep_histories: &[f64],
-    window: Window,
-    progress: impl FnMut(usize),
-) -> Result<Sweep, ResponseError> {
-    sweep_from(set, run, model, direction, speeds, keep_histories, window, None, progress)
-}
-
-/// [`sweep_windowed`] whose first point starts from `start` (a state of
-/// another sweep at a neighbouring speed) instead of the static deflection:
-/// a stretch of a sweep run again, entering it as the sweep did.
+/// [`sweep`] with the window of every point chosen by `window`, and the
+/// first point started from `start` (a state of another sweep at a
+/// neighbouring speed, to run a stretch of that sweep again entering it as
+/// the sweep did) or, with `None`, from the static deflection.
 #[allow(clippy::too_many_arguments)]
 pub fn sweep_from(
     set: &GearSet,
