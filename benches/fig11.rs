@@ -18,7 +18,11 @@
 //! orbits by pseudo-arclength continuation on the harmonic balance
 //! (`analysis::continuation::BalanceBranch`), up from 500 and down from
 //! 15 000 rpm at the nominal step, folds and unstable stretches included
-//! (the response where no period-1 orbit is stable is not part of it).
+//! (the response where no period-1 orbit is stable is not part of it); each
+//! state's down run after its up run, ending where it joins the up run's
+//! unbroken stretch from 500 rpm (`follow_joining`: below, the down run
+//! would retrace it), the four states on rayon's threads; `-- --no-join`
+//! runs the eight runs independently to their ends.
 //! The wear model that makes the states runs first and is timed apart (the
 //! figure starts from the states, as the study's does).
 //! docs/PERFORMANCE.md records the figures.
@@ -29,7 +33,7 @@ use rayon::prelude::*;
 
 use planetwear::analysis::accuracy::{harmonic_error, reference, Protocol};
 use planetwear::analysis::continuation::{
-    follow_branch, BalanceBranch, BifurcationKind, ContinuationSettings,
+    follow_branch, follow_joining, BalanceBranch, BifurcationKind, Branch, ContinuationSettings,
 };
 use planetwear::analysis::frame_sweep::{frame_sweep, FrameSweepSettings};
 use planetwear::dynamics::equations::PlanetaryDynamics;
@@ -67,7 +71,7 @@ fn main() {
         };
     let (set, run) = scene.validate_with_run().expect("the example is valid");
     if arg("--continuation") {
-        continuation(&set, step, arg("--no-check"));
+        continuation(&set, step, arg("--no-check"), !arg("--no-join"));
         return;
     }
 
@@ -164,10 +168,12 @@ fn main() {
 
 /// The figure as the continuation's equivalent: per wear state an up run
 /// (500 → 15 000 rpm) and a down run (15 000 → 500 rpm) of pseudo-arclength
-/// continuation on the harmonic balance at the nominal step `step` [rpm],
-/// the eight runs on rayon's threads; then E_h of the up runs' points
-/// nearest the check speeds against long time marching at those points' speeds.
-fn continuation(set: &GearSet, step: f64, no_check: bool) {
+/// continuation on the harmonic balance at the nominal step `step` [rpm]
+/// (with `join`, each down run after its state's up run, ending where it
+/// joins that run's unbroken stretch; without, the eight runs independent),
+/// on rayon's threads; then E_h of the up runs' points nearest the check
+/// speeds against long time marching at those points' speeds.
+fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool) {
     let wear_start = Instant::now();
     let states = planetwear::package::pack::example_wear_states().expect("the example's wear run");
     let wear_time = wear_start.elapsed().as_secs_f64();
@@ -181,41 +187,56 @@ fn continuation(set: &GearSet, step: f64, no_check: bool) {
         .map(|&k| PlanetaryDynamics::new(set, states[k].set_model(set)).expect("model"))
         .collect();
     let built = start.elapsed().as_secs_f64();
-    let tasks: Vec<(usize, f64, f64)> =
-        (0..KAPPAS.len()).flat_map(|i| [(i, 500.0, 15000.0), (i, 15000.0, 500.0)]).collect();
-    let runs: Vec<_> = tasks
-        .par_iter()
-        .map(|&(i, a, b)| {
-            let t0 = Instant::now();
-            let problem = PeriodicProblem::new(models[i].clone(), shooting, rpm_to_rad_per_s(a)).expect("problem");
-            let mut hb = HarmonicBalance::new(problem, HarmonicSettings::default()).expect("balance");
-            let settings =
-                ContinuationSettings::new(rpm_to_rad_per_s(a), rpm_to_rad_per_s(b), rpm_to_rad_per_s(step));
-            let mut solver = BalanceBranch::new(&mut hb);
-            let branch = follow_branch(&mut solver, &settings, |_| {}).expect("continuation");
-            let orbits = std::mem::take(&mut solver.orbits);
-            let folds = branch.bifurcations.iter().filter(|b| b.kind == BifurcationKind::Fold).count();
-            let unstable = branch.points.iter().filter(|p| !p.stable).count();
-            eprintln!(
-                "  κ = {} {a:.0} → {b:.0} rpm: {} points ({unstable} unstable), {folds} folds, {} gaps, {:.2} s; {}",
-                KAPPAS[i],
-                branch.points.len(),
-                branch.gaps.len(),
-                t0.elapsed().as_secs_f64(),
-                branch.ended
-            );
-            (i, a < b, branch, orbits, hb)
-        })
-        .collect();
+    let one = |i: usize, a: f64, b: f64, other: Option<&Branch>| {
+        let t0 = Instant::now();
+        let problem =
+            PeriodicProblem::new(models[i].clone(), shooting, rpm_to_rad_per_s(a)).expect("problem");
+        let mut hb = HarmonicBalance::new(problem, HarmonicSettings::default()).expect("balance");
+        let settings =
+            ContinuationSettings::new(rpm_to_rad_per_s(a), rpm_to_rad_per_s(b), rpm_to_rad_per_s(step));
+        let mut solver = BalanceBranch::new(&mut hb);
+        let branch = match other {
+            Some(o) => follow_joining(&mut solver, &settings, o, |_| {}),
+            None => follow_branch(&mut solver, &settings, |_| {}),
+        }
+        .expect("continuation");
+        let orbits = std::mem::take(&mut solver.orbits);
+        let folds = branch.bifurcations.iter().filter(|b| b.kind == BifurcationKind::Fold).count();
+        let unstable = branch.points.iter().filter(|p| !p.stable).count();
+        eprintln!(
+            "  κ = {} {a:.0} → {b:.0} rpm: {} points ({unstable} unstable), {folds} folds, {} gaps, {:.2} s; {}",
+            KAPPAS[i],
+            branch.points.len(),
+            branch.gaps.len(),
+            t0.elapsed().as_secs_f64(),
+            branch.ended
+        );
+        (i, a < b, branch, orbits, hb)
+    };
+    let runs: Vec<_> = if join {
+        (0..KAPPAS.len())
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let up = one(i, 500.0, 15000.0, None);
+                let down = one(i, 15000.0, 500.0, Some(&up.2));
+                [up, down]
+            })
+            .collect()
+    } else {
+        let tasks: Vec<(usize, f64, f64)> =
+            (0..KAPPAS.len()).flat_map(|i| [(i, 500.0, 15000.0), (i, 15000.0, 500.0)]).collect();
+        tasks.par_iter().map(|&(i, a, b)| one(i, a, b, None)).collect()
+    };
     let wall = start.elapsed().as_secs_f64();
     let cpu = cpu_start.elapsed().as_secs_f64();
     let points: usize = runs.iter().map(|r| r.2.points.len()).sum();
     let evaluations: u64 = runs.iter().map(|r| r.2.work.rhs_evaluations).sum();
     println!(
         "Fig. 11 as the continuation's equivalent: example-2004, {:?}, κ = {KAPPAS:?}, 500–15 000 rpm up and down, \
-         nominal step {step} rpm, harmonic balance, {} threads",
+         nominal step {step} rpm, harmonic balance, {} threads, {}",
         set.fidelity(),
-        rayon::current_num_threads()
+        rayon::current_num_threads(),
+        if join { "each down run joining its up run" } else { "the eight runs independent" }
     );
     println!("  wear model to κ = 6 (not part of the figure): {wear_time:.2} s");
     println!("  model set-up of the four states: {built:.2} s");

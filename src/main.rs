@@ -254,6 +254,12 @@ struct SweepArgs {
     /// multipliers from the balance's own monodromy; docs/PERIODIC.md §3).
     #[arg(long, value_name = "SOLVER")]
     solver: Option<String>,
+    /// Continuation only, both directions: run the down run after the up run and end it where it
+    /// joins the up run's branch on the stretch the up run followed without a restart from
+    /// --from (below, it would retrace that stretch): less work, but the two runs no longer
+    /// run side by side (docs/PERIODIC.md §3)
+    #[arg(long)]
+    join: bool,
     /// Continuation only: also run the marching sweep up and down on the same grid and set
     /// each of its jumps beside the nearest fold, period doubling or change of stability
     /// (jumps.md, and "jumps" in sweep.json).

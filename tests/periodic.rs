@@ -5,8 +5,8 @@
 
 use planetwear::analysis::accuracy::harmonic_error;
 use planetwear::analysis::continuation::{
-    continue_branch, follow_branch, BalanceBranch, BifurcationKind, Branch, ContinuationSettings, Gap,
-    GapKind,
+    continue_branch, follow_branch, follow_joining, BalanceBranch, BifurcationKind, Branch,
+    ContinuationSettings, Gap, GapKind, JOIN_TOLERANCE,
 };
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
@@ -865,6 +865,51 @@ fn the_sweep_command_refuses_continuation_flags_that_cannot_work() {
     assert!(err.contains("--solver applies to --method continuation only"), "{err}");
     let err = run(&["--step", "10", "--method", "continuation", "--solver", "collocation"]);
     assert!(err.contains("--solver collocation") && err.contains("shooting, harmonic-balance"), "{err}");
+    let err = run(&["--step", "10", "--join"]);
+    assert!(err.contains("--join applies to --method continuation only"), "{err}");
+    let err = run(&["--step", "10", "--method", "continuation", "--join", "--direction", "up"]);
+    assert!(err.contains("--join up") && err.contains("--direction both"), "{err}");
+}
+
+/// `--join`: the down run runs after the up run and ends where it lands on
+/// the up run's branch. On 2000–2600 rpm (torsional, one stable branch, no
+/// restart) the down run joins within its first steps; the summary says
+/// where, the CSV holds both runs' points and no more, and the up run is
+/// the one the plain command gives.
+#[test]
+fn the_continuation_command_joins_the_down_run_to_the_up_run() {
+    let dir = std::env::temp_dir().join(format!("planetwear-periodic-join-{}", std::process::id()));
+    let scene = torsional_scene_file(&dir);
+    let sweep = |join: bool| {
+        let out = dir.join(if join { "joined" } else { "plain" });
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_planetwear"));
+        c.args(["sweep", "--from", "2000", "--to", "2600", "--step", "50", "--method", "continuation"])
+            .args(["--solver", "harmonic-balance", "--json", "--scene"])
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out);
+        if join {
+            c.arg("--join");
+        }
+        let run = c.output().unwrap();
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        let summary: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+        let csv = std::fs::read_to_string(out.join("sweep_continuation.csv")).unwrap();
+        (summary, csv)
+    };
+    let (joined, csv) = sweep(true);
+    let (plain, _) = sweep(false);
+    let runs = joined["runs"].as_array().unwrap();
+    let plain_runs = plain["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    assert_eq!(runs[0]["ended"], "reached the last speed");
+    assert_eq!(runs[0]["points"], plain_runs[0]["points"], "the up run is the plain one");
+    let ended = runs[1]["ended"].as_str().unwrap();
+    assert!(ended.starts_with("joined the other run's branch"), "{ended}");
+    let (down, plain_down) = (runs[1]["points"].as_u64().unwrap(), plain_runs[1]["points"].as_u64().unwrap());
+    assert!(down <= 3 && down < plain_down, "{down} points joined, {plain_down} plain");
+    assert_eq!((csv.lines().count() - 1) as u64, joined["points"].as_u64().unwrap());
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Marching in the rigid-body frame (`analysis::frame_sweep`) settles on the
@@ -1469,4 +1514,91 @@ mod harmonic_balance {
             other => panic!("a guess of the wrong length: {other:?}"),
         }
     }
+}
+
+/// A down run joining the up run (`follow_joining`), torsional example,
+/// 5000 ↔ 9000 rpm on the harmonic balance. The up run restarts once
+/// (7878 rpm), the plain down run rides other branches with four restarts
+/// down to 5854 rpm. The joining run ends on one of the up run's stable
+/// orbits before its restart (measured: at 5713.2 rpm, states within
+/// 2.5e-6), which is that orbit to [`JOIN_TOLERANCE`], below every speed
+/// where the plain runs lie more than 10 % apart, and with fewer points
+/// than the plain down run (150 of 169).
+#[test]
+fn a_down_run_joins_the_up_run_only_where_they_share_the_branch() {
+    let (_, _, model) = build(&torsional());
+    let (low, high, step) = (5000.0 * RPM, 9000.0 * RPM, 50.0 * RPM);
+    let run = |from: f64, to: f64, other: Option<&Branch>| {
+        let problem = PeriodicProblem::new(model.clone(), ShootingSettings::default(), from).unwrap();
+        let mut hb = HarmonicBalance::new(problem, HarmonicSettings::default()).unwrap();
+        let settings = ContinuationSettings::new(from, to, step);
+        let mut solver = BalanceBranch::new(&mut hb);
+        match other {
+            None => follow_branch(&mut solver, &settings, |_| {}).unwrap(),
+            Some(o) => follow_joining(&mut solver, &settings, o, |_| {}).unwrap(),
+        }
+    };
+    let up = run(low, high, None);
+    let down = run(high, low, None);
+    let joined = run(high, low, Some(&up));
+    let describe = |b: &Branch| {
+        format!(
+            "{} points, gaps at {:?} rpm, ended: {}",
+            b.points.len(),
+            b.gaps.iter().map(|g| (g.from / RPM).round()).collect::<Vec<_>>(),
+            b.ended
+        )
+    };
+    eprintln!("up: {}\ndown: {}\njoined: {}", describe(&up), describe(&down), describe(&joined));
+    assert!(joined.ended.starts_with("joined the other run's branch"), "{}", joined.ended);
+    let last = joined.points.last().unwrap();
+    let at = last.orbit.speed;
+    // The point is the up run's, at the speed of one of its stable points.
+    let theirs = up.points.iter().find(|p| (p.orbit.speed - at).abs() <= 1e-9 * at).expect("an up point");
+    assert!(theirs.stable);
+    // States compared in the joined run's units (the runs' problems were built at
+    // different speeds and scale the velocities differently).
+    let units = |b: &Branch, z: &[f64]| -> Vec<f64> {
+        z.iter().zip(&b.scales).zip(&joined.scales).map(|((v, a), c)| v * a / c).collect()
+    };
+    let distance = |a: &[f64], b: &[f64]| {
+        let size = a.iter().chain(b).fold(1.0_f64, |m, v| m.max(v.abs()));
+        a.iter().zip(b).fold(0.0_f64, |m, (p, q)| m.max((p - q).abs())) / size
+    };
+    let d = distance(&units(&up, &theirs.orbit.z), &units(&joined, &last.orbit.z));
+    eprintln!("joined at {:.1} rpm, states within {d:.2e}", at / RPM);
+    assert!(d <= JOIN_TOLERANCE, "{d:.2e}");
+    // Above the join the runs differ: the plain down run's points between the
+    // join and the top, set beside the up run's nearest point in speed, are
+    // somewhere far from it (two branches), and the join lies below.
+    let nearest_up = |w: f64| {
+        up.points
+            .iter()
+            .min_by(|a, b| (a.orbit.speed - w).abs().total_cmp(&(b.orbit.speed - w).abs()))
+            .unwrap()
+    };
+    let apart: Vec<f64> = down
+        .points
+        .iter()
+        .filter(|p| {
+            let q = nearest_up(p.orbit.speed);
+            (q.orbit.speed - p.orbit.speed).abs() <= 0.25 * step
+                && distance(&units(&up, &q.orbit.z), &units(&down, &p.orbit.z)) > 0.1
+        })
+        .map(|p| p.orbit.speed / RPM)
+        .collect();
+    eprintln!("plain runs apart at {apart:?} rpm");
+    assert!(!apart.is_empty(), "the two plain runs never differ between 5000 and 9000 rpm");
+    assert!(
+        apart.iter().all(|&w| w > at / RPM),
+        "joined at {:.1} rpm, the runs apart at {apart:?}",
+        at / RPM
+    );
+    // Before the join it rode the plain down run's branches: the same restarts.
+    assert_eq!(joined.gaps.len(), down.gaps.len());
+    for (a, b) in joined.gaps.iter().zip(&down.gaps) {
+        assert!((a.from - b.from).abs() <= step, "{:.1} and {:.1} rpm", a.from / RPM, b.from / RPM);
+    }
+    // The joined run saved the plain down run's points below the join.
+    assert!(joined.points.len() < down.points.len(), "{} of {}", joined.points.len(), down.points.len());
 }

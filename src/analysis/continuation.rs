@@ -180,6 +180,10 @@ pub struct Branch {
     pub work: Work,
     /// Flows over one period integrated in the whole run.
     pub flows: usize,
+    /// What one unit of each component of the points' unknowns z is in SI
+    /// units ([`PeriodicProblem::unknown_scales`]; empty where not known).
+    #[serde(default)]
+    pub scales: Vec<f64>,
 }
 
 fn add(work: &mut Work, w: &Work) {
@@ -406,6 +410,9 @@ pub trait BranchSolver {
     /// chord of the next step's corrector.
     type Linear;
 
+    /// What one unit of each component of the orbits' z is in SI units.
+    fn unknown_scales(&self) -> Vec<f64>;
+
     /// The first point at `omega` [rad/s] (λ in units of `unit`): its orbit
     /// (with the work of the whole solve), its x and its linearization.
     fn start(
@@ -458,6 +465,10 @@ pub trait BranchSolver {
 
 impl BranchSolver for PeriodicProblem {
     type Linear = Linearization;
+
+    fn unknown_scales(&self) -> Vec<f64> {
+        PeriodicProblem::unknown_scales(self)
+    }
 
     fn start(
         &mut self,
@@ -586,6 +597,10 @@ fn add_arc(work: &mut Work, arc: &ArcWork) {
 impl BranchSolver for BalanceBranch<'_> {
     type Linear = ArcLinear;
 
+    fn unknown_scales(&self) -> Vec<f64> {
+        self.balance.problem().unknown_scales()
+    }
+
     fn start(
         &mut self,
         omega: f64,
@@ -697,6 +712,98 @@ pub fn continue_branch(
 pub fn follow_branch<S: BranchSolver>(
     solver: &mut S,
     settings: &ContinuationSettings,
+    progress: impl FnMut(&BranchPoint),
+) -> Result<Branch, ContinuationError> {
+    follow(solver, settings, None, progress)
+}
+
+/// Two periodic states at one speed whose states at the period's start
+/// differ by at most this (in one problem's state scales, of the larger's
+/// largest component, at least 1) are one orbit: a tenth of the accuracy
+/// rule's E_h ≤ 1e-3, far below the distance between two branches at one
+/// speed.
+pub const JOIN_TOLERANCE: f64 = 1e-4;
+
+/// A step is aimed at a stable point of the other run ([`follow_joining`])
+/// only where the branch's tangent changes the speed at least this much
+/// per unit of arclength (clear of folds, where a step at fixed speed
+/// cannot be corrected) and the aimed step is at least half the planned one.
+const JOIN_SLOPE: f64 = 0.5;
+
+/// ... and only from a point whose state lies within this share of the
+/// other run's, interpolated between its two points that bracket the speed
+/// (distinct branches at one speed lie 0.15 to 5 of the state's largest
+/// component apart on the example): elsewhere the steps are the plain run's.
+const JOIN_NEAR: f64 = 0.05;
+
+/// `other`'s state `z` (in its units) in the units `scales` of another
+/// problem of the same model (the two may scale velocities differently).
+fn rescaled(other: &Branch, z: &[f64], scales: &[f64]) -> Option<Vec<f64>> {
+    (other.scales.len() == z.len() && scales.len() == z.len())
+        .then(|| z.iter().zip(&other.scales).zip(scales).map(|((v, a), b)| v * a / b).collect())
+}
+
+/// The largest difference of two states in one problem's units, over the
+/// larger of their largest components and 1.
+fn state_distance(a: &[f64], b: &[f64]) -> f64 {
+    let size = a.iter().chain(b).fold(1.0_f64, |m, v| m.max(v.abs()));
+    a.iter().zip(b).fold(0.0_f64, |m, (p, q)| m.max((p - q).abs())) / size
+}
+
+/// The points of `other` before its first gap: the stretch it followed
+/// without a break from its first speed, which is where a run in the other
+/// direction ends. A run that meets this stretch would follow it to its
+/// end; beyond a gap (a restart that landed on a branch by marching) the
+/// branch below the landing point was never followed.
+fn unbroken(other: &Branch) -> &[BranchPoint] {
+    let end = other.gaps.iter().map(|g| g.point).min().unwrap_or(other.points.len());
+    &other.points[..end.min(other.points.len())]
+}
+
+/// Whether `z` (in units `scales`) at `speed` lies within [`JOIN_NEAR`] of
+/// `other`'s unbroken stretch ([`unbroken`]): of its state interpolated
+/// between two successive points that bracket the speed.
+fn near_branch(other: &Branch, speed: f64, z: &[f64], scales: &[f64]) -> bool {
+    unbroken(other).windows(2).any(|w| {
+        let (a, b) = (&w[0], &w[1]);
+        let (sa, sb) = (a.orbit.speed, b.orbit.speed);
+        let share = (speed - sa) / (sb - sa);
+        if b.after_gap || sa == sb || !(0.0..=1.0).contains(&share) {
+            return false;
+        }
+        let (Some(za), Some(zb)) = (rescaled(other, &a.orbit.z, scales), rescaled(other, &b.orbit.z, scales))
+        else {
+            return false;
+        };
+        let at: Vec<f64> = za.iter().zip(&zb).map(|(p, q)| p + share * (q - p)).collect();
+        state_distance(&at, z) <= JOIN_NEAR
+    })
+}
+
+/// [`follow_branch`], ending where the run meets `other`'s branch (a run
+/// of the same model from this run's last speed towards its first, its
+/// [`Branch::scales`] known) on the stretch `other` followed without a
+/// break from its first speed: once the run's state lies near that
+/// stretch (within 5 % of its state), a step within which one of its stable points
+/// lies, on a stretch of this run clear of folds, lands at that point's
+/// speed, and when the orbit found there is that point's (within
+/// [`JOIN_TOLERANCE`]) the rest of this run would retrace `other` back to
+/// its first speed: the run ends with that point (its [`Branch::ended`]
+/// says where). A run that never meets `other` is the branch
+/// [`follow_branch`] gives but for where some steps land.
+pub fn follow_joining<S: BranchSolver>(
+    solver: &mut S,
+    settings: &ContinuationSettings,
+    other: &Branch,
+    progress: impl FnMut(&BranchPoint),
+) -> Result<Branch, ContinuationError> {
+    follow(solver, settings, Some(other), progress)
+}
+
+fn follow<S: BranchSolver>(
+    solver: &mut S,
+    settings: &ContinuationSettings,
+    other: Option<&Branch>,
     mut progress: impl FnMut(&BranchPoint),
 ) -> Result<Branch, ContinuationError> {
     settings.check()?;
@@ -731,6 +838,9 @@ pub fn follow_branch<S: BranchSolver>(
     // The run has come back to a fold it passed before (see below): restart.
     let mut retracing = false;
     let mut ended = String::from("reached the last speed");
+    // Whether the last point lies near `other`'s branch (where a step may be aimed at it).
+    let scales = solver.unknown_scales();
+    let mut near = other.is_some_and(|o| near_branch(o, points[0].orbit.speed, &points[0].orbit.z, &scales));
     while points.len() < settings.max_points {
         // The unknowns the solver takes for the coming step (the balance's harmonics):
         // its points lie within one nominal step of this speed, on the tangent's side (the
@@ -759,8 +869,23 @@ pub fn follow_branch<S: BranchSolver>(
             h = (lambda_end - y[m]) / t[m];
             last = true;
         }
+        // Aimed at the other run's stable point furthest within the step.
+        let landing =
+            other.filter(|_| !last && !retracing && t[m].abs() >= JOIN_SLOPE && near).and_then(|o| {
+                let (from, planned) = (y[m], h * t[m]);
+                unbroken(o)
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| p.stable)
+                    .map(|(j, p)| (j, (p.orbit.speed / unit - from) / planned))
+                    .filter(|(_, share)| (0.5..1.0).contains(share))
+                    .max_by(|a, b| a.1.total_cmp(&b.1))
+            });
+        if let Some((_, share)) = landing {
+            h *= share;
+        }
         let predicted: Vec<f64> = y.iter().zip(&t).map(|(a, b)| a + h * b).collect();
-        let constraint: Vec<f64> = if last {
+        let constraint: Vec<f64> = if last || landing.is_some() {
             let mut c = vec![0.0; m + 1];
             c[m] = 1.0;
             c
@@ -886,6 +1011,14 @@ pub fn follow_branch<S: BranchSolver>(
             }
         }
         let prev_lambda = if gap.is_some() { x[k] } else { y[m] };
+        // The orbit where the step was aimed at the other run's point: that point's orbit?
+        let joined = match (landing, other) {
+            (Some((j, _)), Some(o)) if gap.is_none() => rescaled(o, &o.points[j].orbit.z, &scales)
+                .map(|theirs| (j, state_distance(&theirs, &orbit.z)))
+                .filter(|(_, distance)| *distance <= JOIN_TOLERANCE),
+            _ => None,
+        };
+        near = other.is_some_and(|o| near_branch(o, orbit.speed, &orbit.z, &scales));
         let point = BranchPoint {
             stable: orbit.is_stable(),
             orbit,
@@ -915,6 +1048,14 @@ pub fn follow_branch<S: BranchSolver>(
         } else {
             ds
         };
+        if let Some((j, distance)) = joined {
+            ended = format!(
+                "joined the other run's branch at {:.4} rad/s (its point {j}; states within {distance:.1e} of \
+                 their size), which that run follows from there",
+                y[k] * unit
+            );
+            break;
+        }
         if last || (y[k] - lambda_end) * direction >= 0.0 {
             break;
         }
@@ -922,7 +1063,7 @@ pub fn follow_branch<S: BranchSolver>(
     if points.len() >= settings.max_points {
         ended = format!("stopped after {} points (the most allowed)", settings.max_points);
     }
-    Ok(Branch { points, bifurcations, gaps, ended, work: total, flows })
+    Ok(Branch { points, bifurcations, gaps, ended, work: total, flows, scales: solver.unknown_scales() })
 }
 
 /// The folds and period doublings between two successive points of a
@@ -1173,6 +1314,7 @@ mod tests {
             ended: String::new(),
             work: Work::default(),
             flows: 0,
+            scales: Vec::new(),
         };
         let events = branch_events(&branch);
         let got: Vec<(f64, EventKind)> = events.iter().map(|e| (e.speed, e.kind)).collect();
@@ -1209,6 +1351,35 @@ mod tests {
         assert!(!on_one_stable_branch(&curve, &jump(300.0, 450.0, 40.0, 5.5), 0.05));
         // Down a stretch works as up.
         assert!(on_one_stable_branch(&curve, &jump(450.0, 400.0, 5.5, 5.0), 0.05));
+    }
+
+    #[test]
+    fn a_join_looks_at_the_other_runs_stretch_before_its_first_gap_in_this_runs_units() {
+        let mut other = Branch {
+            points: vec![
+                point(1.0, true, false),
+                point(2.0, true, false),
+                point(5.0, true, true),
+                point(6.0, true, false),
+            ],
+            bifurcations: vec![],
+            gaps: vec![Gap { kind: GapKind::Restart, from: 2.0, to: 5.0, point: 2 }],
+            ended: String::new(),
+            work: Work::default(),
+            flows: 0,
+            scales: vec![2.0, 10.0],
+        };
+        assert_eq!(unbroken(&other).len(), 2);
+        other.gaps.clear();
+        assert_eq!(unbroken(&other).len(), 4);
+        // Its units (2, 10) in ours (1, 5): both components double.
+        assert_eq!(rescaled(&other, &[1.0, 1.0], &[1.0, 5.0]), Some(vec![2.0, 2.0]));
+        assert_eq!(rescaled(&other, &[1.0], &[1.0]), None);
+        other.scales.clear();
+        assert_eq!(rescaled(&other, &[1.0, 1.0], &[1.0, 5.0]), None);
+        // Of the larger's largest component, at least 1.
+        assert!((state_distance(&[0.0, 2.0], &[0.0, 2.5]) - 0.2).abs() < 1e-15);
+        assert!((state_distance(&[0.1], &[0.3]) - 0.2).abs() < 1e-15);
     }
 
     #[test]

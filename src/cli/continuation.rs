@@ -4,9 +4,9 @@
 //! stability, branch segment and Floquet multipliers.
 
 use planetwear::analysis::continuation::{
-    branch_events, continue_branch, follow_branch, marching_jumps, nearest_event, on_one_stable_branch,
-    BalanceBranch, BifurcationKind, Branch, BranchEvent, BranchPoint, ContinuationSettings, CurvePoint,
-    GapKind,
+    branch_events, continue_branch, follow_branch, follow_joining, marching_jumps, nearest_event,
+    on_one_stable_branch, BalanceBranch, BifurcationKind, Branch, BranchEvent, BranchPoint,
+    ContinuationSettings, CurvePoint, GapKind,
 };
 use planetwear::dynamics::periodic::{
     HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings, MAX_RULE_HARMONICS,
@@ -47,6 +47,7 @@ pub(crate) fn sweep_continuation(
         max_back,
         against_march,
         solver,
+        join,
         ..
     }: SweepArgs,
 ) -> Result<()> {
@@ -70,6 +71,9 @@ pub(crate) fn sweep_continuation(
         bail!("--direction {direction}: allowed are up, down, both");
     }
     let direction = direction.as_str();
+    if join && direction != "both" {
+        bail!("--join {direction}: --join needs both directions (--direction both), the down run joining the up run");
+    }
     let back = match max_back {
         Some(back) if !(back.is_finite() && back > 0.0) => {
             bail!("--max-back {back} rpm: must be a positive, finite speed")
@@ -92,50 +96,59 @@ pub(crate) fn sweep_continuation(
     let per_run = ((to - from).abs() / step).ceil() as u64 + 1;
     let bar = progress_bar(per_run * ends.len() as u64);
     let done: Vec<AtomicU64> = ends.iter().map(|_| 0.into()).collect();
-    let runs = ends
-        .par_iter()
-        .enumerate()
-        .map(|(k, &(name, a, b))| -> Result<Run> {
-            let mut problem =
-                PeriodicProblem::new(model.clone(), ShootingSettings::default(), rpm_to_rad_per_s(a))?;
-            let mut settings =
-                ContinuationSettings::new(rpm_to_rad_per_s(a), rpm_to_rad_per_s(b), rpm_to_rad_per_s(step));
-            if let Some(back) = back {
-                settings.max_back = back;
+    let one = |k: usize, (name, a, b): (&'static str, f64, f64), other: Option<&Branch>| -> Result<Run> {
+        let mut problem =
+            PeriodicProblem::new(model.clone(), ShootingSettings::default(), rpm_to_rad_per_s(a))?;
+        let mut settings =
+            ContinuationSettings::new(rpm_to_rad_per_s(a), rpm_to_rad_per_s(b), rpm_to_rad_per_s(step));
+        if let Some(back) = back {
+            settings.max_back = back;
+        }
+        let progress = |p: &BranchPoint| {
+            let at = ((rad_per_s_to_rpm(p.orbit.speed) - a).abs() / step) as u64;
+            done[k].store(at.min(per_run), Ordering::Relaxed);
+            bar.set_position(done.iter().map(|d| d.load(Ordering::Relaxed)).sum());
+        };
+        let mut states = Vec::new();
+        let mut held = None;
+        let branch = if balance {
+            let mut hb = HarmonicBalance::new(problem, HarmonicSettings::default())?;
+            let mut solver = BalanceBranch::new(&mut hb);
+            let branch = match other {
+                Some(o) => follow_joining(&mut solver, &settings, o, progress)?,
+                None => follow_branch(&mut solver, &settings, progress)?,
+            };
+            let orbits = std::mem::take(&mut solver.orbits);
+            for orbit in &orbits {
+                states.push(hb.steady_state(orbit)?);
+                // Only the cap: elsewhere a point may keep more harmonics than the rule at
+                // its own speed (the rule's at the lowest speed its step could reach).
+                if orbit.harmonics == MAX_RULE_HARMONICS
+                    && hb.rule_harmonics(orbit.speed) > MAX_RULE_HARMONICS
+                {
+                    held = Some(held.unwrap_or(0.0_f64).max(rad_per_s_to_rpm(orbit.speed)));
+                }
             }
-            let progress = |p: &BranchPoint| {
-                let at = ((rad_per_s_to_rpm(p.orbit.speed) - a).abs() / step) as u64;
-                done[k].store(at.min(per_run), Ordering::Relaxed);
-                bar.set_position(done.iter().map(|d| d.load(Ordering::Relaxed)).sum());
+            branch
+        } else {
+            let branch = match other {
+                Some(o) => follow_joining(&mut problem, &settings, o, progress)?,
+                None => continue_branch(&mut problem, &settings, progress)?,
             };
-            let mut states = Vec::new();
-            let mut held = None;
-            let branch = if balance {
-                let mut hb = HarmonicBalance::new(problem, HarmonicSettings::default())?;
-                let mut solver = BalanceBranch::new(&mut hb);
-                let branch = follow_branch(&mut solver, &settings, progress)?;
-                let orbits = std::mem::take(&mut solver.orbits);
-                for orbit in &orbits {
-                    states.push(hb.steady_state(orbit)?);
-                    // Only the cap: elsewhere a point may keep more harmonics than the rule at
-                    // its own speed (the rule's at the lowest speed its step could reach).
-                    if orbit.harmonics == MAX_RULE_HARMONICS
-                        && hb.rule_harmonics(orbit.speed) > MAX_RULE_HARMONICS
-                    {
-                        held = Some(held.unwrap_or(0.0_f64).max(rad_per_s_to_rpm(orbit.speed)));
-                    }
-                }
-                branch
-            } else {
-                let branch = continue_branch(&mut problem, &settings, progress)?;
-                for p in &branch.points {
-                    states.push(problem.steady_state(&p.orbit)?);
-                }
-                branch
-            };
-            Ok(Run { direction: name, branch, states, held })
-        })
-        .collect::<Result<Vec<Run>>>()?;
+            for p in &branch.points {
+                states.push(problem.steady_state(&p.orbit)?);
+            }
+            branch
+        };
+        Ok(Run { direction: name, branch, states, held })
+    };
+    let runs = if join {
+        let up = one(0, ends[0], None)?;
+        let down = one(1, ends[1], Some(&up.branch))?;
+        vec![up, down]
+    } else {
+        ends.par_iter().enumerate().map(|(k, &end)| one(k, end, None)).collect::<Result<Vec<Run>>>()?
+    };
     bar.finish_and_clear();
     let wall = started.elapsed().as_secs_f64();
     let width_mm = set.sun().face_width * 1e3;

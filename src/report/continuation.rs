@@ -294,6 +294,7 @@ mod tests {
             ended: String::new(),
             work: Work::default(),
             flows: 0,
+            scales: Vec::new(),
         };
         let (x, stable, unstable) = pieces(&branch, &[1.0, 2.0, 5.0, 6.0], &[10.0, 20.0, 50.0, 60.0]);
         assert_eq!(x, vec![1.0, 2.0, 5.0, 5.0, 6.0]);

@@ -426,6 +426,18 @@ impl PeriodicProblem {
         }
     }
 
+    /// What one unit of each unknown is in SI units: the position scale
+    /// (the static mesh deflection) for the coordinates, the velocity scale
+    /// (that times the mesh angular frequency at the reference speed) for
+    /// their rates. Two problems built at different reference speeds scale
+    /// the velocities differently.
+    pub fn unknown_scales(&self) -> Vec<f64> {
+        let half = self.unknowns() / 2;
+        let mut s = vec![self.q_scale; half];
+        s.extend(std::iter::repeat_n(self.v_scale, half));
+        s
+    }
+
     /// Period \[s\] at speed `omega` [rad/s].
     pub fn period(&self, omega: f64) -> f64 {
         self.cycles as f64 / (self.model.mesh_frequency_per_input_speed * omega.abs())
