@@ -768,7 +768,7 @@ fn near_branch(other: &Branch, speed: f64, z: &[f64], scales: &[f64]) -> bool {
         let (a, b) = (&w[0], &w[1]);
         let (sa, sb) = (a.orbit.speed, b.orbit.speed);
         let share = (speed - sa) / (sb - sa);
-        if b.after_gap || sa == sb || !(0.0..=1.0).contains(&share) {
+        if sa == sb || !(0.0..=1.0).contains(&share) {
             return false;
         }
         let (Some(za), Some(zb)) = (rescaled(other, &a.orbit.z, scales), rescaled(other, &b.orbit.z, scales))
@@ -1063,7 +1063,7 @@ fn follow<S: BranchSolver>(
     if points.len() >= settings.max_points {
         ended = format!("stopped after {} points (the most allowed)", settings.max_points);
     }
-    Ok(Branch { points, bifurcations, gaps, ended, work: total, flows, scales: solver.unknown_scales() })
+    Ok(Branch { points, bifurcations, gaps, ended, work: total, flows, scales })
 }
 
 /// The folds and period doublings between two successive points of a

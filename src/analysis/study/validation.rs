@@ -28,7 +28,7 @@ use crate::contact::hertz::{contact_modulus, line_contact};
 use crate::contact::iso6336::{iso_stiffness, IsoPair};
 use crate::contact::ltca::SetModel;
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::dynamics::response::{steady_state, sweep, sweep_from, Direction, SteadyState, Sweep, Window};
+use crate::dynamics::response::{steady_state, sweep_from, Direction, State, SteadyState, Sweep, Window};
 use crate::dynamics::spectrum::mesh_phases;
 use crate::model::gear::{GearSet, IntegratorKind, MeshKind};
 use crate::model::lumped::Fidelity;
@@ -359,6 +359,13 @@ fn lowest_differing(up: &Curve, down: &Curve) -> Option<f64> {
         .zip(&down.points)
         .find(|(u, d)| (u.rms[0] - d.rms[0]).abs() > DIRECTIONS_DIFFER * u.rms[0].max(d.rms[0]))
         .map(|(u, _)| u.speed)
+}
+
+/// `f(0)` … `f(3)` on rayon's threads (the validation's four sweeps: κ = 0
+/// up and down, the worn κ up and down).
+fn four<R: Send>(f: impl Fn(usize) -> R + Sync) -> [R; 4] {
+    let ((a, b), (c, d)) = rayon::join(|| rayon::join(|| f(0), || f(1)), || rayon::join(|| f(2), || f(3)));
+    [a, b, c, d]
 }
 
 /// `again`'s points, below them `first`'s: a curve whose upper stretch was swept again.
@@ -785,18 +792,21 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     let speeds: Vec<f64> = plan.speeds().into_iter().map(rpm_to_rad_per_s).collect();
     let model0 = PlanetaryDynamics::new(&set, unworn.set_model(&set)).map_err(|e| e.to_string())?;
     let model6 = PlanetaryDynamics::new(&set, worn.set_model(&set)).map_err(|e| e.to_string())?;
-    let run_sweep = |model: &PlanetaryDynamics, d: Direction| -> Result<Sweep, String> {
-        let mut m = model.clone();
-        let mut grid = speeds.clone();
-        if d == Direction::Down {
-            grid.reverse();
-        }
-        sweep(&set, &run, &mut m, d, &grid, &[], |_| {}).map_err(|e| e.to_string())
-    };
-    let ((a, b), (c, d)) = rayon::join(
-        || rayon::join(|| run_sweep(&model0, Direction::Up), || run_sweep(&model0, Direction::Down)),
-        || rayon::join(|| run_sweep(&model6, Direction::Up), || run_sweep(&model6, Direction::Down)),
-    );
+    // The four sweeps in the order of `four`: κ = 0 up and down, the worn κ up and down.
+    let models = [&model0, &model0, &model6, &model6];
+    let directions = [Direction::Up, Direction::Down, Direction::Up, Direction::Down];
+    // A sweep over `grid` (ascending; run downwards for a down sweep) from `start`.
+    let sweep_over =
+        |k: usize, settings: &RunSettings, grid: &[f64], start: Option<&State>| -> Result<Sweep, String> {
+            let mut m = models[k].clone();
+            let mut grid = grid.to_vec();
+            if directions[k] == Direction::Down {
+                grid.reverse();
+            }
+            sweep_from(&set, settings, &mut m, directions[k], &grid, &[], Window::Fixed, start, |_| {})
+                .map_err(|e| e.to_string())
+        };
+    let [a, b, c, d] = four(|k| sweep_over(k, &run, &speeds, None));
     let (up0, down0, up6, down6) = (a?, b?, c?, d?);
     let curves = vec![curve(&up0, 0), curve(&down0, 0), curve(&up6, worn.kappa), curve(&down6, worn.kappa)];
     let t_first = t.elapsed().as_secs_f64();
@@ -827,33 +837,13 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
                     }
                 })
                 .map_err(|e| e.to_string())?;
-            let band = &speeds[i..];
-            let again = |model: &PlanetaryDynamics, first: &Sweep, d: Direction| -> Result<Sweep, String> {
-                let mut m = model.clone();
-                let mut grid = band.to_vec();
-                // The up sweep enters the band from the first sweep's state at
-                // the speed below it; the down sweep starts at the top, as the first did.
-                let start = if d == Direction::Up && i > 0 { Some(&first.points[i - 1].end) } else { None };
-                if d == Direction::Down {
-                    grid.reverse();
-                }
-                sweep_from(&set, &finer, &mut m, d, &grid, &[], Window::Fixed, start, |_| {})
-                    .map_err(|e| e.to_string())
-            };
-            let ((a, b), (c, d)) = rayon::join(
-                || {
-                    rayon::join(
-                        || again(&model0, &up0, Direction::Up),
-                        || again(&model0, &down0, Direction::Down),
-                    )
-                },
-                || {
-                    rayon::join(
-                        || again(&model6, &up6, Direction::Up),
-                        || again(&model6, &down6, Direction::Down),
-                    )
-                },
-            );
+            let firsts = [&up0, &down0, &up6, &down6];
+            // The up sweeps enter the band from the first sweep's state at the
+            // speed below it; the down sweeps start at the top, as the first did.
+            let [a, b, c, d] = four(|k| {
+                let start = (directions[k] == Direction::Up && i > 0).then(|| &firsts[k].points[i - 1].end);
+                sweep_over(k, &finer, &speeds[i..], start)
+            });
             let (a, b, c, d) = (a?, b?, c?, d?);
             vec![
                 splice(&curves[0], &curve(&a, 0)),
