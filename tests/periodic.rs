@@ -1445,7 +1445,7 @@ mod harmonic_balance {
     /// (its Newton takes one or two steps and ends 2.15e-3 from the start; the
     /// teeth separate and the period map is not smooth), so agreement within
     /// 2e-2 is what the comparison can show (1.0358 and 1.0404 from the
-    /// balance's states of earlier sessions; without the saltation of the
+    /// balance's states of earlier versions; without the saltation of the
     /// damping's jumps where the meshes separate, the balance gave 1.0222
     /// before the steps were cut at the pairs' switches).
     #[test]
