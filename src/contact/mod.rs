@@ -13,8 +13,11 @@
 //! - [`iso6336`]: the ISO/TR 6336-30 single-pair stiffness example.
 //! - [`ltca`]: loaded tooth contact analysis.
 //! - [`cache`]: the separation tables on disk, keyed by what they are made from.
+//! - [`deformable`]: deformable-tooth contact (finite-element bodies, a local
+//!   contact term, the pairs solved together).
 
 pub mod cache;
+pub mod deformable;
 pub mod hertz;
 pub mod iso6336;
 pub mod ltca;
