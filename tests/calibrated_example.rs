@@ -6,7 +6,7 @@ use planetwear::analysis::modes::{natural_modes, ModeClass};
 use planetwear::analysis::study::calibrate::{
     calibrate, CalibrationError, Free, Measure, Plan, PlanFile, Target,
 };
-use planetwear::analysis::study::validation::{validate, ValidationPlan, Verdict};
+use planetwear::analysis::study::validation::{headline, validate, Evidence, ValidationPlan, Verdict};
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::scene::units::rad_per_s_to_rpm;
@@ -235,10 +235,44 @@ fn the_reduced_validation_keeps_its_frequency_and_wear_shape_rows() {
         }
         assert!(moved > 0, "the finer sweeps changed no figure of κ = {} {:?}", first.kappa, first.direction);
     }
-    for id in ["peak-8500", "peak-10750", "jump-softening", "separation-large-peak", "wear-new-peaks"] {
-        let r = v.row(id).unwrap();
+    for id in [
+        "peak-8500",
+        "peak-10750",
+        "off-resonance-2750",
+        "jump-softening",
+        "separation-large-peak",
+        "separation-ring-upper-branch",
+        "wear-new-peaks",
+        "wear-near-resonance-upper-branch",
+        "wear-near-resonance-separating",
+    ] {
+        let r = v.row(id).unwrap_or_else(|| panic!("no row {id}"));
         assert!(r.error.contains("at a third of the tolerance"), "{id}: {}", r.error);
     }
+    // The calibration's targets are labelled fitted, the rows that follow
+    // from the model's construction identities; the headline counts the
+    // independent rows alone.
+    eprintln!("{}", headline(&v.rows));
+    for r in &v.rows {
+        eprintln!(
+            "{:<9} {:<11} {:<34} study {} | ours {}",
+            r.verdict.word(),
+            r.evidence.word(),
+            r.id,
+            r.study,
+            r.ours
+        );
+    }
+    let label = |id: &str| v.row(id).map(|r| r.evidence);
+    assert_eq!(label("frequency-torsional-planet-modes"), Some(Evidence::Fitted));
+    assert_eq!(label("double-contact-sun-planet"), Some(Evidence::Fitted));
+    assert_eq!(label("frequency-tt-first-rotational"), Some(Evidence::Identity));
+    assert_eq!(label("wear-total"), Some(Evidence::Identity));
+    assert_eq!(label("double-contact-ring-planet"), Some(Evidence::Independent));
+    assert_eq!(label("magnitude-2750-worn"), Some(Evidence::Independent));
+    let fitted = v.rows.iter().filter(|r| r.evidence == Evidence::Fitted).count();
+    assert_eq!(fitted, 4, "three torsional frequencies and the sun–planet double contact");
+    assert!(headline(&v.rows).contains(&format!("fitted: 4 of {fitted}")), "{}", headline(&v.rows));
     // Every row has a figure, a tolerance and a time.
     for r in &v.rows {
         assert!(!r.ours.is_empty() && !r.tolerance.is_empty() && r.seconds >= 0.0, "{r:?}");

@@ -17,15 +17,11 @@ pub(crate) fn validate_command(ValidateArgs { out, quick, scene }: ValidateArgs)
     );
     planetwear::report::validation::write_report(&v, &out, set.sun().face_width, &command)?;
     for r in &v.rows {
-        outln!("{:<9} {:<40} ours {}", r.verdict.word(), r.id, r.ours)?;
+        outln!("{:<9} {:<11} {:<40} ours {}", r.verdict.word(), r.evidence.word(), r.id, r.ours)?;
     }
-    let count = |verdict| v.rows.iter().filter(|r| r.verdict == verdict).count();
-    use planetwear::analysis::study::validation::Verdict;
     outln!(
-        "{} of {} rows pass, {} undecided ({:.0} s); report {}",
-        count(Verdict::Pass),
-        v.rows.len(),
-        count(Verdict::Undecided),
+        "{} ({:.0} s); report {}",
+        planetwear::analysis::study::validation::headline(&v.rows),
         v.seconds,
         out.join("VALIDATION.md").display()
     )?;
