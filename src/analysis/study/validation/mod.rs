@@ -695,10 +695,13 @@ impl SweepRun {
     }
 }
 
+/// F^(1) and F^(rms) of the sun–planet mesh \[N\].
+type Amplitudes = (f64, f64);
+
 /// F^(1) and F^(rms) of the sun–planet mesh at the off-resonance speeds.
 struct OffResonance {
-    /// (rpm, κ = 0, worn, κ = 0 reference, worn reference), each (F^(1), F^(rms)) \[N\].
-    figures: Vec<(f64, (f64, f64), (f64, f64), (f64, f64), (f64, f64))>,
+    /// (rpm, κ = 0, worn, κ = 0 reference, worn reference).
+    figures: Vec<(f64, Amplitudes, Amplitudes, Amplitudes, Amplitudes)>,
     /// How they were computed, in words.
     method: String,
     /// Time \[s\].
