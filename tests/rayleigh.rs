@@ -145,7 +145,7 @@ fn measured_ratio(
 }
 
 /// Law: under C = μM_v + ηK a mode of circular frequency ω decays at
-/// ζ = μ/(2ω) + ηω/2 (Clough & Penzien, Dynamics of Structures, eq. 12-38).
+/// ζ = μ/(2ω) + ηω/2 (Chopra, Dynamics of Structures, §11.4.1).
 /// μ and η from the two-frequency rule at ζ = 0.02 on the first two tangent
 /// modes; the third lies between or above them and has its own ratio. Each
 /// measured log decrement within ±2 % of the formula, for both integrators.
@@ -251,4 +251,20 @@ fn the_energy_balance_holds_with_rayleigh_damping() {
     eprintln!("energy balance error {worst:e} J, dissipated {lost:e} J, contact energy {contact_scale:e} J");
     assert!(worst < 1e-3 * contact_scale, "balance error {worst} vs contact energy {contact_scale}");
     assert!(lost > 10.0 * worst, "the damping took {lost} J only, against the balance error {worst} J");
+}
+
+/// The flexible example's Rayleigh coefficients are the two-frequency
+/// rule's at its `dynamics.mesh_damping_ratio` on its first two rotational
+/// modes (to the five digits the scene writes: 1e-4).
+#[test]
+fn the_examples_coefficients_follow_the_two_frequency_rule() {
+    let scene = Scene::example_2004_flexible();
+    let model = model_of(&scene);
+    let modes = planetwear::analysis::modes::natural_modes(&model.lumped);
+    let rule = planetwear::analysis::modes::rayleigh_rule(&modes, scene.dynamics.mesh_damping_ratio).unwrap();
+    eprintln!("{rule:?}");
+    assert_eq!(scene.dynamics.damping, DampingModel::Rayleigh);
+    let (mu, eta) = (scene.dynamics.rayleigh_mass_per_s, scene.dynamics.rayleigh_stiffness_s);
+    assert!((mu / rule.mass_per_s - 1.0).abs() < 1e-4, "μ {mu} against {}", rule.mass_per_s);
+    assert!((eta / rule.stiffness_s - 1.0).abs() < 1e-4, "η {eta} against {}", rule.stiffness_s);
 }

@@ -22,8 +22,8 @@
 //! torque on the output member, both as generalised forces on u.
 //!
 //! Rayleigh damping (`dynamics.damping = "rayleigh"`, [`Damping::Rayleigh`])
-//! replaces the damping ratios by C = μ M_v + η K (Clough & Penzien,
-//! Dynamics of Structures, 2nd ed., §12-5, eq. 12-37): each mesh's damping
+//! replaces the damping ratios by C = μ M_v + η K (Chopra,
+//! Dynamics of Structures, §11.4.1): each mesh's damping
 //! is η ∂F/∂δ, its current tangent stiffness (zero out of contact, and
 //! following the time-varying stiffness), each bearing's η k, and the
 //! mass-proportional part acts on the motion relative to the train's

@@ -551,8 +551,8 @@ pub enum Damping {
 
 impl Damping {
     /// The damping ratio Rayleigh damping gives a classical mode of circular
-    /// frequency `omega` \[rad/s\]: ζ = μ/(2ω) + ηω/2 (Clough & Penzien,
-    /// Dynamics of Structures, 2nd ed., eq. 12-38) [-]; `None` for the ratio
+    /// frequency `omega` \[rad/s\]: ζ = μ/(2ω) + ηω/2 (Chopra,
+    /// Dynamics of Structures, §11.4.1) [-]; `None` for the ratio
     /// model, whose ratios are set per mesh and bearing.
     pub fn rayleigh_ratio(&self, omega: f64) -> Option<f64> {
         match *self {
@@ -564,7 +564,7 @@ impl Damping {
     /// The Rayleigh coefficients (μ \[1/s\], η \[s\]) that give the damping
     /// ratio `zeta` at the two circular frequencies `omega1` and `omega2`
     /// \[rad/s\]: μ = 2ζ ω₁ω₂/(ω₁+ω₂), η = 2ζ/(ω₁+ω₂) (the two-frequency
-    /// rule, Clough & Penzien eq. 12-39 with equal ratios). Between the two
+    /// rule, Chopra §11.4.1, with equal ratios). Between the two
     /// frequencies the ratio is below ζ, outside them above.
     pub fn two_frequency(zeta: f64, omega1: f64, omega2: f64) -> (f64, f64) {
         let sum = omega1 + omega2;

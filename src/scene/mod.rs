@@ -452,13 +452,14 @@ impl Scene {
             "example-2004" => Some(Self::example_2004()),
             "example-2004-annulus" => Some(Self::example_2004_annulus()),
             "example-2004-gear-data" => Some(Self::example_2004_gear_data()),
+            "example-2004-flexible" => Some(Self::example_2004_flexible()),
             _ => None,
         }
     }
 
     /// Names of the built-in gear scenes.
     pub const BUILTIN: &'static [&'static str] =
-        &["example-2004", "example-2004-annulus", "example-2004-gear-data"];
+        &["example-2004", "example-2004-annulus", "example-2004-gear-data", "example-2004-flexible"];
 
     /// The calibration plan (TOML) of a built-in scene made by
     /// `planetwear calibrate`, if it has one.
