@@ -486,8 +486,14 @@ pub(crate) fn report_modes(
             "coordinates": red.coordinates.iter().map(|c| format!("{c:?}")).collect::<Vec<_>>(),
             "modes": modes,
             "rayleigh_two_frequency_rule": rule,
-            "rayleigh_mode_damping_ratios": modes.iter().map(|m| ratio(m.frequency)).collect::<Vec<_>>(),
         });
+        // Each mode's ratio μ/(2ω) + ηω/2, under Rayleigh damping only.
+        if modes.iter().any(|m| ratio(m.frequency.max(1.0)).is_some()) {
+            doc["rayleigh_mode_damping_ratios"] = serde_json::json!(modes
+                .iter()
+                .map(|m| ratio(m.frequency).filter(|z| z.is_finite()))
+                .collect::<Vec<_>>());
+        }
         if let Some((w, load, whirl)) = &whirl {
             doc["carrier_frame"] = serde_json::json!({
                 "carrier_speed_rad_per_s": w,
