@@ -333,3 +333,25 @@ fn the_rayleigh_keys_are_checked() {
     assert_eq!(back.dynamics, Scene::example_2004_flexible().dynamics);
     assert_eq!(back.value_at("dynamics.rayleigh_stiffness_s").unwrap(), 5.0298e-7);
 }
+
+/// The FMU has no parameters of its own for μ and η: a scene file named by
+/// `sceneFile` carries them, and the instance's scene keeps the file's
+/// damping model, coefficients and planet bearings.
+#[test]
+fn a_scene_file_brings_rayleigh_damping_into_the_fmu() {
+    use planetwear::fmi::instance::Instance;
+    use planetwear::fmi::variables::vr;
+    let dir = std::env::temp_dir().join(format!("planetwear-rayleigh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("flexible.toml");
+    std::fs::write(&path, Scene::example_2004_flexible().to_toml()).unwrap();
+    let mut i = Instance::new("rayleigh", None);
+    i.set_string(vr::SCENE_FILE, &path.display().to_string()).unwrap();
+    let scene = i.scene().map_err(|e| e.message).unwrap();
+    let flexible = Scene::example_2004_flexible();
+    assert_eq!(scene.dynamics.damping, DampingModel::Rayleigh);
+    assert_eq!(scene.dynamics.rayleigh_mass_per_s, flexible.dynamics.rayleigh_mass_per_s);
+    assert_eq!(scene.dynamics.rayleigh_stiffness_s, flexible.dynamics.rayleigh_stiffness_s);
+    assert_eq!(scene.supports.planet_bearing_n_per_m, flexible.supports.planet_bearing_n_per_m);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
