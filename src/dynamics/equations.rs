@@ -799,7 +799,12 @@ impl PlanetaryDynamics {
     /// damping force of mesh `i` switches on (`on`: a pair starts to touch in
     /// a mesh that had none) or off, at the state of the last evaluation: the
     /// force c·δ̇ acts along the mesh's line while a pair touches, so it jumps
-    /// there while the elastic force does not.
+    /// there while the elastic force does not. Under Rayleigh damping the
+    /// jump is η times the mesh's tangent stiffness at its last evaluation
+    /// in contact; the damping η ∂F/∂δ δ̇ also jumps where a pair enters or
+    /// leaves a mesh that stays in contact (the tangent stiffness jumps
+    /// there), and those jumps are not switches of this kind: the periodic
+    /// solvers' Floquet multipliers leave them out.
     pub fn add_damping_switch(&self, i: usize, on: bool, f: &mut [f64]) {
         let link = &self.links[i];
         let c = link.damping + self.mesh_stiffness_damping * self.touch_stiffness[i];
