@@ -229,3 +229,29 @@ pub fn rotating_modes(set: &LumpedSet, carrier_speed: f64, carrier_radius: f64) 
     out.sort_by(|x, y| x.frequency.total_cmp(&y.frequency).then(x.growth_rate.total_cmp(&y.growth_rate)));
     out
 }
+
+/// Rayleigh damping set by the two-frequency rule on a set's first two
+/// rotational modes (the in-phase modes that carry the mesh response).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RayleighRule {
+    /// The damping ratio both modes get [-].
+    pub zeta: f64,
+    /// The first and second rotational modes' frequencies \[Hz\].
+    pub frequencies: [f64; 2],
+    /// Mass-proportional coefficient μ = 2ζ ω₁ω₂/(ω₁+ω₂) \[1/s\].
+    pub mass_per_s: f64,
+    /// Stiffness-proportional coefficient η = 2ζ/(ω₁+ω₂) \[s\].
+    pub stiffness_s: f64,
+}
+
+/// The Rayleigh coefficients that give the damping ratio `zeta` [-] at the
+/// first and the second rotational mode of `modes`
+/// ([`Damping::two_frequency`](crate::model::gear::Damping::two_frequency));
+/// `None` when there are fewer than two rotational modes.
+pub fn rayleigh_rule(modes: &[Mode], zeta: f64) -> Option<RayleighRule> {
+    let mut rotational = modes.iter().filter(|m| m.class == ModeClass::Rotational);
+    let (f1, f2) = (rotational.next()?.frequency, rotational.next()?.frequency);
+    let w = |f: f64| 2.0 * std::f64::consts::PI * f;
+    let (mass_per_s, stiffness_s) = crate::model::gear::Damping::two_frequency(zeta, w(f1), w(f2));
+    Some(RayleighRule { zeta, frequencies: [f1, f2], mass_per_s, stiffness_s })
+}

@@ -2,7 +2,9 @@
 //! `modes` and `ltca`, with the printing of their results.
 
 use crate::*;
+use planetwear::analysis::modes::rayleigh_rule;
 use planetwear::analysis::plausibility;
+use planetwear::model::gear::Damping;
 
 pub(crate) fn simulate_command(
     SimulateArgs { scene, wear_state, accept_state_difference, stop, step }: SimulateArgs,
@@ -350,7 +352,7 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
 pub(crate) fn modes_command(
     ModesArgs { scene, wear_state, accept_state_difference, json }: ModesArgs,
 ) -> Result<()> {
-    let (name, lumped, frame) = match load_any(&scene)? {
+    let (name, lumped, frame, damping) = match load_any(&scene)? {
         AnyScene::Gear(s) => {
             let (set, run) = validated_with_run(&s)?;
             let mut model = PlanetaryDynamics::new(
@@ -360,14 +362,19 @@ pub(crate) fn modes_command(
             // The carrier frame at the scene's input speed (a turning carrier only).
             model.set_drive_speed(run.input_speed());
             let frame = (model.carrier_frame_speed(), set.centre_distance());
-            (set.name().to_string(), model.lumped, Some(frame).filter(|(w, _)| *w != 0.0))
+            (
+                set.name().to_string(),
+                model.lumped,
+                Some(frame).filter(|(w, _)| *w != 0.0),
+                Some((set.damping(), set.mesh_damping_ratio())),
+            )
         }
         AnyScene::Lumped(_) if wear_state.is_some() => {
             bail!("--wear-state: a lumped-parameter scene has no tooth flanks to wear")
         }
-        AnyScene::Lumped(s) => (s.name.clone(), s.validate()?, None),
+        AnyScene::Lumped(s) => (s.name.clone(), s.validate()?, None, None),
     };
-    report_modes(&name, &lumped, frame, json)?;
+    report_modes(&name, &lumped, frame, damping, json)?;
     Ok(())
 }
 
@@ -454,9 +461,20 @@ pub(crate) fn print_steady_state(ss: &SteadyState, width_mm: f64) -> Result<()> 
 
 /// Prints the natural modes of `set`; with `frame` = (Ω_c [rad/s], r_c \[m\])
 /// of a turning carrier also the whirl frequencies at that carrier speed and
-/// the planets' centrifugal bearing load.
-pub(crate) fn report_modes(name: &str, set: &LumpedSet, frame: Option<(f64, f64)>, json: bool) -> Result<()> {
+/// the planets' centrifugal bearing load; with `damping` = (the scene's
+/// damping model, its mesh damping ratio [-]) the Rayleigh coefficients of
+/// the two-frequency rule at that ratio on the first two rotational modes,
+/// and under Rayleigh damping each mode's ratio μ/(2ω) + ηω/2.
+pub(crate) fn report_modes(
+    name: &str,
+    set: &LumpedSet,
+    frame: Option<(f64, f64)>,
+    damping: Option<(Damping, f64)>,
+    json: bool,
+) -> Result<()> {
     let modes = natural_modes(set);
+    let rule = damping.and_then(|(_, zeta)| rayleigh_rule(&modes, zeta));
+    let ratio = |f: f64| damping.and_then(|(d, _)| d.rayleigh_ratio(2.0 * std::f64::consts::PI * f));
     let red = set.reduction();
     let whirl = frame.map(|(w, rc)| (w, set.planet_mass * w * w * rc, rotating_modes(set, w, rc)));
     if json {
@@ -467,7 +485,15 @@ pub(crate) fn report_modes(name: &str, set: &LumpedSet, frame: Option<(f64, f64)
             "mean_mesh_stiffness": {"sun_planet": set.sun_mesh, "ring_planet": set.ring_mesh},
             "coordinates": red.coordinates.iter().map(|c| format!("{c:?}")).collect::<Vec<_>>(),
             "modes": modes,
+            "rayleigh_two_frequency_rule": rule,
         });
+        // Each mode's ratio μ/(2ω) + ηω/2, under Rayleigh damping only.
+        if modes.iter().any(|m| ratio(m.frequency.max(1.0)).is_some()) {
+            doc["rayleigh_mode_damping_ratios"] = serde_json::json!(modes
+                .iter()
+                .map(|m| ratio(m.frequency).filter(|z| z.is_finite()))
+                .collect::<Vec<_>>());
+        }
         if let Some((w, load, whirl)) = &whirl {
             doc["carrier_frame"] = serde_json::json!({
                 "carrier_speed_rad_per_s": w,
@@ -482,7 +508,12 @@ pub(crate) fn report_modes(name: &str, set: &LumpedSet, frame: Option<(f64, f64)
         "natural modes of {name} ({:?}, held {:?}); mean mesh stiffness sun–planet {:.4e} N/m, ring–planet {:.4e} N/m",
         set.fidelity, set.held, set.sun_mesh, set.ring_mesh
     )?;
-    outln!("  {:>12}  {:<14} {:>12}", "frequency Hz", "class", "multiplicity")?;
+    let rayleigh = modes.first().and_then(|m| ratio(m.frequency.max(1.0))).is_some();
+    if rayleigh {
+        outln!("  {:>12}  {:<14} {:>12} {:>12}", "frequency Hz", "class", "multiplicity", "ζ Rayleigh")?;
+    } else {
+        outln!("  {:>12}  {:<14} {:>12}", "frequency Hz", "class", "multiplicity")?;
+    }
     let mut i = 0;
     while i < modes.len() {
         let m = &modes[i];
@@ -493,8 +524,18 @@ pub(crate) fn report_modes(name: &str, set: &LumpedSet, frame: Option<(f64, f64)
             ModeClass::Planet => "planet",
             ModeClass::Mixed => "mixed",
         };
-        outln!("  {:>12.1}  {:<14} {:>12}", m.frequency, class, m.multiplicity)?;
+        match ratio(m.frequency).filter(|z| z.is_finite() && m.class != ModeClass::RigidBody) {
+            Some(z) => outln!("  {:>12.1}  {:<14} {:>12} {:>12.4}", m.frequency, class, m.multiplicity, z)?,
+            None => outln!("  {:>12.1}  {:<14} {:>12}", m.frequency, class, m.multiplicity)?,
+        }
         i += m.multiplicity.max(1);
+    }
+    if let Some(r) = rule {
+        outln!(
+            "Rayleigh damping by the two-frequency rule, ζ = {} (dynamics.mesh_damping_ratio) at the rotational \
+             modes {:.1} and {:.1} Hz: rayleigh_mass_per_s = {:.6e}, rayleigh_stiffness_s = {:.6e}",
+            r.zeta, r.frequencies[0], r.frequencies[1], r.mass_per_s, r.stiffness_s
+        )?;
     }
     if let Some((w, load, whirl)) = &whirl {
         outln!(

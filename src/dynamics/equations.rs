@@ -20,6 +20,24 @@
 //! is geometry, not a prescribed phase. External forces: the input torque
 //! (or a torsional shaft from a source at constant speed) and the balancing
 //! torque on the output member, both as generalised forces on u.
+//!
+//! Rayleigh damping (`dynamics.damping = "rayleigh"`, [`Damping::Rayleigh`])
+//! replaces the damping ratios by C = μ M_v + η K (Chopra,
+//! Dynamics of Structures, §11.4.1): each mesh's damping
+//! is η ∂F/∂δ, its current tangent stiffness (zero out of contact, and
+//! following the time-varying stiffness), each bearing's η k, and the
+//! mass-proportional part acts on the motion relative to the train's
+//! rigid-body rotation only,
+//!
+//! M_v = M − M r rᵀ M / (rᵀ M r),
+//!
+//! r the rigid-body velocity pattern ([`PlanetaryDynamics::rigid_velocity`]).
+//! M_v r = 0, so a train turning freely is not braked (a drag μ M q̇ on the
+//! whole velocity would take μ·(rᵀMr)·ω² of power from it), and every elastic
+//! mode φ, being M-orthogonal to the rigid-body mode r, sees M_v φ = M φ: a
+//! classical mode of circular frequency ω decays at ζ = μ/(2ω) + ηω/2. The
+//! speed drive's shaft and the load balance keep their own damping: they
+//! are a test bench's, not the gear set's structure.
 
 use nalgebra::DMatrix;
 
@@ -28,7 +46,7 @@ use crate::dynamics::solver::{
     LowRankJacobian, RankOneTerm, SecondOrderSystem, TangentSystem, TermCoefficients,
 };
 use crate::model::carrier_frame::CarrierFrame;
-use crate::model::gear::{Drive, GearSet, Member, MeshKind};
+use crate::model::gear::{Damping, Drive, GearSet, Member, MeshKind};
 use crate::model::lumped::{
     add_outer, full_index, planet_bearing_vectors, ring_mesh_vector, sun_mesh_vector, Coordinate, Fidelity,
     LumpedSet, Reduction,
@@ -44,7 +62,7 @@ struct Link {
     /// Position s = Σ p_i q_i + s0.
     p_nz: Vec<(usize, f64)>,
     s0: f64,
-    /// Viscous mesh damping [N·s/m].
+    /// Viscous mesh damping of the ratio model [N·s/m] (0 under Rayleigh damping).
     damping: f64,
 }
 
@@ -112,6 +130,13 @@ pub struct PlanetaryDynamics {
     /// The inertial terms of the turning carrier's frame (None when the
     /// carrier is held or the model torsional).
     frame: Option<CarrierFrame>,
+    /// Rayleigh's stiffness-proportional coefficient η on each mesh's
+    /// tangent stiffness \[s\] (0 under the ratio model).
+    mesh_stiffness_damping: f64,
+    /// Each mesh's tangent stiffness at its last evaluation in contact
+    /// [N/m]: the stiffness-proportional damping that switches off when the
+    /// mesh's last pair leaves contact ([`Self::add_damping_switch`]).
+    touch_stiffness: Vec<f64>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -280,7 +305,10 @@ impl PlanetaryDynamics {
             }
         }
         let u = |m: Member| reduction.position(Coordinate::U(m));
-        let zeta_m = set.mesh_damping_ratio();
+        let (zeta_m, eta) = match set.damping() {
+            Damping::Ratio => (set.mesh_damping_ratio(), 0.0),
+            Damping::Rayleigh { stiffness, .. } => (0.0, stiffness),
+        };
         let m_rot = |x: f64, y: f64| x * y / (x + y);
         let c_sp = 2.0
             * zeta_m
@@ -407,7 +435,10 @@ impl PlanetaryDynamics {
             reaction.links.push(dot(&sun_mesh_vector(n, p, *psi, alpha_s)));
             reaction.links.push(dot(&ring_mesh_vector(n, p, *psi, alpha_r)));
             let kp = lumped.planet_bearing_of(p);
-            let cp = 2.0 * zeta[3] * (kp * lumped.planet_mass).sqrt();
+            let cp = match set.damping() {
+                Damping::Ratio => 2.0 * zeta[3] * (kp * lumped.planet_mass).sqrt(),
+                Damping::Rayleigh { stiffness, .. } => stiffness * kp,
+            };
             for bv in planet_bearing_vectors(n, p, *psi) {
                 let e = dot(&bv);
                 let reduced: Vec<(usize, f64)> =
@@ -460,6 +491,9 @@ impl PlanetaryDynamics {
             }
             _ => None,
         };
+        if let Damping::Rayleigh { mass: mu, stiffness } = set.damping() {
+            c_support = rayleigh_support_damping(&mass, &rigid, &k_support, mu, stiffness);
+        }
         let slots = vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()];
         let mut support_nz = Vec::new();
         for i in 0..dim {
@@ -495,6 +529,8 @@ impl PlanetaryDynamics {
             events_scratch: Vec::new(),
             cache: None,
             frame,
+            mesh_stiffness_damping: eta,
+            touch_stiffness: vec![0.0; 2 * n],
         };
         model.set_torques(torques[0], torques[1], torques[2]);
         Ok(model)
@@ -763,10 +799,16 @@ impl PlanetaryDynamics {
     /// damping force of mesh `i` switches on (`on`: a pair starts to touch in
     /// a mesh that had none) or off, at the state of the last evaluation: the
     /// force c·δ̇ acts along the mesh's line while a pair touches, so it jumps
-    /// there while the elastic force does not.
+    /// there while the elastic force does not. Under Rayleigh damping the
+    /// jump is η times the mesh's tangent stiffness at its last evaluation
+    /// in contact; the damping η ∂F/∂δ δ̇ also jumps where a pair enters or
+    /// leaves a mesh that stays in contact (the tangent stiffness jumps
+    /// there), and those jumps are not switches of this kind: the periodic
+    /// solvers' Floquet multipliers leave them out.
     pub fn add_damping_switch(&self, i: usize, on: bool, f: &mut [f64]) {
         let link = &self.links[i];
-        let jump = link.damping * self.meshes[i].approach_rate;
+        let c = link.damping + self.mesh_stiffness_damping * self.touch_stiffness[i];
+        let jump = c * self.meshes[i].approach_rate;
         let sign = if on { -1.0 } else { 1.0 };
         for (j, b) in &link.b_nz {
             f[*j] += sign * b * jump;
@@ -833,7 +875,12 @@ impl PlanetaryDynamics {
             } else {
                 self.model(link.kind).force_tangents(s, delta)
             };
-            let damping_force = if law.approach_stiffness > 0.0 { link.damping * rate } else { 0.0 };
+            let damping_force = if law.approach_stiffness > 0.0 {
+                self.touch_stiffness[i] = law.approach_stiffness;
+                (link.damping + self.mesh_stiffness_damping * law.approach_stiffness) * rate
+            } else {
+                0.0
+            };
             self.meshes[i] = MeshState {
                 position: s,
                 approach: delta,
@@ -901,10 +948,14 @@ impl TangentSystem for PlanetaryDynamics {
             if state.stiffness == 0.0 {
                 continue;
             }
+            // The damping's own change with the stiffness, η ∂²F/∂δ² δ̇, is
+            // left out of the tangent: the law gives no second derivative,
+            // and Newton's iteration only converges more slowly without it.
+            let damping = link.damping + self.mesh_stiffness_damping * state.stiffness;
             for &(i, bi) in &link.b_nz {
                 for &(j, bj) in &link.b_nz {
                     k[(i, j)] += state.stiffness * bi * bj;
-                    c[(i, j)] += link.damping * bi * bj;
+                    c[(i, j)] += damping * bi * bj;
                 }
             }
             // ∂F/∂s · ∂s/∂q: a rank-one, non-symmetric term.
@@ -953,10 +1004,39 @@ impl TangentSystem for PlanetaryDynamics {
             } else {
                 TermCoefficients {
                     stiffness: state.stiffness,
-                    damping: link.damping,
+                    damping: link.damping + self.mesh_stiffness_damping * state.stiffness,
                     cross: state.position_derivative,
                 }
             };
         }
     }
+}
+
+/// The support damping of Rayleigh's model, η K_b + μ M_v with
+/// M_v = M − M r rᵀ M / (rᵀ M r) (module docs): `mass` the diagonal of M
+/// [kg], `rigid` the rigid-body velocity pattern r, `k_support` the supports'
+/// stiffness K_b [N/m], `mu` \[1/s\] and `eta` \[s\] the coefficients.
+fn rayleigh_support_damping(
+    mass: &[f64],
+    rigid: &[f64],
+    k_support: &DMatrix<f64>,
+    mu: f64,
+    eta: f64,
+) -> DMatrix<f64> {
+    let mut c = k_support * eta;
+    let mr: Vec<f64> = mass.iter().zip(rigid).map(|(m, r)| m * r).collect();
+    let rmr: f64 = mr.iter().zip(rigid).map(|(a, r)| a * r).sum();
+    for (i, m) in mass.iter().enumerate() {
+        c[(i, i)] += mu * m;
+    }
+    // A model without a rigid-body motion (all velocities zero at unit
+    // input speed cannot happen for a valid set) would keep μM whole.
+    if rmr > 0.0 {
+        for (i, a) in mr.iter().enumerate() {
+            for (j, b) in mr.iter().enumerate() {
+                c[(i, j)] -= mu * a * b / rmr;
+            }
+        }
+    }
+    c
 }

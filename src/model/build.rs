@@ -11,13 +11,13 @@ use std::fmt;
 use crate::model::gear::{
     Analysis, Bodies, Body, Chamfer, GearKind, GearSet, Material, MeshKind, RootForm, Supports, ToothForm,
 };
-use crate::model::gear::{Drive, Member};
+use crate::model::gear::{Damping, Drive, Member};
 use crate::model::gear_data::{minimum_profile_shift, name_by_gear_data, trochoid_margin};
 use crate::model::mesh::PathOfContact;
 use crate::model::run::{RunSettings, RunValues};
 use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 use crate::scene::{
-    default_chamfer, ChamferSpec, ExternalGearSpec, Problem, RingGearSpec, Scene, SceneError,
+    default_chamfer, ChamferSpec, DampingModel, ExternalGearSpec, Problem, RingGearSpec, Scene, SceneError,
 };
 
 impl Scene {
@@ -495,6 +495,7 @@ fn validate_radii(given: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
     if !(d.mesh_damping_ratio.is_finite() && (0.0..1.0).contains(&d.mesh_damping_ratio)) {
         c.fail("dynamics.mesh_damping_ratio", d.mesh_damping_ratio, "must be at least 0 and below 1");
     }
+    check_rayleigh(d, &mut c);
     c.positive("dynamics.shaft_stiffness_nm_per_rad", d.shaft_stiffness_nm_per_rad);
     let run = RunValues {
         input_speed: rpm_to_rad_per_s(d.input_speed_rpm),
@@ -595,6 +596,12 @@ fn validate_radii(given: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
         },
         fidelity: d.fidelity,
         mesh_damping_ratio: d.mesh_damping_ratio,
+        damping: match d.damping {
+            DampingModel::Ratio => Damping::Ratio,
+            DampingModel::Rayleigh => {
+                Damping::Rayleigh { mass: d.rayleigh_mass_per_s, stiffness: d.rayleigh_stiffness_s }
+            }
+        },
         drive: d.drive,
         shaft_stiffness: d.shaft_stiffness_nm_per_rad,
         load_balance: d.load_balance,
@@ -953,5 +960,25 @@ fn check_speed_driven_member(
             "the load balance already holds the output member's speed: drive the input member, or turn \
              dynamics.load_balance off",
         );
+    }
+}
+
+/// The Rayleigh coefficients: finite and not negative, and set only with
+/// `dynamics.damping = "rayleigh"` (the ratio model would ignore them).
+fn check_rayleigh(d: &crate::scene::DynamicsSpec, c: &mut Checker) {
+    for (key, v) in [
+        ("dynamics.rayleigh_mass_per_s", d.rayleigh_mass_per_s),
+        ("dynamics.rayleigh_stiffness_s", d.rayleigh_stiffness_s),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            c.fail(key, v, "must be a finite number, at least 0");
+        } else if v != 0.0 && d.damping == DampingModel::Ratio {
+            c.fail(
+                key,
+                v,
+                "is read only with dynamics.damping = \"rayleigh\" (the damping is \"ratio\"): set the damping \
+                 model, or remove the key",
+            );
+        }
     }
 }

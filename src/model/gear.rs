@@ -404,6 +404,8 @@ pub struct GearSet {
     pub(in crate::model) fidelity: Fidelity,
     /// Mesh damping ratio [-].
     pub(in crate::model) mesh_damping_ratio: f64,
+    /// The damping model of the dynamics.
+    pub(in crate::model) damping: Damping,
     /// Drive of the input member.
     pub(in crate::model) drive: Drive,
     /// Input shaft torsional stiffness for the speed drive [N·m/rad].
@@ -499,6 +501,12 @@ impl GearSet {
         self.mesh_damping_ratio
     }
 
+    /// The damping model of the dynamics: the damping ratios of meshes and
+    /// bearings, or Rayleigh's C = μM + ηK.
+    pub fn damping(&self) -> Damping {
+        self.damping
+    }
+
     /// How the input member is driven.
     pub fn drive(&self) -> Drive {
         self.drive
@@ -521,6 +529,46 @@ impl GearSet {
     /// `dynamics.speed_driven_member` names the output member.
     pub fn speed_driven_member(&self) -> Member {
         self.speed_driven
+    }
+}
+
+/// The damping model of the dynamics.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Damping {
+    /// A damping ratio per mesh ([`GearSet::mesh_damping_ratio`]) and per
+    /// bearing ([`Supports::damping_ratios`]).
+    Ratio,
+    /// Rayleigh damping C = μM + ηK: η on each mesh's tangent stiffness and
+    /// each bearing's stiffness, μ on the masses for the motion relative to
+    /// the train's rigid-body rotation.
+    Rayleigh {
+        /// Mass-proportional coefficient μ \[1/s\].
+        mass: f64,
+        /// Stiffness-proportional coefficient η \[s\].
+        stiffness: f64,
+    },
+}
+
+impl Damping {
+    /// The damping ratio Rayleigh damping gives a classical mode of circular
+    /// frequency `omega` \[rad/s\]: ζ = μ/(2ω) + ηω/2 (Chopra,
+    /// Dynamics of Structures, §11.4.1) [-]; `None` for the ratio
+    /// model, whose ratios are set per mesh and bearing.
+    pub fn rayleigh_ratio(&self, omega: f64) -> Option<f64> {
+        match *self {
+            Damping::Ratio => None,
+            Damping::Rayleigh { mass, stiffness } => Some(mass / (2.0 * omega) + stiffness * omega / 2.0),
+        }
+    }
+
+    /// The Rayleigh coefficients (μ \[1/s\], η \[s\]) that give the damping
+    /// ratio `zeta` at the two circular frequencies `omega1` and `omega2`
+    /// \[rad/s\]: μ = 2ζ ω₁ω₂/(ω₁+ω₂), η = 2ζ/(ω₁+ω₂) (the two-frequency
+    /// rule, Chopra §11.4.1, with equal ratios). Between the two
+    /// frequencies the ratio is below ζ, outside them above.
+    pub fn two_frequency(zeta: f64, omega1: f64, omega2: f64) -> (f64, f64) {
+        let sum = omega1 + omega2;
+        (2.0 * zeta * omega1 * omega2 / sum, 2.0 * zeta / sum)
     }
 }
 

@@ -21,6 +21,8 @@
 //! - [`involute`]: the involute function and its inverse relations.
 //! - [`lumped`]: degrees of freedom, fidelity, the lumped (mean-stiffness) set.
 //! - [`mesh`]: the path of contact of one mesh along its line of action.
+//! - [`planet_bearing`]: a planet's support stiffness from its needle
+//!   bearing (Palmgren, Stribeck) and its pin between the carrier plates.
 //! - [`run`]: the run settings (integrator, tolerances, windows, samples,
 //!   the input speed of a single run), a value apart from the gear set.
 
@@ -32,4 +34,5 @@ pub mod gear_data;
 pub mod involute;
 pub mod lumped;
 pub mod mesh;
+pub mod planet_bearing;
 pub mod run;

@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 pub use gear_data::{GearData, ADDENDUM_FACTOR, DEDENDUM_FACTOR, TOOL_TIP_RADIUS_FACTOR};
 pub use validate::{default_chamfer, Problem, SceneError};
 
-pub use terms::{Drive, Fidelity, IntegratorKind, Member};
+pub use terms::{DampingModel, Drive, Fidelity, IntegratorKind, Member};
 
 /// A planetary gear set as written in a scene file (engineering units).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -169,8 +169,22 @@ pub struct InertiaSpec {
 pub struct DynamicsSpec {
     /// Degrees of freedom.
     pub fidelity: Fidelity,
-    /// Viscous mesh damping as a ratio of the mesh mode's critical damping.
+    /// Viscous mesh damping as a ratio of the mesh mode's critical damping
+    /// (read only with `damping = "ratio"`) [-].
     pub mesh_damping_ratio: f64,
+    /// The damping model: `"ratio"` (the mesh and bearing damping ratios) or
+    /// `"rayleigh"` (C = μM + ηK with the two coefficients below; the damping
+    /// ratios are then not read).
+    #[serde(skip_serializing_if = "DampingModel::is_ratio")]
+    pub damping: DampingModel,
+    /// Mass-proportional Rayleigh coefficient μ, acting on the motion
+    /// relative to the rigid-body rotation of the train \[1/s\].
+    #[serde(skip_serializing_if = "is_zero")]
+    pub rayleigh_mass_per_s: f64,
+    /// Stiffness-proportional Rayleigh coefficient η, on the meshes' tangent
+    /// stiffness and the bearings' stiffness \[s\].
+    #[serde(skip_serializing_if = "is_zero")]
+    pub rayleigh_stiffness_s: f64,
     /// How the input is driven.
     pub drive: Drive,
     /// Input speed \[rpm\] of a single run (sweeps set their own).
@@ -218,6 +232,9 @@ impl Default for DynamicsSpec {
         Self {
             fidelity: Fidelity::TransverseTorsional,
             mesh_damping_ratio: 0.05,
+            damping: DampingModel::Ratio,
+            rayleigh_mass_per_s: 0.0,
+            rayleigh_stiffness_s: 0.0,
             drive: Drive::Torque,
             input_speed_rpm: 3000.0,
             shaft_stiffness_nm_per_rad: 5.0e4,
@@ -435,13 +452,14 @@ impl Scene {
             "example-2004" => Some(Self::example_2004()),
             "example-2004-annulus" => Some(Self::example_2004_annulus()),
             "example-2004-gear-data" => Some(Self::example_2004_gear_data()),
+            "example-2004-flexible" => Some(Self::example_2004_flexible()),
             _ => None,
         }
     }
 
     /// Names of the built-in gear scenes.
     pub const BUILTIN: &'static [&'static str] =
-        &["example-2004", "example-2004-annulus", "example-2004-gear-data"];
+        &["example-2004", "example-2004-annulus", "example-2004-gear-data", "example-2004-flexible"];
 
     /// The calibration plan (TOML) of a built-in scene made by
     /// `planetwear calibrate`, if it has one.
@@ -514,4 +532,9 @@ pub enum KeyError {
         /// The converter's message.
         why: String,
     },
+}
+
+/// Whether a real scene value is zero (the scene file then omits it).
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }

@@ -66,3 +66,24 @@ pub enum Fidelity {
     /// Two in-plane translations and one rotation per body.
     TransverseTorsional,
 }
+
+/// How the structure is damped in the dynamic model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DampingModel {
+    /// A damping ratio per mesh (on the mesh mode, acting while a pair
+    /// touches) and per bearing (on the body on its bearing).
+    #[default]
+    Ratio,
+    /// Rayleigh damping C = μM + ηK: η times each mesh's tangent stiffness
+    /// and each bearing's stiffness, μ times the masses on the motion
+    /// relative to the train's rigid-body rotation.
+    Rayleigh,
+}
+
+impl DampingModel {
+    /// Whether this is the default model (the scene file then omits it).
+    pub fn is_ratio(&self) -> bool {
+        *self == DampingModel::Ratio
+    }
+}
