@@ -432,7 +432,9 @@ impl DeformableMesh {
         let lo = -((s - t.start) / pb).floor();
         let hi = ((t.end() - s) / pb).floor();
         if !(lo.is_finite() && hi.is_finite()) || hi < lo {
-            return 1..=0;
+            // An empty range (start above end): no pair lies in the tables.
+            let (start, end) = (1, 0);
+            return start..=end;
         }
         (lo as i32)..=(hi as i32)
     }

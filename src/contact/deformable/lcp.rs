@@ -317,11 +317,11 @@ pub fn solve_with_local(
     loop {
         // The linearisation at the current loads: M = A + diag(t), q̃ = q + φ(p) − t∘p.
         out.tangent.clear();
-        for i in 0..n {
-            let at = out.p[i].max(floor);
-            let t = local[i].tangent(at);
-            if !(t > 0.0) {
-                return Err(LcpError::LocalTermNotMonotone { load: at, limit: local[i].monotone_limit() });
+        for (law, &p) in local.iter().zip(&out.p) {
+            let at = p.max(floor);
+            let t = law.tangent(at);
+            if t.is_nan() || t <= 0.0 {
+                return Err(LcpError::LocalTermNotMonotone { load: at, limit: law.monotone_limit() });
             }
             out.tangent.push(t);
         }
