@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use planetwear::contact::deformable::law::{DeformableMesh, LocalContact};
 use planetwear::contact::deformable::standin::CurveBody;
-use planetwear::contact::deformable::table::TableSpec;
+use planetwear::contact::deformable::table::{TableSpec, TabulatedMesh};
 use planetwear::contact::ltca::MeshModel;
 use planetwear::contact::separation::MeshFlanks;
 use planetwear::model::gear::MeshKind;
@@ -47,7 +47,7 @@ fn main() {
         let b1 = CurveBody::new(g1, set.material()).coupled(0.3);
         let b2 = CurveBody::new(g2, set.material()).coupled(0.3);
         let flanks = MeshFlanks::default();
-        let mut law = DeformableMesh::new(&set, mesh, &b1, &b2, &flanks, LocalContact::Johnson).expect("law");
+        let law = DeformableMesh::new(&set, mesh, &b1, &b2, &flanks, LocalContact::Johnson).expect("law");
         let compliance = planetwear::contact::stiffness::hertz_compliance(
             set.material(),
             g1.face_width.min(g2.face_width),
@@ -75,17 +75,19 @@ fn main() {
             let (s, d) = points[i % n];
             pair_model.force_tangents(s, d).force
         });
+        let mut tabulated = None;
         let mut builds: Vec<f64> = (0..7)
             .map(|_| {
                 let t = Instant::now();
-                law.tabulate(load, TableSpec::default()).expect("table");
+                tabulated = Some(TabulatedMesh::new(law.clone(), load, TableSpec::default()).expect("table"));
                 t.elapsed().as_secs_f64()
             })
             .collect();
+        let tabulated = tabulated.expect("built");
         builds.sort_by(f64::total_cmp);
         let lookup = time(20000, |i| {
             let (s, d) = points[i % n];
-            law.force_tangents(s, d).expect("lookup").force
+            tabulated.force_tangents(s, d).expect("lookup").force
         });
         println!(
             "{:<11} {:>10.2}  {:>19.2}  {:>17.3}  {:>15.3}  {:>15.3}",

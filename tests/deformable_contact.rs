@@ -8,7 +8,7 @@
 
 use planetwear::contact::deformable::law::{DeformableMesh, Flank, LocalContact};
 use planetwear::contact::deformable::standin::CurveBody;
-use planetwear::contact::deformable::table::TableSpec;
+use planetwear::contact::deformable::table::{TableSpec, TabulatedMesh};
 use planetwear::contact::hertz::{contact_modulus, line_contact};
 use planetwear::contact::iso6336::{iso_stiffness, IsoPair};
 use planetwear::contact::ltca::MeshModel;
@@ -266,8 +266,8 @@ fn force_table_interpolates_the_exact_law() {
     let set = example();
     let load = set.mesh_load_per_planet();
     for mesh in MeshKind::ALL {
-        let mut law = johnson_law(&set, mesh, 0.3);
-        law.tabulate(load, TableSpec::default()).unwrap();
+        let table = TabulatedMesh::new(johnson_law(&set, mesh, 0.3), load, TableSpec::default()).unwrap();
+        let law = &table.mesh;
         let p = law.path().clone();
         let d0 = law.separation.drive.values.iter().cloned().fold(f64::INFINITY, f64::min);
         let b0 = -law.separation.back.values.iter().cloned().fold(f64::INFINITY, f64::min);
@@ -286,7 +286,7 @@ fn force_table_interpolates_the_exact_law() {
             let x = next() * 3.0 * reach;
             let delta = if i < 2000 { d0 + x } else { b0 - x };
             let exact = law.solve(s, delta).unwrap().law;
-            let tab = law.force_tangents(s, delta).unwrap();
+            let tab = table.force_tangents(s, delta).unwrap();
             ef.push((tab.force - exact.force).abs() / load);
             ek.push((tab.approach_stiffness - exact.approach_stiffness).abs() / k_mean);
             es.push((tab.position_derivative - exact.position_derivative).abs() * p.base_pitch / load);

@@ -218,8 +218,6 @@ pub struct DeformableMesh {
     /// Logarithmic part c of Johnson's law [m/N] (0 for a linear term).
     local_c: f64,
     e_star: f64,
-    /// The force table, once built ([`Self::tabulate`]).
-    pub(crate) table: Option<crate::contact::deformable::table::ForceTable>,
 }
 
 /// Pair loads below this fraction of the mesh's scale count as zero in the
@@ -268,16 +266,8 @@ impl DeformableMesh {
         // Pairs further apart than the tables hold never meet in one problem.
         let span = ((separation.drive.end() - separation.drive.start) / path.base_pitch).ceil() as i32;
         let reach = gear1.reach().max(gear2.reach()).clamp(0, span.max(0));
-        let mut mesh_law = Self {
-            separation,
-            local,
-            face_width,
-            reach,
-            flanks: Default::default(),
-            local_c,
-            e_star,
-            table: None,
-        };
+        let mut mesh_law =
+            Self { separation, local, face_width, reach, flanks: Default::default(), local_c, e_star };
         for flank in [Flank::Drive, Flank::Back] {
             mesh_law.flanks[flank.slot()] = mesh_law.sample_flank(flank, gear1, gear2, linear, m)?;
         }
@@ -688,5 +678,81 @@ impl DeformableMesh {
                 [body, self.local_law(a.flank, a.position).approach(a.force.abs())]
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Scene;
+
+    /// A body whose coefficient between neighbours depends on the roll angle
+    /// of the tooth on the loaded tooth's facing side (+1): reciprocal
+    /// (coefficient(+1, r, 0, r') = coefficient(−1, r', 0, r)) but different
+    /// towards the two neighbours, so that it tells the tooth directions apart.
+    struct Facing {
+        slope: f64,
+    }
+
+    impl Facing {
+        fn h(&self, roll: f64) -> f64 {
+            1e-10 + self.slope * roll
+        }
+    }
+
+    impl BodyInfluence for Facing {
+        fn coefficient(&self, i: i32, roll_i: f64, j: i32, roll_j: f64) -> f64 {
+            match i - j {
+                0 => 1e-9,
+                1 => self.h(roll_i),
+                -1 => self.h(roll_j),
+                _ => 0.0,
+            }
+        }
+        fn reference_depth(&self, _roll: f64) -> f64 {
+            1e-3
+        }
+        fn reach(&self) -> i32 {
+            1
+        }
+    }
+
+    /// The cross-compliance of pair k and pair k + 1 (further along the path)
+    /// reads gear 1's tooth +1 and gear 2's tooth −1 on the drive flanks, and
+    /// the reverse on the back flanks: with the body above, C = h₁(roll₁ of
+    /// the gear-1 tooth on the +1 side) + h₂(roll₂ of the gear-2 tooth on its
+    /// +1 side), to 1e-12 at grid positions.
+    #[test]
+    fn pair_offsets_map_to_the_documented_tooth_offsets() {
+        let set = Scene::example_2004().validate().unwrap();
+        for mesh in MeshKind::ALL {
+            let (b1, b2) = (Facing { slope: 1e-11 }, Facing { slope: 3e-11 });
+            let law = DeformableMesh::new(
+                &set,
+                mesh,
+                &b1,
+                &b2,
+                &MeshFlanks::default(),
+                LocalContact::Linear { compliance: 0.0 },
+            )
+            .unwrap();
+            let p = law.path().clone();
+            let pb = p.base_pitch;
+            let grid: Vec<f64> = law.separation.drive.positions().collect();
+            for &s in grid.iter().step_by(53) {
+                for flank in [Flank::Drive, Flank::Back] {
+                    let (qa, qb) = (law.contact_position(flank, s), law.contact_position(flank, s + pb));
+                    let want = match flank {
+                        // Pair k + 1 is gear-1 tooth +1 and gear-2 tooth −1 of pair k: gear 1's +1
+                        // side holds pair k + 1, gear 2's holds pair k.
+                        Flank::Drive => b1.h(p.roll_1(qb)) + b2.h(p.roll_2(qa)),
+                        Flank::Back => b1.h(p.roll_1(qa)) + b2.h(p.roll_2(qb)),
+                    };
+                    let got = law.compliance(flank, s, 0, 1).0;
+                    assert!((got / want - 1.0).abs() < 1e-12, "{mesh:?} {flank:?} {s}: {got} vs {want}");
+                    assert_eq!(got, law.compliance(flank, s, 1, 0).0);
+                }
+            }
+        }
     }
 }

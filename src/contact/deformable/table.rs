@@ -160,9 +160,17 @@ impl FlankTable {
     }
 }
 
-impl DeformableMesh {
-    /// Builds the force table for a nominal mesh load `load` \[N\] with `spec`.
-    pub fn tabulate(&mut self, load: f64, spec: TableSpec) -> Result<(), DeformableError> {
+/// A deformable mesh law with its force table: the form the dynamics reads.
+#[derive(Clone, Debug)]
+pub struct TabulatedMesh {
+    /// The exact law.
+    pub mesh: DeformableMesh,
+    table: ForceTable,
+}
+
+impl TabulatedMesh {
+    /// Tabulates `mesh` for a nominal mesh load `load` \[N\] with `spec`.
+    pub fn new(mesh: DeformableMesh, load: f64, spec: TableSpec) -> Result<Self, DeformableError> {
         check_finite("nominal load", load)?;
         if !(spec.positions >= 4 && spec.approaches >= 4 && spec.load_factor > 1.0 && load > 0.0) {
             return Err(DeformableError::Setting {
@@ -171,40 +179,35 @@ impl DeformableMesh {
                 allowed: "positions ≥ 4, approaches ≥ 4, load factor > 1, nominal load > 0 N",
             });
         }
-        self.table = None;
-        let p = self.path().clone();
+        let p = mesh.path().clone();
         let min_gap = |values: &[f64]| values.iter().cloned().fold(f64::INFINITY, f64::min);
-        let drive_start = min_gap(&self.separation.drive.values);
-        let back_start = -min_gap(&self.separation.back.values);
+        let drive_start = min_gap(&mesh.separation.drive.values);
+        let back_start = -min_gap(&mesh.separation.back.values);
         // The largest approach the nominal load needs over one cycle, beyond the first contact.
         let mut reach: f64 = 0.0;
         for j in 0..spec.positions {
             let s = p.start + p.base_pitch * j as f64 / spec.positions as f64;
-            reach = reach.max(self.approach_for(s, load)? - drive_start);
+            reach = reach.max(mesh.approach_for(s, load)? - drive_start);
         }
         let span = spec.load_factor * reach;
-        let drive = FlankTable::build(self, Flank::Drive, drive_start, drive_start + span, &spec)?;
-        let back = FlankTable::build(self, Flank::Back, back_start - span, back_start, &spec)?;
-        self.table = Some(ForceTable { flanks: [drive, back], spec });
-        Ok(())
+        let drive = FlankTable::build(&mesh, Flank::Drive, drive_start, drive_start + span, &spec)?;
+        let back = FlankTable::build(&mesh, Flank::Back, back_start - span, back_start, &spec)?;
+        Ok(Self { mesh, table: ForceTable { flanks: [drive, back], spec } })
     }
 
     /// The mesh force and its derivatives at (s, δ), from the table where it
-    /// has been built and covers δ, exactly otherwise: the dynamics' entry,
-    /// as [`crate::contact::ltca::MeshModel::force_tangents`].
+    /// covers δ and exactly otherwise: the dynamics' entry, as
+    /// [`crate::contact::ltca::MeshModel::force_tangents`].
     pub fn force_tangents(&self, s: f64, delta: f64) -> Result<MeshLaw, DeformableError> {
         check_finite("position s", s)?;
         check_finite("approach delta", delta)?;
-        let Some(table) = &self.table else {
-            return Ok(self.solve(s, delta)?.law);
-        };
         let mut out = MeshLaw::default();
         let mut work = FlankProblem::default();
-        for t in &table.flanks {
+        for t in &self.table.flanks {
             let law = match t.law(s, delta) {
                 Some(law) => law,
                 None => {
-                    let f = self.solve_flank(t.flank, s, delta, &mut work)?;
+                    let f = self.mesh.solve_flank(t.flank, s, delta, &mut work)?;
                     MeshLaw {
                         force: f.force,
                         approach_stiffness: f.approach_stiffness,
@@ -221,8 +224,8 @@ impl DeformableMesh {
         Ok(out)
     }
 
-    /// The table, when built.
-    pub fn table(&self) -> Option<&ForceTable> {
-        self.table.as_ref()
+    /// The table.
+    pub fn table(&self) -> &ForceTable {
+        &self.table
     }
 }
