@@ -101,6 +101,51 @@ fn uncoupled_linear_law_is_the_pair_model() {
     }
 }
 
+/// Worn flanks (a 4 µm parabolic deviation on gear 1's drive flank and 2 µm
+/// on gear 2's, sun–planet): the uncoupled linear law reads the worn gaps
+/// exactly as the pair model does, 1e-9 relative over 1200 (s, δ).
+#[test]
+fn uncoupled_linear_law_is_the_pair_model_on_worn_flanks() {
+    use planetwear::geometry::profile::ProfileDeviation;
+    let set = example();
+    let mesh = MeshKind::SunPlanet;
+    let p = planetwear::model::mesh::PathOfContact::new(&set, mesh);
+    let wear = |lo: f64, hi: f64, depth: f64| {
+        let roll: Vec<f64> = (0..=40).map(|i| lo + (hi - lo) * i as f64 / 40.0).collect();
+        let mid = 0.5 * (lo + hi);
+        let half = 0.5 * (hi - lo);
+        let d = roll.iter().map(|x| depth * (1.0 - ((x - mid) / half).powi(2))).collect();
+        ProfileDeviation::new(roll, d)
+    };
+    let flanks = MeshFlanks {
+        gear1_drive: wear(p.roll_1(p.start), p.roll_1(p.end), 4e-6),
+        gear2_drive: wear(p.roll_2(p.end), p.roll_2(p.start), 2e-6),
+        ..MeshFlanks::default()
+    };
+    let pm = MeshModel::new(&set, mesh, &flanks);
+    let (b1, b2) = bodies(&set, mesh, 0.0);
+    let c = hertz_compliance(set.material(), pm.face_width());
+    let dm =
+        DeformableMesh::new(&set, mesh, &b1, &b2, &flanks, LocalContact::Linear { compliance: c }).unwrap();
+    let mut worst: f64 = 0.0;
+    for i in 0..40 {
+        let s = p.start - p.base_pitch + (p.end - p.start + 2.0 * p.base_pitch) * (i as f64 + 0.37) / 40.0;
+        for j in 0..30 {
+            let delta = -5e-6 + 45e-6 * (j as f64 + 0.5) / 30.0;
+            let want = pm.force_tangents(s, delta);
+            let got = dm.solve(s, delta).unwrap().law;
+            let e = (got.force - want.force).abs() / want.force.abs().max(1.0);
+            worst = worst.max(e);
+        }
+    }
+    eprintln!("worn sun–planet: worst relative difference {worst:.2e}");
+    assert!(worst < 1e-9);
+    assert!(
+        dm.separation.drive.values
+            != MeshModel::new(&set, mesh, &MeshFlanks::default()).separation.drive.values
+    );
+}
+
 /// With neighbouring teeth coupled (cross-coefficient 0.3 of the geometric
 /// mean of the own coefficients), every loaded pair's total approach, body
 /// and local parts plus gap, equals δ (to 1e-12 of δ), every open pair's
