@@ -51,3 +51,9 @@ pub trait BodyInfluence: Send + Sync {
     /// teeth farther apart do not influence each other.
     fn reach(&self) -> i32;
 }
+
+pub mod law;
+pub mod lcp;
+pub mod quasi;
+pub mod standin;
+pub mod table;

@@ -1,0 +1,107 @@
+//! Cost of the deformable mesh law on the built-in example: one exact solve
+//! of all tooth pairs of a mesh (one LTCA position), the force table's build
+//! time, one table lookup, and the pair model's `force_tangents` for
+//! comparison. The bodies are the stand-in `CurveBody` (energy-method
+//! compliance curve; coupled neighbours, fraction 0.3), the local term
+//! Johnson's. Median of 7 rounds; the table build is timed once per round.
+//!
+//! Run: `cargo bench --bench deformable_contact`; docs/DEFORMABLE.md records
+//! the figures with the machine.
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use planetwear::contact::deformable::law::{DeformableMesh, LocalContact};
+use planetwear::contact::deformable::standin::CurveBody;
+use planetwear::contact::deformable::table::{TableSpec, TabulatedMesh};
+use planetwear::contact::ltca::MeshModel;
+use planetwear::contact::separation::MeshFlanks;
+use planetwear::model::gear::MeshKind;
+use planetwear::scene::Scene;
+
+/// Median time per call [s] of `f` over `reps` calls, in 7 rounds.
+fn time(reps: usize, mut f: impl FnMut(usize) -> f64) -> f64 {
+    let mut sink = 0.0;
+    let mut rounds: Vec<f64> = (0..7)
+        .map(|_| {
+            let t = Instant::now();
+            for i in 0..reps {
+                sink += f(i);
+            }
+            t.elapsed().as_secs_f64() / reps as f64
+        })
+        .collect();
+    rounds.sort_by(f64::total_cmp);
+    assert!(black_box(sink).is_finite());
+    rounds[3]
+}
+
+fn main() {
+    let set = Scene::example_2004().validate().expect("the example is valid");
+    let load = set.mesh_load_per_planet();
+    println!(
+        "mesh        solve [µs]  (linear local) [µs]  table lookup [µs]  pair model [µs]  table build [s]"
+    );
+    for mesh in MeshKind::ALL {
+        let (g1, g2) = set.mesh_gears(mesh);
+        let b1 = CurveBody::new(g1, set.material()).coupled(0.3);
+        let b2 = CurveBody::new(g2, set.material()).coupled(0.3);
+        let flanks = MeshFlanks::default();
+        let law = DeformableMesh::new(&set, mesh, &b1, &b2, &flanks, LocalContact::Johnson).expect("law");
+        let compliance = planetwear::contact::stiffness::hertz_compliance(
+            set.material(),
+            g1.face_width.min(g2.face_width),
+        );
+        let linear = DeformableMesh::new(&set, mesh, &b1, &b2, &flanks, LocalContact::Linear { compliance })
+            .expect("law");
+        let pair_model = MeshModel::new(&set, mesh, &flanks);
+        let p = law.path().clone();
+        let n = 200;
+        let points: Vec<(f64, f64)> = (0..n)
+            .map(|i| {
+                let s = p.start + p.base_pitch * i as f64 / n as f64;
+                (s, law.approach_for(s, load).expect("approach"))
+            })
+            .collect();
+        let solve = time(2000, |i| {
+            let (s, d) = points[i % n];
+            law.solve(s, d).expect("solve").law.force
+        });
+        let solve_linear = time(2000, |i| {
+            let (s, d) = points[i % n];
+            linear.solve(s, d).expect("solve").law.force
+        });
+        let pm = time(20000, |i| {
+            let (s, d) = points[i % n];
+            pair_model.force_tangents(s, d).force
+        });
+        let mut tabulated = None;
+        let mut builds: Vec<f64> = (0..7)
+            .map(|_| {
+                let t = Instant::now();
+                tabulated = Some(TabulatedMesh::new(law.clone(), load, TableSpec::default()).expect("table"));
+                t.elapsed().as_secs_f64()
+            })
+            .collect();
+        let tabulated = tabulated.expect("built");
+        builds.sort_by(f64::total_cmp);
+        let lookup = time(20000, |i| {
+            let (s, d) = points[i % n];
+            tabulated.force_tangents(s, d).expect("lookup").force
+        });
+        println!(
+            "{:<11} {:>10.2}  {:>19.2}  {:>17.3}  {:>15.3}  {:>15.3}",
+            mesh.name(),
+            solve * 1e6,
+            solve_linear * 1e6,
+            lookup * 1e6,
+            pm * 1e6,
+            builds[3]
+        );
+    }
+    let spec = TableSpec::default();
+    println!(
+        "table: {} positions per base pitch × {} approaches per flank, up to {}× the nominal load's approach",
+        spec.positions, spec.approaches, spec.load_factor
+    );
+}
