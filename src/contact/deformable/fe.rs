@@ -136,7 +136,7 @@ pub fn element_stiffness(x: &[Point; 9], m: &PlaneStrain) -> Result<[[f64; 18]; 
     for (xi, wx) in GAUSS3 {
         for (eta, wy) in GAUSS3 {
             let (gx, gy, det) = gradients(x, xi, eta);
-            if !(det > 0.0) {
+            if det.is_nan() || det <= 0.0 {
                 return Err(det);
             }
             let w = wx * wy * det;

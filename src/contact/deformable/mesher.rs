@@ -271,16 +271,22 @@ struct HalfGrids {
     rolls: Vec<Option<f64>>,
 }
 
-/// Index of the outline point where the fillet, leaving the root circle
-/// along the root chord's direction, has turned 30° away from it: the
-/// tooth patch starts there, so that its corner between the chord side and
-/// the flank is not a sliver.
+/// Index of the outline point where the fillet has turned 30° from its
+/// direction at the root circle (the root circle's tangent): the tooth
+/// patch starts there, so that its corner between the base line and the
+/// flank is not a sliver.
 fn foot_end(outline: &FlankOutline, root: usize, first_involute: usize) -> usize {
     let p = &outline.points;
+    let unit = |a: Point, b: Point| {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let l = d[0].hypot(d[1]);
+        [d[0] / l, d[1] / l]
+    };
+    let t0 = unit(p[root], p[root + 1]);
     (root + 1..first_involute)
         .find(|&k| {
-            let d = [p[k + 1][0] - p[k][0], p[k + 1][1] - p[k][1]];
-            d[0].abs().atan2(-d[1]) >= 30f64.to_radians()
+            let d = unit(p[k], p[k + 1]);
+            (d[0] * t0[0] + d[1] * t0[1]).clamp(-1.0, 1.0).acos() >= 30f64.to_radians()
         })
         .unwrap_or(root + 1)
 }
