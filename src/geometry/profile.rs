@@ -151,8 +151,8 @@ fn rotate(p: [f64; 2], angle: f64) -> [f64; 2] {
 }
 
 /// Outward unit normal of the upper involute flank at roll angle `xi`
-/// (pointing out of the material, into the space).
-fn involute_normal(form: &ToothForm, xi: f64) -> [f64; 2] {
+/// \[rad\] (pointing out of the material, into the space).
+pub fn involute_normal(form: &ToothForm, xi: f64) -> [f64; 2] {
     let r = radius_at_roll(xi, form.base_radius());
     let phi = form.involute_half_angle(r);
     let alpha = xi.atan();
@@ -166,8 +166,9 @@ fn involute_normal(form: &ToothForm, xi: f64) -> [f64; 2] {
     }
 }
 
-/// Point of the upper involute at roll angle `xi`, shifted by the deviation.
-fn involute_point(form: &ToothForm, xi: f64, dev: &ProfileDeviation) -> [f64; 2] {
+/// Point of the upper involute at roll angle `xi` \[rad\], shifted by the
+/// deviation \[m\].
+pub fn involute_point(form: &ToothForm, xi: f64, dev: &ProfileDeviation) -> [f64; 2] {
     let r = radius_at_roll(xi, form.base_radius());
     let p = polar(r, form.involute_half_angle(r));
     let e = dev.at(xi);

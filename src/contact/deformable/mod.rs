@@ -19,6 +19,14 @@
 //!
 //! The two halves meet in [`BodyInfluence`]: the body model implements it,
 //! the contact solution reads it.
+//!
+//! - [`fe`]: the 9-node plane-strain element and the factorised stiffness.
+//! - [`mesher`]: the mapped mesh of a sector of a gear body.
+//! - [`body`]: the bodies' influence coefficients ([`body::BodyCompliance`]).
+
+pub mod body;
+pub mod fe;
+pub mod mesher;
 
 /// The influence coefficients of one gear body at the contact points of its
 /// flanks: how far a point at the reference depth below one flank point
