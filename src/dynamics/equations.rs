@@ -1014,7 +1014,7 @@ impl TangentSystem for PlanetaryDynamics {
 
 /// The support damping of Rayleigh's model, η K_b + μ M_v with
 /// M_v = M − M r rᵀ M / (rᵀ M r) (module docs): `mass` the diagonal of M
-/// [kg], `rigid` the rigid-body velocity pattern r, `k_support` the supports'
+/// \[kg\], `rigid` the rigid-body velocity pattern r, `k_support` the supports'
 /// stiffness K_b [N/m], `mu` \[1/s\] and `eta` \[s\] the coefficients.
 fn rayleigh_support_damping(
     mass: &[f64],
