@@ -283,25 +283,7 @@ fn pair_single_stiffness_against_iso_6336() {
         );
         let bodies = (b1.coefficient(0, x, 0, x) + b2.coefficient(0, x, 0, x)) * width;
         let c_fe = 1e-9 / (bodies + local);
-        let j = set.circumferential_backlash(mesh);
-        let a = g1.pressure_angle;
-        let md = g1.module;
-        let shift = |t: f64| (t + j / 2.0 - std::f64::consts::PI * md / 2.0) / (2.0 * md * a.tan());
-        let x1 = shift(g1.tooth_thickness);
-        let (z2, x2) = match mesh {
-            MeshKind::SunPlanet => (Some(f64::from(g2.teeth)), shift(g2.tooth_thickness)),
-            MeshKind::RingPlanet => (None, 0.0),
-        };
-        let iso = iso_stiffness(&IsoPair {
-            z1: f64::from(g1.teeth),
-            z2,
-            x1,
-            x2,
-            helix: 0.0,
-            rack_pressure_angle: a,
-            rack_dedendum: (g1.reference_radius() + x1 * md - g1.root_radius) / md,
-            contact_ratio: 1.5,
-        });
+        let iso = iso_stiffness(&IsoPair::of_mesh(&set, mesh, 1.5));
         let rel = c_fe / iso.single_theoretical - 1.0;
         eprintln!(
             "ISO {mesh:?}: FE pair {c_fe:.2} N/(mm·µm) (bodies {:.3e}, local {:.3e} m²/N at {:.0} N/mm), c'_th {:.2} ({:+.1} %), c' {:.2}",

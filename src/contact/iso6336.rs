@@ -9,6 +9,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::model::gear::{GearSet, MeshKind};
+
 /// Inputs of the ISO stiffness of one gear pair.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct IsoPair {
@@ -28,6 +30,36 @@ pub struct IsoPair {
     pub rack_dedendum: f64,
     /// Transverse contact ratio ε_α.
     pub contact_ratio: f64,
+}
+
+impl IsoPair {
+    /// The ISO inputs of a mesh of a gear set with transverse contact ratio
+    /// `contact_ratio`: profile shifts from the tooth thicknesses with the
+    /// circumferential backlash shared equally, the basic-rack dedendum from
+    /// gear 1's root radius, spur teeth (the ring, gear 2 of its mesh, is
+    /// internal: z_n2 = ∞).
+    pub fn of_mesh(set: &GearSet, mesh: MeshKind, contact_ratio: f64) -> Self {
+        let (g1, g2) = set.mesh_gears(mesh);
+        let j = set.circumferential_backlash(mesh);
+        let a = g1.pressure_angle;
+        let m = g1.module;
+        let shift = |t: f64| (t + j / 2.0 - std::f64::consts::PI * m / 2.0) / (2.0 * m * a.tan());
+        let x1 = shift(g1.tooth_thickness);
+        let (z2, x2) = match mesh {
+            MeshKind::SunPlanet => (Some(f64::from(g2.teeth)), shift(g2.tooth_thickness)),
+            MeshKind::RingPlanet => (None, 0.0),
+        };
+        Self {
+            z1: f64::from(g1.teeth),
+            z2,
+            x1,
+            x2,
+            helix: 0.0,
+            rack_pressure_angle: a,
+            rack_dedendum: (g1.reference_radius() + x1 * m - g1.root_radius) / m,
+            contact_ratio,
+        }
+    }
 }
 
 /// ISO 6336-1 stiffnesses [N/(mm·µm)].

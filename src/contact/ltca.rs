@@ -581,14 +581,30 @@ pub fn loaded_span(
 /// Solves f(x) = target for a non-decreasing piecewise-linear f given with
 /// its slope, by Newton steps safeguarded with bisection once bracketed.
 fn solve_increasing(f: impl Fn(f64) -> (f64, f64), target: f64, x0: f64) -> f64 {
+    match try_solve_increasing(|x| Ok::<_, std::convert::Infallible>(f(x)), target, x0, 200) {
+        Ok(x) | Err((_, x)) => x,
+    }
+}
+
+/// [`solve_increasing`] for an f that may fail: Newton steps from `x0`
+/// safeguarded with bisection once bracketed, to 1e-13 of x (the bracket) or
+/// 1e-14 (the step). An error of f is passed on as `Err((Some(e), x))`; no
+/// convergence within `iterations` steps gives `Err((None, x))` with the
+/// last iterate.
+pub(crate) fn try_solve_increasing<E>(
+    f: impl Fn(f64) -> Result<(f64, f64), E>,
+    target: f64,
+    x0: f64,
+    iterations: usize,
+) -> Result<f64, (Option<E>, f64)> {
     let scale = 1e-5;
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
     let mut x = x0;
-    for _ in 0..200 {
-        let (v, slope) = f(x);
+    for _ in 0..iterations {
+        let (v, slope) = f(x).map_err(|e| (Some(e), x))?;
         let r = v - target;
         if r == 0.0 {
-            return x;
+            return Ok(x);
         }
         if r < 0.0 {
             lo = lo.max(x);
@@ -607,7 +623,7 @@ fn solve_increasing(f: impl Fn(f64) -> (f64, f64), target: f64, x0: f64) -> f64 
                 next = 0.5 * (lo + hi);
             }
             if hi - lo <= 1e-16 + 1e-13 * x.abs() {
-                return 0.5 * (lo + hi);
+                return Ok(0.5 * (lo + hi));
             }
         } else if lo.is_finite() && next <= lo {
             next = lo + scale;
@@ -615,11 +631,11 @@ fn solve_increasing(f: impl Fn(f64) -> (f64, f64), target: f64, x0: f64) -> f64 
             next = hi - scale;
         }
         if (next - x).abs() <= 1e-18 + 1e-14 * x.abs() {
-            return next;
+            return Ok(next);
         }
         x = next;
     }
-    x
+    Err((None, x))
 }
 
 /// Summary of a periodic quantity over a mesh cycle.

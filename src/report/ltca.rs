@@ -25,31 +25,9 @@ pub struct LtcaStudy {
     pub kappa: Option<u32>,
 }
 
-/// ISO 6336-1 stiffness of a mesh of the set: profile shifts from the tooth
-/// thicknesses with the backlash shared equally; basic-rack dedendum from
-/// the root radius.
+/// ISO 6336-1 stiffness of a mesh of the set ([`IsoPair::of_mesh`]).
 fn iso_for(set: &GearSet, mesh: MeshKind, contact_ratio: f64) -> crate::contact::iso6336::IsoStiffness {
-    let (g1, g2) = set.mesh_gears(mesh);
-    let j = set.circumferential_backlash(mesh);
-    let a = g1.pressure_angle;
-    let m = g1.module;
-    let shift = |t: f64| (t + j / 2.0 - std::f64::consts::PI * m / 2.0) / (2.0 * m * a.tan());
-    let x1 = shift(g1.tooth_thickness);
-    let (z2, x2) = match mesh {
-        MeshKind::SunPlanet => (Some(f64::from(g2.teeth)), shift(g2.tooth_thickness)),
-        MeshKind::RingPlanet => (None, 0.0),
-    };
-    let dedendum = (g1.reference_radius() + x1 * m - g1.root_radius) / m;
-    iso_stiffness(&IsoPair {
-        z1: f64::from(g1.teeth),
-        z2,
-        x1,
-        x2,
-        helix: 0.0,
-        rack_pressure_angle: a,
-        rack_dedendum: dedendum,
-        contact_ratio,
-    })
+    iso_stiffness(&IsoPair::of_mesh(set, mesh, contact_ratio))
 }
 
 impl LtcaStudy {

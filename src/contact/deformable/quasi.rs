@@ -8,7 +8,7 @@
 //! [`crate::contact::ltca::mesh_ltca`]).
 
 use crate::contact::deformable::law::{check_finite, DeformableError, DeformableMesh, DeformableState};
-use crate::contact::ltca::{loaded_span, Refine};
+use crate::contact::ltca::{loaded_span, try_solve_increasing, Refine};
 
 /// Quasi-static analysis of one mesh over one mesh cycle at a constant load.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -56,45 +56,10 @@ impl DeformableMesh {
     pub fn approach_for(&self, s: f64, load: f64) -> Result<f64, DeformableError> {
         check_finite("load", load)?;
         let f = |d: f64| self.solve(s, d).map(|st| (st.law.force, st.law.approach_stiffness));
-        let scale = 1e-5;
-        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-        let mut x = 0.0;
-        for _ in 0..300 {
-            let (v, slope) = f(x)?;
-            let r = v - load;
-            if r == 0.0 {
-                return Ok(x);
-            }
-            if r < 0.0 {
-                lo = lo.max(x);
-            } else {
-                hi = hi.min(x);
-            }
-            let mut next = if slope > 0.0 {
-                x - r / slope
-            } else if r < 0.0 {
-                x + scale
-            } else {
-                x - scale
-            };
-            if lo.is_finite() && hi.is_finite() {
-                if !(next > lo && next < hi) {
-                    next = 0.5 * (lo + hi);
-                }
-                if hi - lo <= 1e-16 + 1e-13 * x.abs() {
-                    return Ok(0.5 * (lo + hi));
-                }
-            } else if lo.is_finite() && next <= lo {
-                next = lo + scale;
-            } else if hi.is_finite() && next >= hi {
-                next = hi - scale;
-            }
-            if (next - x).abs() <= 1e-18 + 1e-14 * x.abs() {
-                return Ok(next);
-            }
-            x = next;
-        }
-        Err(DeformableError::LoadNotReached { load, approach: x })
+        try_solve_increasing(f, load, 0.0, 300).map_err(|(e, x)| match e {
+            Some(e) => e,
+            None => DeformableError::LoadNotReached { load, approach: x },
+        })
     }
 
     /// The quasi-static analysis at `load` \[N\] over one mesh cycle at
