@@ -55,3 +55,39 @@ fn fillet_joins_the_involute_at_the_form_radius() {
         assert!((o.form_radius - g.form_radius()).abs() < 2e-6, "{} vs {}", o.form_radius, g.form_radius());
     }
 }
+
+/// A profile deviation removes material: on the sun (external) and on the
+/// ring (internal) alike, a uniform deviation e makes the tooth thinner, its
+/// half-thickness at a mid-involute radius smaller by e / cos of the angle
+/// between the flank normal and the tooth's cross direction (to 2 % of e),
+/// never thicker.
+#[test]
+fn a_deviation_thins_the_tooth_of_an_external_and_an_internal_gear() {
+    use planetwear::geometry::profile::{involute_normal, FlankOutline, ProfileDeviation};
+    let set = planetwear::scene::Scene::example_2004().validate().unwrap();
+    let e = 10e-6;
+    for form in [set.sun(), set.ring()] {
+        let rb = form.base_radius();
+        let r = 0.5 * (form.root_radius.max(rb) + form.tip_radius);
+        let r = if r < rb { rb * 1.01 } else { r };
+        let xi = (r * r - rb * rb).sqrt() / rb;
+        let worn = ProfileDeviation::new(vec![0.0, 2.0], vec![e, e]);
+        let new = FlankOutline::new(form, &ProfileDeviation::none());
+        let old = FlankOutline::new(form, &worn);
+        // The half-thickness is read at the centreline coordinate of the
+        // unworn involute point at this roll angle.
+        let phi = form.involute_half_angle(r);
+        let x = r * phi.cos();
+        let thinner = new.half_thickness_at(x) - old.half_thickness_at(x);
+        let n = involute_normal(form, xi);
+        // A shift e along the normal moves the flank by e/|n_y| across the tooth.
+        let expected = e / n[1].abs();
+        eprintln!("{:?}: thinner by {thinner:.4e} m, e/|n_y| = {expected:.4e} m", form.kind);
+        assert!(thinner > 0.0, "{:?}: the worn tooth is thicker by {:.3e} m", form.kind, -thinner);
+        assert!(
+            (thinner - expected).abs() < 0.02 * e,
+            "{:?}: thinner by {thinner:.3e} m, expected {expected:.3e}",
+            form.kind
+        );
+    }
+}

@@ -161,8 +161,9 @@ pub fn involute_normal(form: &ToothForm, xi: f64) -> [f64; 2] {
         // toward the space.
         GearKind::External => polar(1.0, phi - alpha + PI / 2.0),
         // Internal: the space lies on the +φ side; the generating line from
-        // the tangency point at φ + α_r points into the tooth, so reverse it.
-        GearKind::Internal => polar(1.0, phi + alpha - PI / 2.0),
+        // the tangency point at φ + α_r points into the tooth, so the
+        // outward normal is its reverse, at φ + α_r + π/2.
+        GearKind::Internal => polar(1.0, phi + alpha + PI / 2.0),
     }
 }
 
