@@ -66,6 +66,15 @@ struct Link {
     damping: f64,
 }
 
+impl Link {
+    /// The mesh's viscous damping [N·s/m] at tangent stiffness `stiffness`
+    /// [N/m]: the ratio model's constant plus Rayleigh's η ∂F/∂δ (`eta` \[s\],
+    /// 0 under the ratio model).
+    fn damping_at(&self, eta: f64, stiffness: f64) -> f64 {
+        self.damping + eta * stiffness
+    }
+}
+
 /// Per-mesh state of the last force evaluation.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MeshState {
@@ -807,7 +816,7 @@ impl PlanetaryDynamics {
     /// solvers' Floquet multipliers leave them out.
     pub fn add_damping_switch(&self, i: usize, on: bool, f: &mut [f64]) {
         let link = &self.links[i];
-        let c = link.damping + self.mesh_stiffness_damping * self.touch_stiffness[i];
+        let c = link.damping_at(self.mesh_stiffness_damping, self.touch_stiffness[i]);
         let jump = c * self.meshes[i].approach_rate;
         let sign = if on { -1.0 } else { 1.0 };
         for (j, b) in &link.b_nz {
@@ -877,7 +886,7 @@ impl PlanetaryDynamics {
             };
             let damping_force = if law.approach_stiffness > 0.0 {
                 self.touch_stiffness[i] = law.approach_stiffness;
-                (link.damping + self.mesh_stiffness_damping * law.approach_stiffness) * rate
+                link.damping_at(self.mesh_stiffness_damping, law.approach_stiffness) * rate
             } else {
                 0.0
             };
@@ -951,7 +960,7 @@ impl TangentSystem for PlanetaryDynamics {
             // The damping's own change with the stiffness, η ∂²F/∂δ² δ̇, is
             // left out of the tangent: the law gives no second derivative,
             // and Newton's iteration only converges more slowly without it.
-            let damping = link.damping + self.mesh_stiffness_damping * state.stiffness;
+            let damping = link.damping_at(self.mesh_stiffness_damping, state.stiffness);
             for &(i, bi) in &link.b_nz {
                 for &(j, bj) in &link.b_nz {
                     k[(i, j)] += state.stiffness * bi * bj;
@@ -1004,7 +1013,7 @@ impl TangentSystem for PlanetaryDynamics {
             } else {
                 TermCoefficients {
                     stiffness: state.stiffness,
-                    damping: link.damping + self.mesh_stiffness_damping * state.stiffness,
+                    damping: link.damping_at(self.mesh_stiffness_damping, state.stiffness),
                     cross: state.position_derivative,
                 }
             };
