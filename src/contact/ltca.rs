@@ -794,6 +794,9 @@ pub struct SetModel {
     base_radius_sun: f64,
     /// Offset \[m\] from a planet's sun-mesh position to its ring-mesh position.
     pub ring_shift: f64,
+    /// The flank deviations per face slice the models were built with
+    /// (sun–planet, ring–planet; unworn slices when built without).
+    flanks: [Vec<MeshFlanks>; 2],
 }
 
 impl SetModel {
@@ -824,6 +827,21 @@ impl SetModel {
             planet_angles: set.planet_angles().to_vec(),
             base_radius_sun: set.sun().base_radius(),
             ring_shift,
+            flanks: [sun_planet, ring_planet].map(|f| {
+                if f.is_empty() {
+                    vec![MeshFlanks::default()]
+                } else {
+                    f.to_vec()
+                }
+            }),
+        }
+    }
+
+    /// The flank deviations per face slice of mesh `kind`.
+    pub fn flanks(&self, kind: MeshKind) -> &[MeshFlanks] {
+        match kind {
+            MeshKind::SunPlanet => &self.flanks[0],
+            MeshKind::RingPlanet => &self.flanks[1],
         }
     }
 

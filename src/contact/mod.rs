@@ -12,6 +12,7 @@
 //! - [`hertz`]: Hertzian line contact.
 //! - [`iso6336`]: the ISO/TR 6336-30 single-pair stiffness example.
 //! - [`ltca`]: loaded tooth contact analysis.
+//! - [`mesh_law`]: one mesh's law, pair or deformable, as its readers see it.
 //! - [`cache`]: the separation tables on disk, keyed by what they are made from.
 //! - [`deformable`]: deformable-tooth contact (finite-element bodies, a local
 //!   contact term, the pairs solved together).
@@ -21,5 +22,6 @@ pub mod deformable;
 pub mod hertz;
 pub mod iso6336;
 pub mod ltca;
+pub mod mesh_law;
 pub mod separation;
 pub mod stiffness;

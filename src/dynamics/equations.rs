@@ -41,12 +41,17 @@
 
 use nalgebra::DMatrix;
 
-use crate::contact::ltca::{CycleStats, SetModel};
+use std::sync::Arc;
+
+use crate::contact::deformable::set::DeformableSet;
+use crate::contact::ltca::MeshLaw;
+use crate::contact::ltca::{CycleStats, MeshModel, SetModel};
+use crate::contact::mesh_law::MeshContact;
 use crate::dynamics::solver::{
     LowRankJacobian, RankOneTerm, SecondOrderSystem, TangentSystem, TermCoefficients,
 };
 use crate::model::carrier_frame::CarrierFrame;
-use crate::model::gear::{Damping, Drive, GearSet, Member, MeshKind};
+use crate::model::gear::{ContactModel, Damping, Drive, GearSet, Member, MeshKind};
 use crate::model::lumped::{
     add_outer, full_index, planet_bearing_vectors, ring_mesh_vector, sun_mesh_vector, Coordinate, Fidelity,
     LumpedSet, Reduction,
@@ -101,6 +106,10 @@ pub struct MeshState {
 pub struct PlanetaryDynamics {
     /// The contact models and phasing.
     pub contact: SetModel,
+    /// The deformable law of both meshes when the set asks for it
+    /// ([`GearSet::contact_model`]); the pair models of `contact` then serve
+    /// only the phasing and the quasi-static start.
+    deformable: Option<Arc<DeformableSet>>,
     /// The mean-stiffness linear model (masses, supports).
     pub lumped: LumpedSet,
     /// Reduction of the fidelity level.
@@ -207,6 +216,9 @@ pub enum DynamicsError {
         /// What is allowed.
         reason: String,
     },
+    /// The deformable contact law could not be built.
+    #[error("deformable contact: {0}")]
+    Contact(String),
 }
 
 /// Speeds of sun, ring and carrier [rad/s] for a unit input speed, the held
@@ -238,25 +250,66 @@ fn lever(set: &GearSet, m: Member) -> f64 {
     }
 }
 
+/// The mean tangent stiffness of a mesh over one cycle at `load` \[N\] [N/m]
+/// (64 positions): the stiffness the damping ratio and the linear model read.
+fn mean_stiffness(mesh: MeshContact<'_>, load: f64) -> Result<f64, DynamicsError> {
+    let p = mesh.path().clone();
+    let mut samples = Vec::with_capacity(64);
+    for i in 0..64 {
+        let s = p.start + p.base_pitch * f64::from(i) / 64.0;
+        samples.push(match mesh {
+            MeshContact::Pair(m) => m.force(s, m.approach_for(s, load), None).1,
+            MeshContact::Deformable(t) => {
+                let solved = t.mesh.approach_for(s, load).and_then(|d| t.mesh.solve(s, d));
+                solved.map_err(|e| DynamicsError::Contact(e.to_string()))?.law.approach_stiffness
+            }
+        });
+    }
+    Ok(CycleStats::of(&samples).mean)
+}
+
+/// The deformable law of both meshes for the flanks of `contact`: one
+/// transverse slice, so the flanks must be the same across the face.
+fn deformable_set(set: &GearSet, contact: &SetModel) -> Result<Arc<DeformableSet>, DynamicsError> {
+    let one = |kind: MeshKind| {
+        let slices = contact.flanks(kind);
+        if slices.iter().all(|f| *f == slices[0]) {
+            Ok(slices[0].clone())
+        } else {
+            Err(DynamicsError::InvalidParameter {
+                name: "dynamics.contact".into(),
+                value: "\"deformable\"".into(),
+                reason: format!(
+                    "the deformable law is transverse (one face slice), but the {kind:?} flanks differ \
+                     across the face ({} slices): use contact = \"pair\" for this worn state",
+                    slices.len()
+                ),
+            })
+        }
+    };
+    let (sp, rp) = (one(MeshKind::SunPlanet)?, one(MeshKind::RingPlanet)?);
+    DeformableSet::of_gear_set(set, &sp, &rp).map_err(|e| DynamicsError::Contact(e.to_string()))
+}
+
 impl PlanetaryDynamics {
     /// The dynamic model of a validated gear set with its contact models.
     pub fn new(set: &GearSet, contact: SetModel) -> Result<Self, DynamicsError> {
         let alpha_s = set.operating_pressure_angle(MeshKind::SunPlanet);
         let alpha_r = set.operating_pressure_angle(MeshKind::RingPlanet);
         let load = set.mesh_load_per_planet().max(1.0);
-        let mean_stiffness = |m: &crate::contact::ltca::MeshModel| {
-            let p = m.path();
-            let samples: Vec<f64> = (0..64)
-                .map(|i| {
-                    let s = p.start + p.base_pitch * f64::from(i) / 64.0;
-                    let d = m.approach_for(s, load);
-                    m.force(s, d, None).1
-                })
-                .collect();
-            CycleStats::of(&samples).mean
+        let deformable = match set.contact_model() {
+            ContactModel::Pair => None,
+            ContactModel::Deformable => Some(deformable_set(set, &contact)?),
         };
-        let k_sp = mean_stiffness(&contact.sun_planet);
-        let k_rp = mean_stiffness(&contact.ring_planet);
+        let view = |kind: MeshKind| match &deformable {
+            Some(d) => MeshContact::Deformable(d.mesh(kind)),
+            None => MeshContact::Pair(match kind {
+                MeshKind::SunPlanet => &contact.sun_planet,
+                MeshKind::RingPlanet => &contact.ring_planet,
+            }),
+        };
+        let k_sp = mean_stiffness(view(MeshKind::SunPlanet), load)?;
+        let k_rp = mean_stiffness(view(MeshKind::RingPlanet), load)?;
         let b = &set.bodies();
         let (rbs, rbr, rbp, a) = (
             set.sun().base_radius(),
@@ -503,7 +556,12 @@ impl PlanetaryDynamics {
         if let Damping::Rayleigh { mass: mu, stiffness } = set.damping() {
             c_support = rayleigh_support_damping(&mass, &rigid, &k_support, mu, stiffness);
         }
-        let slots = vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()];
+        // The deformable law has one event per flank and mesh: where the mesh starts or stops
+        // carrying load.
+        let slots = match &deformable {
+            Some(_) => vec![1, 1],
+            None => vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()],
+        };
         let mut support_nz = Vec::new();
         for i in 0..dim {
             for j in 0..dim {
@@ -517,6 +575,7 @@ impl PlanetaryDynamics {
         let frame = CarrierFrame::new(&lumped, a, &rigid, wc);
         let mut model = Self {
             contact,
+            deformable,
             lumped,
             reduction,
             mass,
@@ -594,7 +653,10 @@ impl PlanetaryDynamics {
             let delta: f64 = link.b_nz.iter().map(|(j, b)| b * q[*j]).sum();
             let s: f64 = link.p_nz.iter().map(|(j, p)| p * q[*j]).sum::<f64>() + link.s0;
             let s_rate: f64 = link.p_nz.iter().map(|(j, p)| p * v[*j]).sum();
-            let (e, de) = self.model(link.kind).contact_energy(s, delta);
+            let (e, de) = match &self.deformable {
+                Some(d) => d.mesh(link.kind).contact_energy(s, delta).unwrap_or((f64::NAN, f64::NAN)),
+                None => self.model(link.kind).contact_energy(s, delta),
+            };
             contact += e;
             power += de * s_rate;
         }
@@ -774,9 +836,12 @@ impl PlanetaryDynamics {
         self.rigid_velocity.iter().map(|v| v * omega).collect()
     }
 
-    /// The contact model of a mesh.
-    pub fn mesh_model(&self, kind: MeshKind) -> &crate::contact::ltca::MeshModel {
-        self.model(kind)
+    /// The contact law of a mesh, pair or deformable.
+    pub fn mesh_model(&self, kind: MeshKind) -> MeshContact<'_> {
+        match &self.deformable {
+            Some(d) => MeshContact::Deformable(d.mesh(kind)),
+            None => MeshContact::Pair(self.model(kind)),
+        }
     }
 
     /// Full Lin–Parker coordinates of a reduced coordinate vector.
@@ -824,7 +889,7 @@ impl PlanetaryDynamics {
         }
     }
 
-    fn model(&self, kind: MeshKind) -> &crate::contact::ltca::MeshModel {
+    fn model(&self, kind: MeshKind) -> &MeshModel {
         match kind {
             MeshKind::SunPlanet => &self.contact.sun_planet,
             MeshKind::RingPlanet => &self.contact.ring_planet,
@@ -876,7 +941,21 @@ impl PlanetaryDynamics {
                 s += p * q[j];
             }
             s += link.s0;
-            let law = if with_events {
+            let law = if let Some(d) = &self.deformable {
+                let table = d.mesh(link.kind);
+                if with_events {
+                    events[start..start + 2].copy_from_slice(&table.events(s, delta));
+                    start += 2;
+                }
+                // A law that cannot be evaluated (a non-finite state) passes NaN on to the
+                // integrator, which refuses the step.
+                table.force_tangents(s, delta).unwrap_or(MeshLaw {
+                    force: f64::NAN,
+                    approach_stiffness: f64::NAN,
+                    position_derivative: f64::NAN,
+                    peak_pair_force: f64::NAN,
+                })
+            } else if with_events {
                 let end = start + 2 * self.slots[Self::slot_kind(link.kind)];
                 let law = self.model(link.kind).force_with_derivatives(s, delta, &mut events[start..end]);
                 start = end;

@@ -735,7 +735,8 @@ impl Simulation {
     pub fn pairs_in_contact(&self, p: usize, mesh: MeshKind) -> u32 {
         let Some(state) = self.mesh_state(p, mesh) else { return 0 };
         let mut pairs = Vec::new();
-        self.model.mesh_model(mesh).force(state.position, state.approach, Some(&mut pairs));
+        // A deformable solve fails only on a non-finite state, which the stepper refuses first.
+        let _ = self.model.mesh_model(mesh).pairs(state.position, state.approach, &mut pairs);
         pairs.iter().filter(|c| c.force != 0.0).count() as u32
     }
 
@@ -751,16 +752,19 @@ impl Simulation {
             MeshKind::RingPlanet => self.set.planet().teeth,
         };
         let period = f64::from(teeth) * model.path().base_pitch;
-        let start = model.separation.drive.start;
+        let start = model.table_start();
         let pos = start + (state.position - start).rem_euclid(period);
-        model.pair_force(pos, state.approach)
+        model.pair_force(pos, state.approach).unwrap_or(f64::NAN)
     }
 
     /// Static transmission error \[m\]: the approach of a mesh of planet `p` at
     /// its current position under the scene's mean tooth force.
     pub fn static_transmission_error(&self, p: usize, mesh: MeshKind) -> f64 {
         let Some(state) = self.mesh_state(p, mesh) else { return 0.0 };
-        self.model.mesh_model(mesh).approach_for(state.position, self.set.mesh_load_per_planet())
+        self.model
+            .mesh_model(mesh)
+            .approach_for(state.position, self.set.mesh_load_per_planet())
+            .unwrap_or(f64::NAN)
     }
 
     /// Magnitude of a bearing's elastic force \[N\] (central members: 0 in the

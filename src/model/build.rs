@@ -11,7 +11,7 @@ use std::fmt;
 use crate::model::gear::{
     Analysis, Bodies, Body, Chamfer, GearKind, GearSet, Material, MeshKind, RootForm, Supports, ToothForm,
 };
-use crate::model::gear::{Damping, Drive, Member};
+use crate::model::gear::{ContactModel, Damping, Drive, Member};
 use crate::model::gear_data::{minimum_profile_shift, name_by_gear_data, trochoid_margin};
 use crate::model::mesh::PathOfContact;
 use crate::model::run::{RunSettings, RunValues};
@@ -496,6 +496,7 @@ fn validate_radii(given: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
         c.fail("dynamics.mesh_damping_ratio", d.mesh_damping_ratio, "must be at least 0 and below 1");
     }
     check_rayleigh(d, &mut c);
+    check_contact(scene, &mut c);
     c.positive("dynamics.shaft_stiffness_nm_per_rad", d.shaft_stiffness_nm_per_rad);
     let run = RunValues {
         input_speed: rpm_to_rad_per_s(d.input_speed_rpm),
@@ -602,6 +603,7 @@ fn validate_radii(given: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
                 Damping::Rayleigh { mass: d.rayleigh_mass_per_s, stiffness: d.rayleigh_stiffness_s }
             }
         },
+        contact: d.contact,
         drive: d.drive,
         shaft_stiffness: d.shaft_stiffness_nm_per_rad,
         load_balance: d.load_balance,
@@ -960,6 +962,28 @@ fn check_speed_driven_member(
             "the load balance already holds the output member's speed: drive the input member, or turn \
              dynamics.load_balance off",
         );
+    }
+}
+
+/// The mesh stiffness scales correct the pair model's tooth stiffness; the
+/// deformable law takes its stiffness from the bodies and does not read them.
+fn check_contact(scene: &Scene, c: &mut Checker) {
+    if scene.dynamics.contact != ContactModel::Deformable {
+        return;
+    }
+    let ms = &scene.mesh_stiffness;
+    for (key, v) in [
+        ("mesh_stiffness.sun_planet_scale", ms.sun_planet_scale),
+        ("mesh_stiffness.ring_planet_scale", ms.ring_planet_scale),
+    ] {
+        if v != 1.0 {
+            c.fail(
+                key,
+                v,
+                "is read only with dynamics.contact = \"pair\" (the deformable law's stiffness comes from its \
+                 finite-element bodies): remove the key or set it to 1",
+            );
+        }
     }
 }
 

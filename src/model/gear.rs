@@ -20,7 +20,7 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-pub use crate::scene::{Drive, Fidelity, IntegratorKind, Member};
+pub use crate::scene::{ContactModel, Drive, Fidelity, IntegratorKind, Member};
 
 use crate::model::involute::{inv, pressure_angle_at, radius_at_roll, roll_angle};
 
@@ -406,6 +406,8 @@ pub struct GearSet {
     pub(in crate::model) mesh_damping_ratio: f64,
     /// The damping model of the dynamics.
     pub(in crate::model) damping: Damping,
+    /// The tooth contact law of the dynamics.
+    pub(in crate::model) contact: ContactModel,
     /// Drive of the input member.
     pub(in crate::model) drive: Drive,
     /// Input shaft torsional stiffness for the speed drive [N·m/rad].
@@ -505,6 +507,11 @@ impl GearSet {
     /// bearings, or Rayleigh's C = μM + ηK.
     pub fn damping(&self) -> Damping {
         self.damping
+    }
+
+    /// The tooth contact law of the dynamics.
+    pub fn contact_model(&self) -> ContactModel {
+        self.contact
     }
 
     /// How the input member is driven.

@@ -57,6 +57,16 @@ impl Scene {
         s
     }
 
+    /// The calibrated example with deformable-tooth contact in place of the
+    /// pair model: every other parameter as [`Scene::example_2004`], so what
+    /// moves between the two is the contact law's doing (docs/DEFORMABLE.md).
+    pub fn example_2004_deformable() -> Self {
+        let mut s = Self::example_2004();
+        s.name = "example-2004-deformable".into();
+        s.dynamics.contact = super::ContactModel::Deformable;
+        s
+    }
+
     /// The example read with the geometry's defaults (docs/PARAMETERS.md)
     /// where the study gives nothing: sun and planet inertias of bare annuli
     /// from bore to root, the ring's from tooth tip to rim outside, needle-bearing planet

@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 pub use gear_data::{GearData, ADDENDUM_FACTOR, DEDENDUM_FACTOR, TOOL_TIP_RADIUS_FACTOR};
 pub use validate::{default_chamfer, Problem, SceneError};
 
-pub use terms::{DampingModel, Drive, Fidelity, IntegratorKind, Member};
+pub use terms::{ContactModel, DampingModel, Drive, Fidelity, IntegratorKind, Member};
 
 /// A planetary gear set as written in a scene file (engineering units).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -177,6 +177,11 @@ pub struct DynamicsSpec {
     /// ratios are then not read).
     #[serde(skip_serializing_if = "DampingModel::is_ratio")]
     pub damping: DampingModel,
+    /// The tooth contact law: `"pair"` (each tooth pair its own spring) or
+    /// `"deformable"` (all pairs of a mesh solved together over
+    /// finite-element bodies; the mesh stiffness scales are then not read).
+    #[serde(skip_serializing_if = "ContactModel::is_pair")]
+    pub contact: ContactModel,
     /// Mass-proportional Rayleigh coefficient μ, acting on the motion
     /// relative to the rigid-body rotation of the train \[1/s\].
     #[serde(skip_serializing_if = "is_zero")]
@@ -233,6 +238,7 @@ impl Default for DynamicsSpec {
             fidelity: Fidelity::TransverseTorsional,
             mesh_damping_ratio: 0.05,
             damping: DampingModel::Ratio,
+            contact: ContactModel::Pair,
             rayleigh_mass_per_s: 0.0,
             rayleigh_stiffness_s: 0.0,
             drive: Drive::Torque,
@@ -453,13 +459,19 @@ impl Scene {
             "example-2004-annulus" => Some(Self::example_2004_annulus()),
             "example-2004-gear-data" => Some(Self::example_2004_gear_data()),
             "example-2004-flexible" => Some(Self::example_2004_flexible()),
+            "example-2004-deformable" => Some(Self::example_2004_deformable()),
             _ => None,
         }
     }
 
     /// Names of the built-in gear scenes.
-    pub const BUILTIN: &'static [&'static str] =
-        &["example-2004", "example-2004-annulus", "example-2004-gear-data", "example-2004-flexible"];
+    pub const BUILTIN: &'static [&'static str] = &[
+        "example-2004",
+        "example-2004-annulus",
+        "example-2004-gear-data",
+        "example-2004-flexible",
+        "example-2004-deformable",
+    ];
 
     /// The calibration plan (TOML) of a built-in scene made by
     /// `planetwear calibrate`, if it has one.

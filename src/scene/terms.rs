@@ -67,6 +67,26 @@ pub enum Fidelity {
     TransverseTorsional,
 }
 
+/// The tooth contact law of the dynamic model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactModel {
+    /// Each tooth pair a spring of its own (potential-energy stiffness, a
+    /// Hertzian band), the pairs of a mesh independent.
+    #[default]
+    Pair,
+    /// The pairs of a mesh solved together over finite-element gear bodies
+    /// with a local Hertzian term, tabulated per mesh (docs/DEFORMABLE.md).
+    Deformable,
+}
+
+impl ContactModel {
+    /// Whether this is the default law (the scene file then omits it).
+    pub fn is_pair(&self) -> bool {
+        *self == ContactModel::Pair
+    }
+}
+
 /// How the structure is damped in the dynamic model.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

@@ -38,7 +38,7 @@
 //! F(s) = Σ_k f(s + k p_b), so ∫ f dx over the passage = ∫_0^{p_b} F ds =
 //! p_b·F̄: a pair carries the mean mesh force times the base pitch.
 
-use crate::contact::ltca::{MeshModel, PairContact, SetModel};
+use crate::contact::ltca::{PairContact, SetModel};
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{steady_state_observed, Work};
 use crate::geometry::profile::interpolate;
@@ -201,17 +201,21 @@ pub fn record_pair_loads(
     let mut sums: Vec<HashMap<(usize, i64), Accumulator>> = vec![HashMap::new(); n_mesh];
     let mut pairs: Vec<PairContact> = Vec::new();
     let mut slice = Vec::new();
+    let mut failure: Option<String> = None;
     let ss = steady_state_observed(&mut dynamics, set, &run, speed, None, |k, model| {
         let phase = k % samples;
         for (i, state) in model.meshes.iter().enumerate() {
             let (_, kind) = model.mesh_identity(i);
-            let mesh: &MeshModel = model.mesh_model(kind);
+            let mesh = model.mesh_model(kind);
             let pb = mesh.path().base_pitch;
             let origin = *reference[i][phase].get_or_insert(state.position);
             let shift = ((state.position - origin) / pb).round() as i64;
-            mesh.force(state.position, state.approach, Some(&mut pairs));
+            if let Err(e) = mesh.pairs(state.position, state.approach, &mut pairs) {
+                failure.get_or_insert(e.to_string());
+                continue;
+            }
             for pair in &pairs {
-                mesh.pair_slice_forces(pair.position, state.approach, &mut slice);
+                mesh.slice_forces(pair, state.approach, &mut slice);
                 let acc = sums[i].entry((phase, i64::from(pair.index) + shift)).or_default();
                 if acc.slice_load.len() < slice.len() {
                     acc.slice_load.resize(slice.len(), 0.0);
@@ -226,6 +230,9 @@ pub fn record_pair_loads(
         }
     })
     .map_err(|e| failed(e.to_string()))?;
+    if let Some(reason) = failure {
+        return Err(failed(reason));
+    }
     let mut profiles = Vec::with_capacity(n_mesh);
     for (i, map) in sums.into_iter().enumerate() {
         let (planet, mesh) = dynamics.mesh_identity(i);

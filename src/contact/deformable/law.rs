@@ -98,6 +98,9 @@ pub enum DeformableError {
         /// What is allowed.
         allowed: &'static str,
     },
+    /// A finite-element body could not be built.
+    #[error("gear body: {0}")]
+    Body(String),
     /// The mesh never carries the asked load.
     #[error("the mesh does not carry {load} N at any approach up to {approach} m")]
     LoadNotReached {

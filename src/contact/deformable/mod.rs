@@ -23,6 +23,8 @@
 //! - [`fe`]: the 9-node plane-strain element and the factorised stiffness.
 //! - [`mesher`]: the mapped mesh of a sector of a gear body.
 //! - [`body`]: the bodies' influence coefficients ([`body::BodyCompliance`]).
+//! - [`law`], [`lcp`]: the contact of one mesh solved over all its pairs.
+//! - [`table`]: the mesh law tabulated for the dynamics; [`set`]: both meshes of a set.
 
 pub mod body;
 pub mod fe;
@@ -63,5 +65,6 @@ pub trait BodyInfluence: Send + Sync {
 pub mod law;
 pub mod lcp;
 pub mod quasi;
+pub mod set;
 pub mod standin;
 pub mod table;

@@ -2,18 +2,30 @@
 //! the dynamics' hot path.
 //!
 //! F(s, δ) is periodic in s with the base pitch p_b (every tooth of a gear
-//! has the same outline and deviations), and the two flanks add:
-//! F = F_drive + F_back, F_drive zero below the smallest drive gap, F_back
-//! zero above minus the smallest back gap. Each flank's part is tabulated on
-//! a uniform (s, δ) grid from where it starts to several times the nominal
-//! load's approach, with F, ∂F/∂δ and ∂F/∂s from the exact solution
-//! ([`DeformableMesh::solve`]) and the cross derivative ∂²F/∂s∂δ by central
+//! has the same outline and deviations), and the two flanks add. Each
+//! flank's part is tabulated in the coordinate that puts its onset of load on
+//! a grid line: with σ = +1 on the drive flank and −1 on the back flank,
+//! g(s) the smallest unloaded gap of the flank's pairs at s and
+//! ξ = σδ − g(s), the flank's part is F = σ P(s, ξ) with P = 0 for ξ ≤ 0
+//! exactly. The kink of F where the first pair starts to touch, which cuts
+//! the cells of a plain (s, δ) grid obliquely, becomes the edge ξ = 0; what
+//! remains inside the table are the kinks where a further pair joins.
+//!
+//! P is tabulated on a uniform (s, ξ) grid from ξ = 0 to several times the
+//! nominal load's approach, with P, ∂P/∂ξ and ∂P/∂s from the exact solution
+//! ([`DeformableMesh::solve`]) and the cross derivative ∂²P/∂s∂ξ by central
 //! differences of the nodes' first derivatives; a bicubic Hermite patch per
 //! cell (de Boor, *A Practical Guide to Splines*, 1978, ch. IV; the
 //! tensor-product form, e.g. Press et al., *Numerical Recipes*, 3rd ed.,
-//! §3.6.3) gives F, ∂F/∂δ and ∂F/∂s continuous across cells. Beyond a
-//! table's δ range the exact solution is used. The peak pair force is
+//! §3.6.3) gives P, ∂P/∂ξ and ∂P/∂s continuous across cells. g(s) is
+//! interpolated linearly between the s nodes, and the flank's event value
+//! (where it starts or stops carrying load) is ξ itself, so the dynamics'
+//! contact switches and the law's zero agree to the last bit. Beyond a
+//! table's ξ range the exact solution is used. The peak pair force is
 //! interpolated bilinearly.
+//!
+//! The stored energy of a flank is W(s, ξ) = ∫₀^ξ P(s, x) dx, exact on the
+//! interpolant (two-point Gauss–Legendre per cell of a cubic).
 
 use crate::contact::deformable::law::{check_finite, DeformableError, DeformableMesh, Flank, FlankProblem};
 use crate::contact::ltca::MeshLaw;
@@ -23,7 +35,7 @@ use crate::contact::ltca::MeshLaw;
 pub struct TableSpec {
     /// Nodes per base pitch in s (≥ 4).
     pub positions: usize,
-    /// Nodes in δ per flank (≥ 4).
+    /// Nodes in ξ per flank (≥ 4).
     pub approaches: usize,
     /// The table reaches this multiple of the nominal load's largest elastic
     /// approach (beyond the first contact) [-] (> 1).
@@ -43,10 +55,11 @@ pub(crate) struct FlankTable {
     s0: f64,
     hs: f64,
     ns: usize,
-    d0: f64,
-    hd: f64,
-    nd: usize,
-    /// Per node (s-major: index j·nd + i): F, ∂F/∂δ, ∂F/∂s, ∂²F/∂s∂δ.
+    hx: f64,
+    nx: usize,
+    /// The flank's smallest unloaded gap g(s) at each s node \[m\].
+    touch: Vec<f64>,
+    /// Per node (s-major: index j·nx + i): P, ∂P/∂ξ, ∂P/∂s, ∂²P/∂s∂ξ.
     nodes: Vec<[f64; 4]>,
     peak: Vec<f64>,
 }
@@ -68,95 +81,174 @@ fn hermite(u: f64) -> ([f64; 4], [f64; 4]) {
     )
 }
 
+/// The flank's smallest unloaded gap over its pairs at reference position
+/// `s` \[m\]: where its first pair touches; `None` where no pair can touch.
+fn touch_gap(mesh: &DeformableMesh, flank: Flank, s: f64) -> Option<f64> {
+    let pb = mesh.path().base_pitch;
+    mesh.pair_range(s).filter_map(|k| mesh.gap(flank, s + f64::from(k) * pb).map(|(g, _)| g)).reduce(f64::min)
+}
+
+/// Where a lookup falls: cell (j, u) in s, the gap g and its slope there,
+/// and ξ.
+#[derive(Clone, Copy, Debug)]
+struct Site {
+    j: usize,
+    u: f64,
+    slope: f64,
+    xi: f64,
+}
+
 impl FlankTable {
     fn build(
         mesh: &DeformableMesh,
         flank: Flank,
-        d0: f64,
-        d1: f64,
+        span: f64,
         spec: &TableSpec,
     ) -> Result<Self, DeformableError> {
         let p = mesh.path();
-        let (ns, nd) = (spec.positions, spec.approaches);
+        let (ns, nx) = (spec.positions, spec.approaches);
         let hs = p.base_pitch / ns as f64;
-        let hd = (d1 - d0) / (nd - 1) as f64;
+        let hx = span / (nx - 1) as f64;
         let s0 = p.start;
-        let mut nodes = vec![[0.0; 4]; ns * nd];
-        let mut peak = vec![0.0; ns * nd];
+        let sigma = flank.sign();
+        let mut touch = Vec::with_capacity(ns);
+        for j in 0..ns {
+            let s = s0 + j as f64 * hs;
+            touch.push(touch_gap(mesh, flank, s).ok_or(DeformableError::Setting {
+                name: "mesh path",
+                value: s,
+                allowed: "positions where at least one tooth pair of each flank can touch",
+            })?);
+        }
+        let mut nodes = vec![[0.0; 4]; ns * nx];
+        let mut peak = vec![0.0; ns * nx];
         let mut work = FlankProblem::default();
         for j in 0..ns {
-            for i in 0..nd {
-                let law = mesh.solve_flank(flank, s0 + j as f64 * hs, d0 + i as f64 * hd, &mut work)?;
-                nodes[j * nd + i] = [law.force, law.approach_stiffness, law.position_derivative, 0.0];
-                peak[j * nd + i] = law.peak;
+            let s = s0 + j as f64 * hs;
+            let slope = (touch[(j + 1) % ns] - touch[(j + ns - 1) % ns]) / (2.0 * hs);
+            for i in 0..nx {
+                // At ξ = 0 the force is zero; its one-sided tangents are read just inside.
+                let xi = if i == 0 { 1e-6 * hx } else { i as f64 * hx };
+                let law = mesh.solve_flank(flank, s, sigma * (touch[j] + xi), &mut work)?;
+                let force = if i == 0 { 0.0 } else { sigma * law.force };
+                let ds = sigma * law.position_derivative + law.approach_stiffness * slope;
+                nodes[j * nx + i] = [force, law.approach_stiffness, ds, 0.0];
+                peak[j * nx + i] = if i == 0 { 0.0 } else { law.peak };
             }
         }
-        // Cross derivative: the mean of the central differences of ∂F/∂s along δ and of ∂F/∂δ
-        // along s (periodic in s, one-sided at the δ ends).
+        // Cross derivative: the mean of the central differences of ∂P/∂s along ξ and of ∂P/∂ξ
+        // along s (periodic in s, one-sided at the ξ ends).
         for j in 0..ns {
             let (jm, jp) = ((j + ns - 1) % ns, (j + 1) % ns);
-            for i in 0..nd {
-                let (im, ip) = (i.saturating_sub(1), (i + 1).min(nd - 1));
-                let along_d = (nodes[j * nd + ip][2] - nodes[j * nd + im][2]) / ((ip - im) as f64 * hd);
-                let along_s = (nodes[jp * nd + i][1] - nodes[jm * nd + i][1]) / (2.0 * hs);
-                nodes[j * nd + i][3] = 0.5 * (along_d + along_s);
+            for i in 0..nx {
+                let (im, ip) = (i.saturating_sub(1), (i + 1).min(nx - 1));
+                let along_x = (nodes[j * nx + ip][2] - nodes[j * nx + im][2]) / ((ip - im) as f64 * hx);
+                let along_s = (nodes[jp * nx + i][1] - nodes[jm * nx + i][1]) / (2.0 * hs);
+                nodes[j * nx + i][3] = 0.5 * (along_x + along_s);
             }
         }
-        Ok(Self { flank, s0, hs, ns, d0, hd, nd, nodes, peak })
+        Ok(Self { flank, s0, hs, ns, hx, nx, touch, nodes, peak })
     }
 
-    /// Whether δ is below (drive) or above (back) where the flank's table starts: no force there.
-    fn open(&self, delta: f64) -> bool {
-        match self.flank {
-            Flank::Drive => delta <= self.d0,
-            Flank::Back => delta >= self.d0 + (self.nd - 1) as f64 * self.hd,
-        }
-    }
-
-    /// The flank's part of the law at (s, δ), `None` outside the δ range.
-    fn law(&self, s: f64, delta: f64) -> Option<MeshLaw> {
-        if self.open(delta) {
-            return Some(MeshLaw::default());
-        }
-        let x = (delta - self.d0) / self.hd;
-        if !(x >= 0.0 && x <= (self.nd - 1) as f64) {
-            return None;
-        }
-        let i = (x as usize).min(self.nd - 2);
-        let v = x - i as f64;
+    /// The cell in s, the interpolated gap's slope and ξ at (s, δ).
+    fn site(&self, s: f64, delta: f64) -> Site {
         let y = ((s - self.s0) / self.hs).rem_euclid(self.ns as f64);
         let j = (y as usize).min(self.ns - 1);
         let u = (y - j as f64).clamp(0.0, 1.0);
+        let (g0, g1) = (self.touch[j], self.touch[(j + 1) % self.ns]);
+        let g = g0 + u * (g1 - g0);
+        Site { j, u, slope: (g1 - g0) / self.hs, xi: self.flank.sign() * delta - g }
+    }
+
+    /// The flank's event value at (s, δ): ξ, positive where it carries load \[m\].
+    fn event(&self, s: f64, delta: f64) -> f64 {
+        self.site(s, delta).xi
+    }
+
+    /// P, ∂P/∂s and ∂P/∂ξ of the Hermite patch at cell (j, u) in s and grid
+    /// coordinate x = ξ/h_ξ (within the table).
+    fn patch(&self, j: usize, u: f64, x: f64) -> (f64, f64, f64) {
+        let i = (x as usize).min(self.nx - 2);
+        let v = x - i as f64;
         let jp = (j + 1) % self.ns;
         let (hu, du) = hermite(u);
         let (hv, dv) = hermite(v);
-        let corner = |jj: usize, ii: usize| self.nodes[jj * self.nd + ii];
+        let corner = |jj: usize, ii: usize| self.nodes[jj * self.nx + ii];
         let c = [corner(j, i), corner(j, i + 1), corner(jp, i), corner(jp, i + 1)];
-        // Corner (a, b): a = 0/1 in s, b = 0/1 in δ; basis index 2a (value) or 2a+1 (slope).
-        let (mut f, mut fs, mut fd) = (0.0, 0.0, 0.0);
+        // Corner (a, b): a = 0/1 in s, b = 0/1 in ξ; basis index 2a (value) or 2a+1 (slope).
+        let (mut f, mut fs, mut fx) = (0.0, 0.0, 0.0);
         for (k, n) in c.iter().enumerate() {
             let (a, b) = (k / 2, k % 2);
             let terms = [
                 (2 * a, 2 * b, n[0]),
                 (2 * a + 1, 2 * b, n[2] * self.hs),
-                (2 * a, 2 * b + 1, n[1] * self.hd),
-                (2 * a + 1, 2 * b + 1, n[3] * self.hs * self.hd),
+                (2 * a, 2 * b + 1, n[1] * self.hx),
+                (2 * a + 1, 2 * b + 1, n[3] * self.hs * self.hx),
             ];
-            for (bs, bd, value) in terms {
-                f += hu[bs] * hv[bd] * value;
-                fs += du[bs] * hv[bd] * value;
-                fd += hu[bs] * dv[bd] * value;
+            for (bs, bx, value) in terms {
+                f += hu[bs] * hv[bx] * value;
+                fs += du[bs] * hv[bx] * value;
+                fx += hu[bs] * dv[bx] * value;
             }
         }
-        let pk = |jj: usize, ii: usize| self.peak[jj * self.nd + ii];
+        (f, fs / self.hs, fx / self.hx)
+    }
+
+    /// The largest ξ the table covers \[m\].
+    fn span(&self) -> f64 {
+        (self.nx - 1) as f64 * self.hx
+    }
+
+    /// The flank's part of the law at (s, δ), `None` beyond the ξ range.
+    fn law(&self, s: f64, delta: f64) -> Option<MeshLaw> {
+        let site = self.site(s, delta);
+        if site.xi <= 0.0 {
+            return Some(MeshLaw::default());
+        }
+        let x = site.xi / self.hx;
+        if !(x <= (self.nx - 1) as f64) {
+            return None;
+        }
+        let (pf, ps, px) = self.patch(site.j, site.u, x);
+        let sigma = self.flank.sign();
+        let (i, v) = ((x as usize).min(self.nx - 2), x - (x as usize).min(self.nx - 2) as f64);
+        let (j, u) = (site.j, site.u);
+        let jp = (j + 1) % self.ns;
+        let pk = |jj: usize, ii: usize| self.peak[jj * self.nx + ii];
         let peak = (1.0 - u) * ((1.0 - v) * pk(j, i) + v * pk(j, i + 1))
             + u * ((1.0 - v) * pk(jp, i) + v * pk(jp, i + 1));
         Some(MeshLaw {
-            force: f,
-            approach_stiffness: fd / self.hd,
-            position_derivative: fs / self.hs,
+            force: sigma * pf,
+            approach_stiffness: px,
+            position_derivative: sigma * (ps - px * site.slope),
             peak_pair_force: peak,
         })
+    }
+
+    /// The flank's stored energy W and ∂W/∂s at fixed δ at (s, δ), over the
+    /// table's range of ξ (the part beyond is added by the caller) [J, N],
+    /// with the ξ it reached.
+    fn energy(&self, s: f64, delta: f64) -> (f64, f64, f64, Site) {
+        let site = self.site(s, delta);
+        if site.xi <= 0.0 {
+            return (0.0, 0.0, 0.0, site);
+        }
+        let top = site.xi.min(self.span());
+        let (mut w, mut ws) = (0.0, 0.0);
+        // Two-point Gauss–Legendre per cell: exact for the cubic in ξ.
+        let g = 0.5 / 3f64.sqrt();
+        let mut a = 0.0;
+        while a < top {
+            let b = (a + self.hx).min(top);
+            for t in [0.5 - g, 0.5 + g] {
+                let x = (a + t * (b - a)) / self.hx;
+                let (pf, ps, _) = self.patch(site.j, site.u, x.min((self.nx - 1) as f64));
+                w += 0.5 * (b - a) * pf;
+                ws += 0.5 * (b - a) * ps;
+            }
+            a = b;
+        }
+        (w, ws, top, site)
     }
 }
 
@@ -180,18 +272,16 @@ impl TabulatedMesh {
             });
         }
         let p = mesh.path().clone();
-        let min_gap = |values: &[f64]| values.iter().cloned().fold(f64::INFINITY, f64::min);
-        let drive_start = min_gap(&mesh.separation.drive.values);
-        let back_start = -min_gap(&mesh.separation.back.values);
         // The largest approach the nominal load needs over one cycle, beyond the first contact.
         let mut reach: f64 = 0.0;
         for j in 0..spec.positions {
             let s = p.start + p.base_pitch * j as f64 / spec.positions as f64;
-            reach = reach.max(mesh.approach_for(s, load)? - drive_start);
+            let first = touch_gap(&mesh, Flank::Drive, s).unwrap_or(f64::INFINITY);
+            reach = reach.max(mesh.approach_for(s, load)? - first);
         }
         let span = spec.load_factor * reach;
-        let drive = FlankTable::build(&mesh, Flank::Drive, drive_start, drive_start + span, &spec)?;
-        let back = FlankTable::build(&mesh, Flank::Back, back_start - span, back_start, &spec)?;
+        let drive = FlankTable::build(&mesh, Flank::Drive, span, &spec)?;
+        let back = FlankTable::build(&mesh, Flank::Back, span, &spec)?;
         Ok(Self { mesh, table: ForceTable { flanks: [drive, back], spec } })
     }
 
@@ -222,6 +312,50 @@ impl TabulatedMesh {
             out.peak_pair_force = out.peak_pair_force.max(law.peak_pair_force);
         }
         Ok(out)
+    }
+
+    /// The event values of the two flanks at (s, δ) \[m\]: σδ − g(s) for the
+    /// drive flank (σ = 1) and the back flank (σ = −1), positive exactly where
+    /// the flank carries load in [`Self::force_tangents`].
+    pub fn events(&self, s: f64, delta: f64) -> [f64; 2] {
+        [self.table.flanks[0].event(s, delta), self.table.flanks[1].event(s, delta)]
+    }
+
+    /// Elastic energy stored in the mesh V(s, δ) = Σ_flanks ∫₀^ξ P dx \[J\] and
+    /// its partial derivative ∂V/∂s at fixed δ \[N\], on the interpolated law
+    /// (exactly its integral: ∂V/∂δ is [`Self::force_tangents`]' force).
+    pub fn contact_energy(&self, s: f64, delta: f64) -> Result<(f64, f64), DeformableError> {
+        check_finite("position s", s)?;
+        check_finite("approach delta", delta)?;
+        let (mut v, mut vs) = (0.0, 0.0);
+        let mut work = FlankProblem::default();
+        let g = 0.5 / 3f64.sqrt();
+        for t in &self.table.flanks {
+            let (mut w, mut ws, top, site) = t.energy(s, delta);
+            if site.xi <= 0.0 {
+                continue;
+            }
+            let sigma = t.flank.sign();
+            let gap = sigma * delta - site.xi;
+            // Beyond the table: the exact law, two Gauss points per table step.
+            let mut a = top;
+            while a < site.xi {
+                let b = (a + t.hx).min(site.xi);
+                for x in [a + (0.5 - g) * (b - a), a + (0.5 + g) * (b - a)] {
+                    let f = self.mesh.solve_flank(t.flank, s, sigma * (gap + x), &mut work)?;
+                    w += 0.5 * (b - a) * sigma * f.force;
+                    ws += 0.5 * (b - a) * (sigma * f.position_derivative + f.approach_stiffness * site.slope);
+                }
+                a = b;
+            }
+            let end = match t.law(s, delta) {
+                Some(law) => sigma * law.force,
+                None => sigma * self.mesh.solve_flank(t.flank, s, delta, &mut work)?.force,
+            };
+            v += w;
+            vs += ws - end * site.slope;
+        }
+        Ok((v, vs))
     }
 
     /// The table.

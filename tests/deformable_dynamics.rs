@@ -1,0 +1,221 @@
+//! The deformable contact law in the dynamics (`dynamics.contact =
+//! "deformable"`): the tabulated law carries no load exactly where its event
+//! values say no flank touches, its energy integrates to its force, the
+//! dynamic model reads it (its mesh forces are the exact joint solution's),
+//! energy is conserved on it, and the scene's key is checked.
+
+use nalgebra::DMatrix;
+use planetwear::contact::deformable::set::DeformableSet;
+use planetwear::contact::ltca::SetModel;
+use planetwear::contact::mesh_law::MeshContact;
+use planetwear::contact::separation::MeshFlanks;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::solver::{GeneralizedAlpha, GeneralizedAlphaSettings, SecondOrderSystem};
+use planetwear::model::gear::MeshKind;
+use planetwear::scene::{ContactModel, DampingModel, Fidelity, Scene};
+
+/// A small deterministic generator in [0, 1).
+fn uniform(seed: &mut u64) -> f64 {
+    *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    (*seed >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// On the example's finite-element law, at 2000 random (s, δ) per mesh from
+/// below the first contact of the back flank to three nominal approaches
+/// beyond the drive flank's: the force is zero where both event values are
+/// at most zero and carries the sign of the flank whose event is positive;
+/// ∂V/∂δ of the stored energy equals the force and ∂V/∂s its partial
+/// derivative (central differences, to 1e-5 of the nominal load).
+#[test]
+fn the_law_is_zero_where_its_events_say_and_its_energy_integrates_to_it() {
+    let set = Scene::example_2004().validate().unwrap();
+    let law = DeformableSet::of_gear_set(&set, &MeshFlanks::default(), &MeshFlanks::default()).unwrap();
+    let load = set.mesh_load_per_planet();
+    let mut seed = 7u64;
+    for kind in MeshKind::ALL {
+        let t = law.mesh(kind);
+        let p = t.mesh.path().clone();
+        let reach = t.mesh.approach_for(p.start, load).unwrap();
+        let back = -t.mesh.separation.back.values.iter().cloned().fold(f64::INFINITY, f64::min);
+        let (mut open, mut loaded, mut worst_v, mut worst_s) = (0, 0, 0.0_f64, 0.0_f64);
+        for _ in 0..2000 {
+            let s = p.start + (uniform(&mut seed) - 0.5) * 4.0 * p.base_pitch;
+            let delta = back - 0.2 * reach + uniform(&mut seed) * (4.0 * reach - back);
+            let f = t.force_tangents(s, delta).unwrap();
+            let [drive, rear] = t.events(s, delta);
+            if drive <= 0.0 && rear <= 0.0 {
+                assert_eq!(f.force, 0.0, "{kind:?} s={s} δ={delta}: open by its events but F = {}", f.force);
+                assert_eq!(f.approach_stiffness, 0.0);
+                open += 1;
+            } else {
+                assert!(drive <= 0.0 || rear <= 0.0, "both flanks touch at once");
+                let sign = if drive > 0.0 { 1.0 } else { -1.0 };
+                assert!(sign * f.force >= 0.0, "{kind:?} s={s} δ={delta}: F = {} against its flank", f.force);
+                loaded += 1;
+            }
+            let (hd, hs) = (1e-9, 1e-8);
+            let v = |s: f64, d: f64| t.contact_energy(s, d).unwrap().0;
+            let dv_dd = (v(s, delta + hd) - v(s, delta - hd)) / (2.0 * hd);
+            let dv_ds = (v(s + hs, delta) - v(s - hs, delta)) / (2.0 * hs);
+            let (_, vs) = t.contact_energy(s, delta).unwrap();
+            worst_v = worst_v.max((dv_dd - f.force).abs() / load);
+            // ∂V/∂s jumps where the touching pair changes; skip points whose difference straddles one.
+            let [d1, _] = t.events(s + hs, delta);
+            let [d0, _] = t.events(s - hs, delta);
+            let smooth = ((d1 - drive) - (drive - d0)).abs() < 1e-3 * hs;
+            if smooth {
+                worst_s = worst_s.max((dv_ds - vs).abs() / load);
+            }
+        }
+        eprintln!(
+            "{kind:?}: {open} open, {loaded} loaded; |∂V/∂δ − F| ≤ {worst_v:.2e} F_nom, |∂V/∂s − V_s| ≤ {worst_s:.2e} F_nom"
+        );
+        assert!(open > 100 && loaded > 100, "the sample must cover both states");
+        assert!(worst_v < 1e-5 && worst_s < 1e-5, "{worst_v} {worst_s}");
+    }
+}
+
+/// The example with deformable contact in `fidelity`.
+fn deformable(fidelity: Fidelity) -> Scene {
+    let mut s = Scene::example_2004_deformable();
+    s.dynamics.fidelity = fidelity;
+    s
+}
+
+/// Along a steady state of the deformable example at 2750 rpm (both
+/// fidelities), every mesh force the model records is the exact joint
+/// solution's at the mesh's (s, δ) to the table's accuracy (1.5e-2 of the
+/// nominal load, the bound of tests/deformable_contact.rs), and the tooth
+/// pairs' forces add up to it.
+#[test]
+fn the_dynamic_model_reads_the_deformable_law() {
+    for fidelity in [Fidelity::Torsional, Fidelity::TransverseTorsional] {
+        let (set, run) = deformable(fidelity).validate_with_run().unwrap();
+        let mut model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+        let omega = 2750.0 * std::f64::consts::PI / 30.0;
+        let r = planetwear::dynamics::response::steady_state(&mut model, &set, &run, omega, None).unwrap();
+        let load = set.mesh_load_per_planet();
+        let n = model.dim();
+        let mut f = vec![0.0; n];
+        model.force(0.0, &r.end.q, &r.end.v, &mut f);
+        let mut pairs = Vec::new();
+        let mut worst: f64 = 0.0;
+        for i in 0..model.mesh_count() {
+            let (_, kind) = model.mesh_identity(i);
+            let state = model.meshes[i];
+            let MeshContact::Deformable(t) = model.mesh_model(kind) else {
+                panic!("the pair model was read")
+            };
+            let exact = t.mesh.solve(state.position, state.approach).unwrap().law.force;
+            worst = worst.max((state.force - exact).abs() / load);
+            let total = model.mesh_model(kind).pairs(state.position, state.approach, &mut pairs).unwrap();
+            let sum: f64 = pairs.iter().map(|p| p.force).sum();
+            assert!((sum - total).abs() <= 1e-9 * load, "pairs {sum} against the mesh {total}");
+            assert!(pairs.iter().any(|p| p.force > 0.0), "no pair loaded at the mean load");
+        }
+        eprintln!("{fidelity:?}: |F_model − F_exact| ≤ {worst:.2e} F_nom");
+        assert!(worst < 1.5e-2, "{worst}");
+    }
+}
+
+/// Energy is conserved on the deformable law, as on the pair model
+/// (tests/rayleigh.rs): the torsional example with Rayleigh damping,
+/// generalized-α at 4000 steps per mesh cycle over five cycles at 3000 rpm;
+/// kinetic + support + contact energy changes by the work of the external
+/// forces and of the time-varying law, less what the damping took, to 1e-3
+/// of the contact energy.
+#[test]
+fn the_energy_balance_holds_on_the_deformable_law() {
+    let mut s = deformable(Fidelity::Torsional);
+    s.dynamics.damping = DampingModel::Rayleigh;
+    s.dynamics.rayleigh_mass_per_s = 500.0;
+    s.dynamics.rayleigh_stiffness_s = 2e-7;
+    let set = s.validate().unwrap();
+    let mut model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+    let n = model.dim();
+    let omega = 3000.0 * std::f64::consts::PI / 30.0;
+    let start = planetwear::dynamics::response::static_state(&model, omega);
+    let fm = model.mesh_frequency_per_input_speed * omega;
+    let mut settings = GeneralizedAlphaSettings::chung_hulbert(1.0).unwrap();
+    settings.rtol = 1e-14;
+    settings.atol = 1e-15;
+    let mut ga = GeneralizedAlpha::new(settings).unwrap();
+    ga.init(&mut model, 0.0, &start.q, &start.v).unwrap();
+    let (steps_per_cycle, cycles) = (4000u64, 5u64);
+    let h = 1.0 / fm / steps_per_cycle as f64;
+    let zeros = vec![0.0; n];
+    let (mut fv, mut f0) = (vec![0.0; n], vec![0.0; n]);
+    let mut rates = |m: &mut PlanetaryDynamics, t: f64, q: &[f64], v: &[f64]| {
+        m.force(t, q, &zeros, &mut f0);
+        m.force(t, q, v, &mut fv);
+        let dissipated: f64 = -fv.iter().zip(&f0).zip(v).map(|((a, b), v)| (a - b) * v).sum::<f64>();
+        let (k, s, c, p) = m.energy(t, q, v);
+        (k + s + c, p + m.external_power(v) - dissipated, c, dissipated)
+    };
+    let (q, v) = (ga.q().to_vec(), ga.v().to_vec());
+    let (e0, mut p_prev, _, mut d_prev) = rates(&mut model, 0.0, &q, &v);
+    let (mut work, mut lost, mut worst, mut contact_scale) = (0.0, 0.0, 0.0_f64, 0.0_f64);
+    for k in 1..=steps_per_cycle * cycles {
+        let t = k as f64 * h;
+        ga.advance(&mut model, t, 1).unwrap();
+        let (q, v) = (ga.q().to_vec(), ga.v().to_vec());
+        let (e, p, c, d) = rates(&mut model, t, &q, &v);
+        work += 0.5 * h * (p + p_prev);
+        lost += 0.5 * h * (d + d_prev);
+        (p_prev, d_prev) = (p, d);
+        contact_scale = contact_scale.max(c);
+        worst = worst.max((e - e0 - work).abs());
+    }
+    eprintln!("energy balance error {worst:e} J, dissipated {lost:e} J, contact energy {contact_scale:e} J");
+    assert!(worst < 1e-3 * contact_scale, "balance error {worst} vs contact energy {contact_scale}");
+    assert!(lost > 10.0 * worst, "the damping took {lost} J only, against the balance error {worst} J");
+}
+
+/// `dynamics.contact`: the stiffness scales are refused with it (naming the
+/// key), it is written to and read from the file only when not the pair
+/// model, an unknown law is refused, and the built-in
+/// `example-2004-deformable` differs from `example-2004` in the law only.
+#[test]
+fn the_scene_key_is_checked_and_read_back() {
+    // The stiffness scales correct the pair model only.
+    let mut s = Scene::example_2004_deformable();
+    s.mesh_stiffness.sun_planet_scale = 1.1;
+    let e = s.validate().unwrap_err().to_string();
+    assert!(e.contains("mesh_stiffness.sun_planet_scale") && e.contains("\"pair\""), "{e}");
+    // The file form: `contact = "deformable"` under [dynamics], written only when not the default.
+    let text = Scene::example_2004_deformable().to_toml();
+    assert!(text.contains("contact = \"deformable\""), "{text}");
+    assert!(!Scene::example_2004().to_toml().contains("contact ="));
+    let back = Scene::from_toml(&text).unwrap();
+    assert_eq!(back.dynamics.contact, ContactModel::Deformable);
+    let bad = text.replace("contact = \"deformable\"", "contact = \"rigid\"");
+    let e = Scene::from_toml(&bad).unwrap_err().to_string();
+    assert!(e.contains("contact") && e.contains("deformable"), "{e}");
+    // Only the contact law differs from the example.
+    let mut same = Scene::example_2004_deformable();
+    same.name = "example-2004".into();
+    same.dynamics.contact = ContactModel::Pair;
+    assert_eq!(same, Scene::example_2004());
+}
+
+/// A model built on the deformable law has a different tangent stiffness
+/// than on the pair model at the same state: its Jacobian reads the law.
+#[test]
+fn the_tangent_stiffness_comes_from_the_law() {
+    use planetwear::dynamics::solver::TangentSystem;
+    let (pair_set, deformable_set) = (
+        Scene::example_2004().validate().unwrap(),
+        deformable(Fidelity::TransverseTorsional).validate().unwrap(),
+    );
+    let mut a = PlanetaryDynamics::new(&pair_set, SetModel::new(&pair_set)).unwrap();
+    let mut b = PlanetaryDynamics::new(&deformable_set, SetModel::new(&deformable_set)).unwrap();
+    let q = planetwear::dynamics::response::static_state(&a, 0.0).q;
+    let n = a.dim();
+    let v = vec![0.0; n];
+    let (mut ka, mut kb, mut c) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n), DMatrix::zeros(n, n));
+    a.jacobian(0.0, &q, &v, &mut ka, &mut c);
+    b.jacobian(0.0, &q, &v, &mut kb, &mut c);
+    let diff = (&ka - &kb).amax() / ka.amax();
+    eprintln!("largest tangent stiffness difference {diff:.3} of the largest entry");
+    assert!(diff > 1e-3, "the deformable model's tangents equal the pair model's");
+}
