@@ -104,4 +104,52 @@ fn main() {
         "table: {} positions per base pitch × {} approaches per flank, up to {}× the nominal load's approach",
         spec.positions, spec.approaches, spec.load_factor
     );
+    example_on_its_bodies();
+}
+
+/// The example on its finite-element bodies: the set-up of both meshes'
+/// tables (bodies and tables, cold), and the dynamics' steady state on each
+/// contact model at three speeds (model built outside the timing): wall
+/// time, steps, time per step and the deformable law's ratio per step.
+fn example_on_its_bodies() {
+    use planetwear::contact::deformable::set::DeformableSet;
+    use planetwear::contact::ltca::SetModel;
+    use planetwear::dynamics::equations::PlanetaryDynamics;
+    let t = Instant::now();
+    let flat = MeshFlanks::default();
+    let set = Scene::example_2004_deformable().validate().expect("valid");
+    DeformableSet::of_gear_set(&set, &flat, &flat).expect("tables");
+    println!(
+        "\nexample-2004-deformable: bodies and both tables built in {:.2} s (cold)",
+        t.elapsed().as_secs_f64()
+    );
+    println!("speed [rpm]  fidelity              pair: s, steps, µs/step   deformable: s, steps, µs/step   ratio per step");
+    for fidelity in [planetwear::scene::Fidelity::Torsional, planetwear::scene::Fidelity::TransverseTorsional]
+    {
+        for rpm in [2750.0, 6000.0, 9000.0] {
+            let mut per_step = [0.0; 2];
+            let mut line = format!("{rpm:>11.0}  {:<20}", format!("{fidelity:?}"));
+            for (k, mut scene) in
+                [Scene::example_2004(), Scene::example_2004_deformable()].into_iter().enumerate()
+            {
+                scene.dynamics.fidelity = fidelity;
+                let (set, run) = scene.validate_with_run().expect("valid");
+                let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
+                let omega = rpm * std::f64::consts::PI / 30.0;
+                let mut best = f64::INFINITY;
+                let mut steps = 0;
+                for _ in 0..3 {
+                    let mut m = model.clone();
+                    let t = Instant::now();
+                    let r = planetwear::dynamics::response::steady_state(&mut m, &set, &run, omega, None)
+                        .expect("steady state");
+                    best = best.min(t.elapsed().as_secs_f64());
+                    steps = r.stats.steps;
+                }
+                per_step[k] = best / steps as f64;
+                line += &format!("   {best:>6.3} {steps:>7} {:>6.2}", per_step[k] * 1e6);
+            }
+            println!("{line}   {:>6.2}", per_step[1] / per_step[0]);
+        }
+    }
 }

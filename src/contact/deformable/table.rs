@@ -54,8 +54,10 @@ pub(crate) struct FlankTable {
     flank: Flank,
     s0: f64,
     hs: f64,
+    inv_hs: f64,
     ns: usize,
     hx: f64,
+    inv_hx: f64,
     nx: usize,
     /// The flank's smallest unloaded gap g(s) at each s node \[m\].
     touch: Vec<f64>,
@@ -147,51 +149,61 @@ impl FlankTable {
                 nodes[j * nx + i][3] = 0.5 * (along_x + along_s);
             }
         }
-        Ok(Self { flank, s0, hs, ns, hx, nx, touch, nodes, peak })
+        Ok(Self { flank, s0, hs, inv_hs: 1.0 / hs, ns, hx, inv_hx: 1.0 / hx, nx, touch, nodes, peak })
     }
 
     /// The cell in s, the interpolated gap's slope and ξ at (s, δ).
     fn site(&self, s: f64, delta: f64) -> Site {
-        let y = ((s - self.s0) / self.hs).rem_euclid(self.ns as f64);
-        let j = (y as usize).min(self.ns - 1);
-        let u = (y - j as f64).clamp(0.0, 1.0);
-        let (g0, g1) = (self.touch[j], self.touch[(j + 1) % self.ns]);
-        let g = g0 + u * (g1 - g0);
-        Site { j, u, slope: (g1 - g0) / self.hs, xi: self.flank.sign() * delta - g }
+        self.site_in(self.cell(s), delta)
     }
 
-    /// The flank's event value at (s, δ): ξ, positive where it carries load \[m\].
-    fn event(&self, s: f64, delta: f64) -> f64 {
-        self.site(s, delta).xi
+    /// The cell (j, u) of position s on the periodic s grid (u in [0, 1]).
+    #[inline]
+    fn cell(&self, s: f64) -> (usize, f64) {
+        let y = (s - self.s0) * self.inv_hs;
+        let floor = y.floor();
+        // Through i64: a NaN position gives cell 0 and a NaN fraction, which the caller's
+        // comparisons send to the exact solution's finiteness check.
+        let j = (floor as i64).rem_euclid(self.ns as i64) as usize;
+        (j, y - floor)
+    }
+
+    /// [`Self::site`] at a cell found by [`Self::cell`].
+    #[inline]
+    fn site_in(&self, (j, u): (usize, f64), delta: f64) -> Site {
+        let jp = if j + 1 == self.ns { 0 } else { j + 1 };
+        let (g0, g1) = (self.touch[j], self.touch[jp]);
+        let g = g0 + u * (g1 - g0);
+        Site { j, u, slope: (g1 - g0) * self.inv_hs, xi: self.flank.sign() * delta - g }
     }
 
     /// P, ∂P/∂s and ∂P/∂ξ of the Hermite patch at cell (j, u) in s and grid
     /// coordinate x = ξ/h_ξ (within the table).
+    #[inline]
     fn patch(&self, j: usize, u: f64, x: f64) -> (f64, f64, f64) {
         let i = (x as usize).min(self.nx - 2);
         let v = x - i as f64;
-        let jp = (j + 1) % self.ns;
+        let jp = if j + 1 == self.ns { 0 } else { j + 1 };
         let (hu, du) = hermite(u);
         let (hv, dv) = hermite(v);
-        let corner = |jj: usize, ii: usize| self.nodes[jj * self.nx + ii];
-        let c = [corner(j, i), corner(j, i + 1), corner(jp, i), corner(jp, i + 1)];
-        // Corner (a, b): a = 0/1 in s, b = 0/1 in ξ; basis index 2a (value) or 2a+1 (slope).
-        let (mut f, mut fs, mut fx) = (0.0, 0.0, 0.0);
-        for (k, n) in c.iter().enumerate() {
-            let (a, b) = (k / 2, k % 2);
-            let terms = [
-                (2 * a, 2 * b, n[0]),
-                (2 * a + 1, 2 * b, n[2] * self.hs),
-                (2 * a, 2 * b + 1, n[1] * self.hx),
-                (2 * a + 1, 2 * b + 1, n[3] * self.hs * self.hx),
-            ];
-            for (bs, bx, value) in terms {
-                f += hu[bs] * hv[bx] * value;
-                fs += du[bs] * hv[bx] * value;
-                fx += hu[bs] * dv[bx] * value;
-            }
-        }
-        (f, fs / self.hs, fx / self.hx)
+        let (hs, hx) = (self.hs, self.hx);
+        let (a0, a1) = (&self.nodes[j * self.nx + i], &self.nodes[j * self.nx + i + 1]);
+        let (b0, b1) = (&self.nodes[jp * self.nx + i], &self.nodes[jp * self.nx + i + 1]);
+        // Along s first, on the two ξ lines of the cell: the value and the ξ slope, and their
+        // s derivatives (Hermite in u with the nodes' s slopes and cross derivatives).
+        let along = |a: &[f64; 4], b: &[f64; 4], w: &[f64; 4]| {
+            (
+                w[0] * a[0] + w[1] * hs * a[2] + w[2] * b[0] + w[3] * hs * b[2],
+                w[0] * a[1] + w[1] * hs * a[3] + w[2] * b[1] + w[3] * hs * b[3],
+            )
+        };
+        let ((p0, x0), (p1, x1)) = (along(a0, b0, &hu), along(a1, b1, &hu));
+        let ((ps0, xs0), (ps1, xs1)) = (along(a0, b0, &du), along(a1, b1, &du));
+        // Then along ξ.
+        let f = hv[0] * p0 + hv[1] * hx * x0 + hv[2] * p1 + hv[3] * hx * x1;
+        let fs = hv[0] * ps0 + hv[1] * hx * xs0 + hv[2] * ps1 + hv[3] * hx * xs1;
+        let fx = dv[0] * p0 + dv[1] * hx * x0 + dv[2] * p1 + dv[3] * hx * x1;
+        (f, fs / hs, fx / hx)
     }
 
     /// The largest ξ the table covers \[m\].
@@ -201,19 +213,26 @@ impl FlankTable {
 
     /// The flank's part of the law at (s, δ), `None` beyond the ξ range.
     fn law(&self, s: f64, delta: f64) -> Option<MeshLaw> {
-        let site = self.site(s, delta);
+        self.law_in(self.cell(s), delta)
+    }
+
+    /// [`Self::law`] at a cell found by [`Self::cell`].
+    #[inline]
+    fn law_in(&self, cell: (usize, f64), delta: f64) -> Option<MeshLaw> {
+        let site = self.site_in(cell, delta);
         if site.xi <= 0.0 {
             return Some(MeshLaw::default());
         }
-        let x = site.xi / self.hx;
+        let x = site.xi * self.inv_hx;
         if !(x <= (self.nx - 1) as f64) {
             return None;
         }
         let (pf, ps, px) = self.patch(site.j, site.u, x);
         let sigma = self.flank.sign();
-        let (i, v) = ((x as usize).min(self.nx - 2), x - (x as usize).min(self.nx - 2) as f64);
+        let i = (x as usize).min(self.nx - 2);
+        let v = x - i as f64;
         let (j, u) = (site.j, site.u);
-        let jp = (j + 1) % self.ns;
+        let jp = if j + 1 == self.ns { 0 } else { j + 1 };
         let pk = |jj: usize, ii: usize| self.peak[jj * self.nx + ii];
         let peak = (1.0 - u) * ((1.0 - v) * pk(j, i) + v * pk(j, i + 1))
             + u * ((1.0 - v) * pk(jp, i) + v * pk(jp, i + 1));
@@ -292,11 +311,13 @@ impl TabulatedMesh {
         check_finite("position s", s)?;
         check_finite("approach delta", delta)?;
         let mut out = MeshLaw::default();
-        let mut work = FlankProblem::default();
+        // Both flanks share the s grid.
+        let cell = self.table.flanks[0].cell(s);
         for t in &self.table.flanks {
-            let law = match t.law(s, delta) {
+            let law = match t.law_in(cell, delta) {
                 Some(law) => law,
                 None => {
+                    let mut work = FlankProblem::default();
                     let f = self.mesh.solve_flank(t.flank, s, delta, &mut work)?;
                     MeshLaw {
                         force: f.force,
@@ -318,7 +339,8 @@ impl TabulatedMesh {
     /// drive flank (σ = 1) and the back flank (σ = −1), positive exactly where
     /// the flank carries load in [`Self::force_tangents`].
     pub fn events(&self, s: f64, delta: f64) -> [f64; 2] {
-        [self.table.flanks[0].event(s, delta), self.table.flanks[1].event(s, delta)]
+        let cell = self.table.flanks[0].cell(s);
+        [self.table.flanks[0].site_in(cell, delta).xi, self.table.flanks[1].site_in(cell, delta).xi]
     }
 
     /// Elastic energy stored in the mesh V(s, δ) = Σ_flanks ∫₀^ξ P dx \[J\] and
