@@ -219,3 +219,56 @@ fn the_tangent_stiffness_comes_from_the_law() {
     eprintln!("largest tangent stiffness difference {diff:.3} of the largest entry");
     assert!(diff > 1e-3, "the deformable model's tangents equal the pair model's");
 }
+
+/// The pair loads of one quasi-static wear cycle: the pair loads at a position.
+fn pair_loads(scene: Scene) -> (f64, Vec<f64>, Vec<f64>) {
+    use planetwear::wear::archard::WearSettings;
+    use planetwear::wear::state::WornState;
+    use planetwear::wear::stepper::WearModel;
+    let set = scene.validate().unwrap();
+    let settings = WearSettings::for_set(&set);
+    let state = WornState::unworn(&set, settings.profile_points, settings.face_slices);
+    let cycle = WearModel::new(&set, settings).unwrap().cycle(&state).unwrap();
+    let sun = cycle.meshes.iter().find(|m| m.mesh == MeshKind::SunPlanet).unwrap();
+    let pb = planetwear::model::mesh::PathOfContact::new(&set, MeshKind::SunPlanet).base_pitch;
+    (pb, sun.position.clone(), sun.pair_load[0].clone())
+}
+
+/// The quasi-static wear reads the deformable law's split of each mesh load
+/// among its pairs: along the sun–planet passage of planet 1 the pair loads
+/// differ from the pair model's (by more than 0.5 % of the mesh load
+/// somewhere), while the loads of the pairs one base pitch apart, which
+/// share the same mesh load, add up to the same total on both laws (to 1.5 %
+/// of the nominal mesh load, the grid's linear interpolation included; away
+/// from the passages' ends, where the two laws engage a grid step apart).
+#[test]
+fn the_quasi_static_wear_reads_the_deformable_split() {
+    let (pb, pos, pair) = pair_loads(Scene::example_2004());
+    let (_, pos_d, deformable) = pair_loads(Scene::example_2004_deformable());
+    let load = Scene::example_2004().validate().unwrap().mesh_load_per_planet();
+    let at = |x: &[f64], y: &[f64], s: f64| -> f64 {
+        if s < x[0] || s > x[x.len() - 1] {
+            return 0.0;
+        }
+        let i = x.partition_point(|v| *v <= s).clamp(1, x.len() - 1);
+        let t = (s - x[i - 1]) / (x[i] - x[i - 1]);
+        y[i - 1] + t * (y[i] - y[i - 1])
+    };
+    let (mut differs, mut worst): (f64, f64) = (0.0, 0.0);
+    for (r, s) in pos.iter().enumerate() {
+        differs = differs.max((at(&pos_d, &deformable, *s) - pair[r]).abs() / load);
+        let total = |x: &[f64], y: &[f64]| (-2..=2).map(|k| at(x, y, s + f64::from(k) * pb)).sum::<f64>();
+        // Not where a shifted position lies within three grid steps of either passage's ends:
+        // the two laws engage a grid step apart, and the loads jump there (the tip corners carry none).
+        let h = pos[1] - pos[0];
+        let ends = [pos[0], pos[pos.len() - 1], pos_d[0], pos_d[pos_d.len() - 1]];
+        if (-2..=2).any(|k| ends.iter().any(|e| (s + f64::from(k) * pb - e).abs() < 3.0 * h)) {
+            continue;
+        }
+        let e = (total(&pos_d, &deformable) - total(&pos, &pair)).abs() / load;
+        worst = worst.max(e);
+    }
+    eprintln!("pair loads differ by up to {differs:.4} of the mesh load; totals agree to {worst:.2e}");
+    assert!(differs > 5e-3, "the deformable split was not read");
+    assert!(worst < 1.5e-2, "{worst}");
+}

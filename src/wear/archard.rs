@@ -291,6 +291,9 @@ pub enum WearError {
         /// Slices in the settings.
         settings: usize,
     },
+    /// The deformable contact law could not be built or solved for the state.
+    #[error("deformable contact: {0}")]
+    Contact(String),
     /// No wearing flank wears: nothing carries load or nothing slides.
     #[error("no wearing flank wears in a cycle (largest wear per revolution {rate:e} m): check input_torque and the wearing flanks")]
     NoWear {

@@ -9,10 +9,11 @@
 //! gear's cycles for those revolutions. The deviations enter the next
 //! cycle's separation tables ([`WornState::mesh_flanks`]).
 
+use crate::contact::deformable::set::DeformableSet;
 use crate::contact::hertz::{contact_modulus, line_contact};
 use crate::contact::ltca::{loaded_span, Refine, SetEquilibrium, SetModel};
 use crate::geometry::profile::ProfileDeviation;
-use crate::model::gear::{GearKind, GearSet, MeshKind};
+use crate::model::gear::{ContactModel, GearKind, GearSet, MeshKind};
 use crate::model::run::RunSettings;
 use crate::wear::archard::{
     passage_wear, Band, CycleWear, FlankWear, Limit, MeshPassage, PairLoads, PressureSource, Stop, WearError,
@@ -24,19 +25,40 @@ use crate::wear::flank::{
 };
 use crate::wear::state::{FlankExtreme, UpdateRecord, WornState};
 
-/// The pair loads of the whole-set quasi-static LTCA on a set's contact models.
+/// The pair loads of the whole-set quasi-static LTCA on a set's contact
+/// models, and on the deformable law when the set asks for it.
 struct QuasiStaticLoads<'a> {
     wear: &'a WearModel,
     model: &'a SetModel,
+    law: Option<&'a DeformableSet>,
 }
 impl PairLoads for QuasiStaticLoads<'_> {
     fn engagement(&self, mesh: MeshKind) -> (f64, f64) {
-        self.wear.engagement(self.model, mesh)
+        self.wear.engagement(self.model, self.law, mesh)
     }
 
     fn slice_loads(&self, mesh: MeshKind, position: &[f64]) -> Vec<Vec<Vec<f64>>> {
-        self.wear.quasi_static_loads(self.model, mesh, position)
+        self.wear.quasi_static_loads(self.model, self.law, mesh, position)
     }
+}
+
+/// The deformable law of a worn state's flanks (one transverse slice: the
+/// state's slices must carry the same deviations).
+fn deformable_law(set: &GearSet, model: &SetModel) -> Result<std::sync::Arc<DeformableSet>, WearError> {
+    let one = |kind: MeshKind| {
+        let slices = model.flanks(kind);
+        if slices.iter().all(|f| *f == slices[0]) {
+            Ok(slices[0].clone())
+        } else {
+            Err(WearError::Contact(format!(
+                "the deformable law is transverse (one face slice), but the worn {kind:?} flanks differ across \
+                 the face ({} slices): use dynamics.contact = \"pair\" for this state",
+                slices.len()
+            )))
+        }
+    };
+    let (sp, rp) = (one(MeshKind::SunPlanet)?, one(MeshKind::RingPlanet)?);
+    DeformableSet::of_gear_set(set, &sp, &rp).map_err(|e| WearError::Contact(e.to_string()))
 }
 /// The Archard wear model of a gear set.
 #[derive(Clone, Debug)]
@@ -160,8 +182,19 @@ impl WearModel {
             PressureSource::QuasiStatic => {
                 self.check(state)?;
                 let model = state.set_model(&self.set);
-                let loads = QuasiStaticLoads { wear: self, model: &model };
-                Ok(self.cycle_on(state, &model, &loads, source))
+                let law = match self.set.contact_model() {
+                    ContactModel::Pair => None,
+                    ContactModel::Deformable => Some(deformable_law(&self.set, &model)?),
+                };
+                let loads = QuasiStaticLoads { wear: self, model: &model, law: law.as_deref() };
+                let cycle = self.cycle_on(state, &model, &loads, source);
+                let finite = cycle.meshes.iter().all(|m| m.pair_load.iter().flatten().all(|f| f.is_finite()));
+                if !finite {
+                    return Err(WearError::Contact(
+                        "a tooth pair's load on the deformable law could not be solved (not finite)".into(),
+                    ));
+                }
+                Ok(cycle)
             }
             PressureSource::Dynamic { speed } => {
                 crate::wear::stepper::dynamic_cycle(self, state, speed).map(|(cycle, _)| cycle)
@@ -219,9 +252,11 @@ impl WearModel {
 
     /// Per-slice forces \[N\] of planet `planet`'s pair of `mesh` at `s`, the
     /// set solved from `guess` (updated to the new equilibrium).
+    #[allow(clippy::too_many_arguments)]
     fn pair_at(
         &self,
         model: &SetModel,
+        law: Option<&DeformableSet>,
         mesh: MeshKind,
         planet: usize,
         s: f64,
@@ -238,15 +273,32 @@ impl WearModel {
             }
         };
         m.pair_slice_forces(s, delta, forces);
+        if let Some(d) = law {
+            // The planet's mesh load from the set's equilibrium; its split among the mesh's
+            // pairs from the deformable law, spread evenly over the slices (a transverse law).
+            let load = m.force(s, delta, None).0;
+            let t = &d.mesh(mesh).mesh;
+            let pair = if load > 0.0 {
+                t.approach_for(s, load).and_then(|a| t.solve(s, a)).map_or(f64::NAN, |st| st.pair_force(0))
+            } else {
+                0.0
+            };
+            let n = forces.len().max(1);
+            forces.clear();
+            forces.resize(n, pair / n as f64);
+        }
         for f in forces.iter_mut() {
             // Under the drive load only the drive flanks touch; a back-flank
             // force (negative) would wear the coast flanks, which do not wear here.
-            *f = f.max(0.0);
+            // (A NaN stays NaN: the cycle refuses it.)
+            if *f < 0.0 {
+                *f = 0.0;
+            }
         }
     }
 
     /// First and last loaded position of the pairs of `mesh` over all planets \[m\].
-    fn engagement(&self, model: &SetModel, mesh: MeshKind) -> (f64, f64) {
+    fn engagement(&self, model: &SetModel, law: Option<&DeformableSet>, mesh: MeshKind) -> (f64, f64) {
         let path = match mesh {
             MeshKind::SunPlanet => model.sun_planet.path(),
             MeshKind::RingPlanet => model.ring_planet.path(),
@@ -256,7 +308,7 @@ impl WearModel {
         let mut forces = Vec::new();
         let loaded = |s: f64| {
             (0..planets).any(|p| {
-                self.pair_at(model, mesh, p, s, &mut guesses[p], &mut forces);
+                self.pair_at(model, law, mesh, p, s, &mut guesses[p], &mut forces);
                 forces.iter().any(|f| *f > 0.0)
             })
         };
@@ -384,7 +436,13 @@ impl WearModel {
 
     /// Per-slice loads `[planet][slice][r]` \[N\] of each planet's pair of
     /// `mesh` at `position` \[m\] from the whole-set quasi-static LTCA.
-    fn quasi_static_loads(&self, model: &SetModel, mesh: MeshKind, position: &[f64]) -> Vec<Vec<Vec<f64>>> {
+    fn quasi_static_loads(
+        &self,
+        model: &SetModel,
+        law: Option<&DeformableSet>,
+        mesh: MeshKind,
+        position: &[f64],
+    ) -> Vec<Vec<Vec<f64>>> {
         let planets = model.planet_angles.len();
         let mut loads = vec![Vec::new(); planets];
         let mut forces = Vec::new();
@@ -392,7 +450,7 @@ impl WearModel {
             let mut guess = SetEquilibrium::unloaded(planets);
             let mut per_slice = vec![Vec::with_capacity(position.len()); self.settings.face_slices];
             for s in position {
-                self.pair_at(model, mesh, p, *s, &mut guess, &mut forces);
+                self.pair_at(model, law, mesh, p, *s, &mut guess, &mut forces);
                 for (j, f) in forces.iter().enumerate() {
                     if let Some(v) = per_slice.get_mut(j) {
                         v.push(*f);
