@@ -304,8 +304,9 @@ fn use_depth(body: &CurveBody, roll: f64) -> f64 {
 /// mesh over the drive table's range and 500 over the back table's: the
 /// largest error in F over the nominal load, and in ∂F/∂δ over the mean
 /// mesh stiffness, and in ∂F/∂s over F_nom/p_b (max, 99th percentile and rms
-/// printed). Bounds from the measurement (default spec: max |ΔF| 6.3e-3
-/// F_nom, rms 4.2e-4 F_nom for the sun mesh), with margin.
+/// printed). Bounds from the measurement (default spec: max |ΔF| 4.4e-3
+/// F_nom, rms 2.1e-4 F_nom, rms ∂F/∂δ 0.021 k_mean over both meshes), with
+/// margin.
 #[test]
 fn force_table_interpolates_the_exact_law() {
     let set = example();
@@ -347,10 +348,10 @@ fn force_table_interpolates_the_exact_law() {
              |Δ∂F/∂δ|/k_mean {:.2e} {:.2e} {:.2e}; |Δ∂F/∂s|·p_b/F_nom {:.2e} {:.2e} {:.2e}",
             ef.0, ef.1, ef.2, ek.0, ek.1, ek.2, es.0, es.1, es.2
         );
-        // The force is continuous but has a kink where a pair starts to carry load (Johnson's
-        // term softens the onset only logarithmically) and where a tip corner enters: the
-        // interpolation is first order there, accurate elsewhere.
-        assert!(ef.0 < 1.5e-2 && ef.2 < 1e-3 && ek.2 < 0.1, "{ef:?} {ek:?}");
+        // The force is continuous but has a kink where a further pair starts to carry load
+        // (Johnson's term softens the onset only logarithmically) and where a tip corner enters:
+        // the interpolation is first order there, accurate elsewhere.
+        assert!(ef.0 < 8e-3 && ef.2 < 5e-4 && ek.2 < 0.04, "{ef:?} {ek:?}");
     }
 }
 

@@ -57,13 +57,22 @@ impl Scene {
         s
     }
 
-    /// The calibrated example with deformable-tooth contact in place of the
-    /// pair model: every other parameter as [`Scene::example_2004`], so what
-    /// moves between the two is the contact law's doing (docs/DEFORMABLE.md).
+    /// The example on deformable-tooth contact (the study's deformable gear
+    /// bodies), calibrated on that law to the same targets with the same
+    /// free parameters and choices as [`Scene::example_2004`]: what differs
+    /// from it is the contact law and the three values the calibration
+    /// fits on it (docs/DEFORMABLE.md).
     pub fn example_2004_deformable() -> Self {
         let mut s = Self::example_2004();
         s.name = "example-2004-deformable".into();
         s.dynamics.contact = super::ContactModel::Deformable;
+        // `planetwear calibrate --plan example-2004-deformable` (the plan:
+        // src/scene/example-2004-deformable.calibration.toml; five digits).
+        let chamfer = ChamferSpec { edge_carries_load: false, ..ChamferSpec::new(0.21447, 45.0) };
+        s.sun.tip_chamfer = Some(chamfer);
+        s.planet.tip_chamfer = Some(chamfer);
+        s.inertia.sun_inertia_kg_m2 = Some(1.4627e-4);
+        s.inertia.planet_inertia_kg_m2 = Some(1.1018e-5);
         s
     }
 

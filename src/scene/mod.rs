@@ -478,6 +478,7 @@ impl Scene {
     pub fn builtin_plan(name: &str) -> Option<&'static str> {
         match name {
             "example-2004" => Some(include_str!("example-2004.calibration.toml")),
+            "example-2004-deformable" => Some(include_str!("example-2004-deformable.calibration.toml")),
             _ => None,
         }
     }

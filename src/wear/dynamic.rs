@@ -10,7 +10,9 @@
 //!    ([`steady_state_observed`]: run-in, then a window of whole mesh cycles).
 //! 2. At every sample of the window, each mesh's reference position s and
 //!    approach δ give every pair's position s + k·p_b and its elastic load
-//!    per face slice ([`MeshModel::force`], [`MeshModel::pair_slice_forces`]);
+//!    per face slice ([`MeshContact::pairs`](crate::contact::mesh_law::MeshContact::pairs),
+//!    [`MeshContact::slice_forces`](crate::contact::mesh_law::MeshContact::slice_forces):
+//!    the pair model's slices, or the deformable law's one transverse slice);
 //!    back-flank forces count as zero, as in the quasi-static path (the
 //!    coast flanks do not wear). The viscous mesh damping force is not a
 //!    tooth load here, as it is not part of F^(m) (docs/MODEL_CHOICES.md).

@@ -27,9 +27,11 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::analysis::modes::{natural_modes, ModeClass};
+use crate::contact::deformable::set::DeformableSet;
 use crate::contact::ltca::SetModel;
+use crate::contact::separation::MeshFlanks;
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::model::gear::MeshKind;
+use crate::model::gear::{ContactModel, MeshKind};
 use crate::model::lumped::Fidelity;
 use crate::scene::{KeyError, Scene, SceneError};
 
@@ -302,13 +304,22 @@ impl<'a> Evaluator<'a> {
                         fail(format!("the model has {} distinct {class:?} frequencies", distinct.len()))
                     })?
                 }
-                Measure::DoubleContact { mesh } => {
-                    let m = match mesh {
-                        MeshKind::SunPlanet => &contact.sun_planet,
-                        MeshKind::RingPlanet => &contact.ring_planet,
-                    };
-                    m.double_contact_share(set.mesh_load_per_planet())
-                }
+                Measure::DoubleContact { mesh } => match set.contact_model() {
+                    ContactModel::Pair => {
+                        let m = match mesh {
+                            MeshKind::SunPlanet => &contact.sun_planet,
+                            MeshKind::RingPlanet => &contact.ring_planet,
+                        };
+                        m.double_contact_share(set.mesh_load_per_planet())
+                    }
+                    // The deformable law of the unworn set (built once per geometry).
+                    ContactModel::Deformable => {
+                        let flat = MeshFlanks::default();
+                        DeformableSet::of_gear_set(&set, &flat, &flat)
+                            .and_then(|d| d.mesh(*mesh).mesh.double_contact_share(set.mesh_load_per_planet()))
+                            .map_err(|e| fail(e.to_string()))?
+                    }
+                },
             };
             if !(v.is_finite() && v > 0.0) {
                 return Err(fail(format!("measured {v}, which cannot be fitted (it must be positive)")));

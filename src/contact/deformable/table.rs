@@ -224,7 +224,7 @@ impl FlankTable {
             return Some(MeshLaw::default());
         }
         let x = site.xi * self.inv_hx;
-        if !(x <= (self.nx - 1) as f64) {
+        if x.is_nan() || x > (self.nx - 1) as f64 {
             return None;
         }
         let (pf, ps, px) = self.patch(site.j, site.u, x);
