@@ -3,7 +3,8 @@
 # Stages: scene, loaded tooth contact analysis, natural modes, the native
 # speed sweep, the periodic states by continuation beside the marching
 # sweeps' jumps (6000-15000 rpm), the Archard wear model to κ = 6, the validation against the
-# study (rewrites docs/VALIDATION.md and docs/validation/), the FMU packed
+# study with the example on deformable-tooth contact beside it (rewrites docs/VALIDATION.md and
+# docs/validation/), the FMU packed
 # with the example's worn states, speed sweeps up and down at κ = 0, 2, 4, 6
 # through the FMU driven by fmpy, the study's plots and report
 # (out/study/report.md), and the drivetrain co-simulation example.
@@ -40,8 +41,8 @@ stage "continuation against marching (unworn)" "$bin" sweep --scene example-2004
     --method continuation --against-march --out out/continuation
 echo "== wear model to kappa = 6 (out/wear/: states, summary.json, plots)"
 stage "wear model to κ = 6" "$bin" wear run --scene example-2004 --to-kappa 6 --out out/wear
-echo "== validation against the study, full grid (docs/VALIDATION.md, docs/validation/)"
-stage "validation" "$bin" validate --out docs
+echo "== validation against the study, full grid, beside the example on deformable-tooth contact (docs/VALIDATION.md, docs/validation/)"
+stage "validation" "$bin" validate --out docs --compare example-2004-deformable
 echo "== FMU: pack fmu/planetwear.fmu (with the example's worn states)"
 stage "FMU pack" "$bin" fmu pack --out fmu/planetwear.fmu --library target/x86_64-unknown-linux-gnu/fmu/libplanetwear.so
 bash scripts/check_glibc.sh fmu/planetwear.fmu 2.17

@@ -312,6 +312,12 @@ struct ValidateArgs {
     /// The scene to validate (default the built-in example-2004).
     #[arg(long, default_value = "example-2004")]
     scene: String,
+    /// A second scene whose validation is set beside the first in the report (its rows read
+    /// differently, both verdicts): e.g. example-2004-deformable, the example on the
+    /// deformable-tooth contact law. Its sweeps are read once (no second reading at a third of
+    /// the tolerance) and its wear without the resolution check.
+    #[arg(long)]
+    compare: Option<String>,
 }
 
 /// Quasi-static loaded tooth contact analysis of both meshes and of the whole set.

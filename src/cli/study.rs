@@ -3,28 +3,41 @@
 
 use crate::*;
 
-pub(crate) fn validate_command(ValidateArgs { out, quick, scene }: ValidateArgs) -> Result<()> {
-    use planetwear::analysis::study::validation::{validate, ValidationPlan};
+pub(crate) fn validate_command(ValidateArgs { out, quick, scene, compare }: ValidateArgs) -> Result<()> {
+    use planetwear::analysis::study::validation::{headline, validate, ValidationPlan};
     let s = load_scene(&scene)?;
     let set = validated(&s)?;
     let plan = if quick { ValidationPlan::quick() } else { ValidationPlan::full() };
+    // The compared scene is loaded and checked before the long run.
+    let other_scene =
+        compare.as_deref().map(|c| load_scene(c).and_then(|o| validated(&o).map(|_| o))).transpose()?;
     let v = validate(&s, &plan).map_err(|e| anyhow::anyhow!("validation of {scene}: {e}"))?;
+    let other = match (&other_scene, &compare) {
+        (Some(o), Some(name)) => {
+            let plan =
+                ValidationPlan { attractor_check: false, wear_resolution_check: false, ..plan.clone() };
+            Some(validate(o, &plan).map_err(|e| anyhow::anyhow!("validation of --compare {name}: {e}"))?)
+        }
+        _ => None,
+    };
     let command = format!(
-        "planetwear validate --out {}{}{}",
+        "planetwear validate --out {}{}{}{}",
         out.display(),
         if quick { " --quick" } else { "" },
-        if scene == "example-2004" { String::new() } else { format!(" --scene {scene}") }
+        if scene == "example-2004" { String::new() } else { format!(" --scene {scene}") },
+        compare.as_deref().map(|c| format!(" --compare {c}")).unwrap_or_default()
     );
-    planetwear::report::validation::write_report(&v, &out, set.sun().face_width, &command)?;
+    planetwear::report::validation::write_report(&v, other.as_ref(), &out, set.sun().face_width, &command)?;
     for r in &v.rows {
         outln!("{:<9} {:<11} {:<40} ours {}", r.verdict.word(), r.evidence.word(), r.id, r.ours)?;
     }
-    outln!(
-        "{} ({:.0} s); report {}",
-        planetwear::analysis::study::validation::headline(&v.rows),
-        v.seconds,
-        out.join("VALIDATION.md").display()
-    )?;
+    outln!("{} ({:.0} s); report {}", headline(&v.rows), v.seconds, out.join("VALIDATION.md").display())?;
+    if let Some(o) = &other {
+        for r in &o.rows {
+            outln!("{:<9} {:<11} {:<40} {} {}", r.verdict.word(), r.evidence.word(), r.id, o.scene, r.ours)?;
+        }
+        outln!("{}: {} ({:.0} s)", o.scene, headline(&o.rows), o.seconds)?;
+    }
     Ok(())
 }
 
@@ -40,7 +53,7 @@ pub(crate) fn calibrate(plan: &str, out: Option<&Path>, show_plan: bool, json: b
         None => {
             let path = Path::new(plan);
             if !path.is_file() {
-                bail!("--plan {plan}: neither a built-in scene with a calibration (example-2004) nor a plan file");
+                bail!("--plan {plan}: neither a built-in scene with a calibration (example-2004, example-2004-deformable) nor a plan file");
             }
             let text = read_text(path, planetwear::files::InputKind::Plan, "--plan")?;
             (text, path.parent().map(Path::to_path_buf).unwrap_or_default())

@@ -48,9 +48,82 @@ fn cell(s: &str) -> String {
     s.replace('|', "\\|").replace('\n', " ")
 }
 
+/// The verdict as the tables write it.
+fn verdict_cell(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Pass => "pass",
+        Verdict::Fail => "**fail**",
+        Verdict::Undecided => "**undecided**",
+    }
+}
+
+/// The section that sets a second scene's validation (`other`, the same
+/// claims on another contact law or parameter choice) beside the report's:
+/// each scene's headline, then every row whose reading differs, with both
+/// readings, verdicts and times; the rows read alike are counted.
+pub fn comparison_markdown(v: &Validation, other: &Validation) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "
+## `{}` beside `{}`
+",
+        other.scene, v.scene
+    );
+    let _ = writeln!(
+        out,
+        "The same claims on the built-in scene `{}` ({:.0} s; its forced-response rows read once, without the \
+         second reading at a third of the tolerance, and its wear without the resolution check). `{}`: **{}** \
+         `{}`: **{}**\n",
+        other.scene,
+        other.seconds,
+        v.scene,
+        headline(&v.rows),
+        other.scene,
+        headline(&other.rows)
+    );
+    let _ = writeln!(
+        out,
+        "| claim | evidence | study | `{}` | verdict | `{}` | verdict | time s |",
+        v.scene, other.scene
+    );
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|");
+    let mut same = 0;
+    for r in &v.rows {
+        let Some(o) = other.row(&r.id) else { continue };
+        if o.ours == r.ours && o.verdict == r.verdict {
+            same += 1;
+            continue;
+        }
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {} | {} | {} | {:.2} / {:.2} |",
+            cell(&r.claim),
+            r.evidence.word(),
+            cell(&r.study),
+            cell(&r.ours),
+            verdict_cell(r.verdict),
+            cell(&o.ours),
+            verdict_cell(o.verdict),
+            r.seconds,
+            o.seconds
+        );
+    }
+    let rows = if same == 1 { "row reads" } else { "rows read" };
+    let _ = writeln!(out, "\n{same} further {rows} the same on both scenes.");
+    out
+}
+
 /// The report as Markdown; `figures` is the figures' folder relative to the report,
-/// `command` the command that made it.
-pub fn markdown(v: &Validation, previous: Option<&Validation>, figures: &str, command: &str) -> String {
+/// `command` the command that made it; `compare`, a second scene's validation
+/// set beside it ([`comparison_markdown`]).
+pub fn markdown(
+    v: &Validation,
+    previous: Option<&Validation>,
+    compare: Option<&Validation>,
+    figures: &str,
+    command: &str,
+) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "# Validation: the study's claims beside ours\n");
     let _ = writeln!(
@@ -126,13 +199,12 @@ pub fn markdown(v: &Validation, previous: Option<&Validation>, figures: &str, co
             cell(&r.study),
             cell(&r.ours),
             cell(&r.tolerance),
-            match r.verdict {
-                Verdict::Pass => "pass",
-                Verdict::Fail => "**fail**",
-                Verdict::Undecided => "**undecided**",
-            },
+            verdict_cell(r.verdict),
             r.seconds
         );
+    }
+    if let Some(other) = compare {
+        out.push_str(&comparison_markdown(v, other));
     }
     let _ = writeln!(out, "\n## How each row was computed\n");
     let _ = writeln!(out, "| row | method | error estimate |");
@@ -224,8 +296,11 @@ pub fn write_figures(v: &Validation, dir: &Path, face_width: f64) -> Result<Vec<
 
 /// Writes `DIR/VALIDATION.md`, the figures and `validation.json` into
 /// `DIR/validation/`, comparing with the JSON a previous run left there.
+/// With `compare`, a second scene's validation is set beside it in the
+/// report and its JSON written as `DIR/validation/<scene>.json`.
 pub fn write_report(
     v: &Validation,
+    compare: Option<&Validation>,
     out: &Path,
     face_width: f64,
     command: &str,
@@ -237,7 +312,13 @@ pub fn write_report(
         .ok()
         .and_then(|b| serde_json::from_slice(&b).ok());
     let mut files = write_figures(v, &figures, face_width)?;
-    let md = markdown(v, previous.as_ref(), "validation", command);
+    let md = markdown(v, previous.as_ref(), compare, "validation", command);
+    if let Some(other) = compare {
+        let path = figures.join(format!("{}.json", other.scene));
+        let json = serde_json::to_string_pretty(other).map_err(|e| PlotError::Backend(e.to_string()))?;
+        write_atomic(&path, json.as_bytes())?;
+        files.push(path);
+    }
     let json = serde_json::to_string_pretty(v).map_err(|e| PlotError::Backend(e.to_string()))?;
     // The next run reads it back: written only if it will be read.
     crate::files::check_output_size(&json_path, crate::files::InputKind::Record, json.len())?;
@@ -303,7 +384,7 @@ mod tests {
         let verdicts = changed_verdicts(&previous, &current);
         assert_eq!(verdicts, vec![("a".to_string(), Verdict::Pass, Verdict::Undecided)]);
         assert_eq!(moved_rows(&previous, &current), vec![("b".to_string(), 2.0, 2.5)]);
-        let md = markdown(&current, Some(&previous), "validation", "planetwear validate");
+        let md = markdown(&current, Some(&previous), None, "validation", "planetwear validate");
         // The headline counts the independent rows (a and b) apart from the identity (c).
         assert!(
             md.contains(
@@ -318,7 +399,23 @@ mod tests {
         assert!(md.contains("| claim a | independent | ≈ 1 | 1 | ±5 % | **undecided** |"), "{md}");
         assert!(md.contains("| claim c | identity | ≈ 1 | 3 | ±5 % | pass |"), "{md}");
         // Nothing changed: nothing listed.
-        let md = markdown(&current, Some(&current), "validation", "planetwear validate");
+        let md = markdown(&current, Some(&current), None, "validation", "planetwear validate");
         assert!(md.contains("No row moved") && !md.contains("Verdicts that changed"), "{md}");
+    }
+
+    #[test]
+    fn a_compared_scene_shows_the_rows_it_reads_differently() {
+        let ours = validation(vec![row("a", 1.0, Verdict::Pass), row("b", 2.0, Verdict::Fail)], None);
+        let mut other = validation(vec![row("a", 1.0, Verdict::Pass), row("b", 2.5, Verdict::Pass)], None);
+        other.scene = "example-2004-deformable".into();
+        let md = markdown(&ours, None, Some(&other), "validation", "planetwear validate");
+        assert!(md.contains("## `example-2004-deformable` beside `example-2004`"), "{md}");
+        assert!(
+            md.contains("| claim b | independent | ≈ 1 | 2 | **fail** | 2.5 | pass | 1.00 / 1.00 |"),
+            "{md}"
+        );
+        assert!(!md.contains("| claim a | independent | ≈ 1 | 1 | pass | 1 |"), "{md}");
+        assert!(md.contains("1 further row reads the same on both scenes."), "{md}");
+        assert!(md.contains("`example-2004-deformable`: **Independent evidence: 2 of 2 rows pass"), "{md}");
     }
 }
