@@ -3,6 +3,9 @@
 //! leaves the train's free rotation alone, and the energy the damping takes
 //! is ∫ vᵀCv dt.
 
+#[path = "support/energy_balance.rs"]
+mod energy_balance;
+use energy_balance::{energy_balance, Balance};
 use nalgebra::{DMatrix, DVector};
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
@@ -214,40 +217,8 @@ fn the_free_rotation_is_not_braked() {
 #[test]
 fn the_energy_balance_holds_with_rayleigh_damping() {
     let mut model = model_of(&rayleigh_scene(500.0, 2e-7));
-    let n = model.dim();
-    let omega = 3000.0 * std::f64::consts::PI / 30.0;
-    let start = planetwear::dynamics::response::static_state(&model, omega);
-    let fm = model.mesh_frequency_per_input_speed * omega;
-    let mut settings = GeneralizedAlphaSettings::chung_hulbert(1.0).unwrap();
-    settings.rtol = 1e-14;
-    settings.atol = 1e-15;
-    let mut ga = GeneralizedAlpha::new(settings).unwrap();
-    ga.init(&mut model, 0.0, &start.q, &start.v).unwrap();
-    let (steps_per_cycle, cycles) = (4000u64, 5u64);
-    let h = 1.0 / fm / steps_per_cycle as f64;
-    let zeros = vec![0.0; n];
-    let (mut fv, mut f0) = (vec![0.0; n], vec![0.0; n]);
-    let mut rates = |m: &mut PlanetaryDynamics, t: f64, q: &[f64], v: &[f64]| {
-        m.force(t, q, &zeros, &mut f0);
-        m.force(t, q, v, &mut fv);
-        let dissipated: f64 = -fv.iter().zip(&f0).zip(v).map(|((a, b), v)| (a - b) * v).sum::<f64>();
-        let (k, s, c, p) = m.energy(t, q, v);
-        (k + s + c, p + m.external_power(v) - dissipated, c, dissipated)
-    };
-    let (q, v) = (ga.q().to_vec(), ga.v().to_vec());
-    let (e0, mut p_prev, _, mut d_prev) = rates(&mut model, 0.0, &q, &v);
-    let (mut work, mut lost, mut worst, mut contact_scale) = (0.0, 0.0, 0.0_f64, 0.0_f64);
-    for k in 1..=steps_per_cycle * cycles {
-        let t = k as f64 * h;
-        ga.advance(&mut model, t, 1).unwrap();
-        let (q, v) = (ga.q().to_vec(), ga.v().to_vec());
-        let (e, p, c, d) = rates(&mut model, t, &q, &v);
-        work += 0.5 * h * (p + p_prev);
-        lost += 0.5 * h * (d + d_prev);
-        (p_prev, d_prev) = (p, d);
-        contact_scale = contact_scale.max(c);
-        worst = worst.max((e - e0 - work).abs());
-    }
+    let Balance { worst, dissipated: lost, contact: contact_scale } =
+        energy_balance(&mut model, 3000.0, 4000, 5);
     eprintln!("energy balance error {worst:e} J, dissipated {lost:e} J, contact energy {contact_scale:e} J");
     assert!(worst < 1e-3 * contact_scale, "balance error {worst} vs contact energy {contact_scale}");
     assert!(lost > 10.0 * worst, "the damping took {lost} J only, against the balance error {worst} J");

@@ -268,6 +268,30 @@ fn mean_stiffness(mesh: MeshContact<'_>, load: f64) -> Result<f64, DynamicsError
     Ok(CycleStats::of(&samples).mean)
 }
 
+/// The deformable law (when the set asks for it) and the mean tangent
+/// stiffnesses of the sun–planet and ring–planet meshes [N/m].
+type ContactLaws = (Option<Arc<DeformableSet>>, f64, f64);
+
+/// The deformable law when the set asks for it, and the mean tangent
+/// stiffness of the sun–planet and ring–planet meshes on the law read.
+fn contact_laws(set: &GearSet, contact: &SetModel) -> Result<ContactLaws, DynamicsError> {
+    let load = set.mesh_load_per_planet().max(1.0);
+    let deformable = match set.contact_model() {
+        ContactModel::Pair => None,
+        ContactModel::Deformable => Some(deformable_set(set, contact)?),
+    };
+    let view = |kind: MeshKind| match &deformable {
+        Some(d) => MeshContact::Deformable(d.mesh(kind)),
+        None => MeshContact::Pair(match kind {
+            MeshKind::SunPlanet => &contact.sun_planet,
+            MeshKind::RingPlanet => &contact.ring_planet,
+        }),
+    };
+    let k_sp = mean_stiffness(view(MeshKind::SunPlanet), load)?;
+    let k_rp = mean_stiffness(view(MeshKind::RingPlanet), load)?;
+    Ok((deformable, k_sp, k_rp))
+}
+
 /// The deformable law of both meshes for the flanks of `contact`: one
 /// transverse slice, so the flanks must be the same across the face.
 fn deformable_set(set: &GearSet, contact: &SetModel) -> Result<Arc<DeformableSet>, DynamicsError> {
@@ -296,20 +320,7 @@ impl PlanetaryDynamics {
     pub fn new(set: &GearSet, contact: SetModel) -> Result<Self, DynamicsError> {
         let alpha_s = set.operating_pressure_angle(MeshKind::SunPlanet);
         let alpha_r = set.operating_pressure_angle(MeshKind::RingPlanet);
-        let load = set.mesh_load_per_planet().max(1.0);
-        let deformable = match set.contact_model() {
-            ContactModel::Pair => None,
-            ContactModel::Deformable => Some(deformable_set(set, &contact)?),
-        };
-        let view = |kind: MeshKind| match &deformable {
-            Some(d) => MeshContact::Deformable(d.mesh(kind)),
-            None => MeshContact::Pair(match kind {
-                MeshKind::SunPlanet => &contact.sun_planet,
-                MeshKind::RingPlanet => &contact.ring_planet,
-            }),
-        };
-        let k_sp = mean_stiffness(view(MeshKind::SunPlanet), load)?;
-        let k_rp = mean_stiffness(view(MeshKind::RingPlanet), load)?;
+        let (deformable, k_sp, k_rp) = contact_laws(set, &contact)?;
         let b = &set.bodies();
         let (rbs, rbr, rbp, a) = (
             set.sun().base_radius(),
@@ -556,12 +567,11 @@ impl PlanetaryDynamics {
         if let Damping::Rayleigh { mass: mu, stiffness } = set.damping() {
             c_support = rayleigh_support_damping(&mass, &rigid, &k_support, mu, stiffness);
         }
-        // The deformable law has one event per flank and mesh: where the mesh starts or stops
-        // carrying load.
-        let slots = match &deformable {
-            Some(_) => vec![1, 1],
-            None => vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()],
-        };
+        // The deformable law has one event per flank and mesh: where the mesh starts or stops carrying load.
+        let slots = deformable.as_ref().map_or_else(
+            || vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()],
+            |_| vec![1, 1],
+        );
         let mut support_nz = Vec::new();
         for i in 0..dim {
             for j in 0..dim {
