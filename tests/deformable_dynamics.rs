@@ -6,7 +6,10 @@
 
 #[path = "support/energy_balance.rs"]
 mod energy_balance;
+#[path = "support/in_phase.rs"]
+mod in_phase;
 use energy_balance::{energy_balance, Balance};
+use in_phase::in_phase_scene;
 use nalgebra::DMatrix;
 use planetwear::contact::deformable::set::DeformableSet;
 use planetwear::contact::ltca::SetModel;
@@ -210,22 +213,25 @@ fn pair_loads(scene: Scene) -> (f64, Vec<f64>, Vec<f64>) {
     (pb, sun.position.clone(), sun.pair_load[0].clone())
 }
 
-/// The quasi-static wear reads the deformable law's split of each mesh load
-/// among its pairs: along the sun–planet passage of planet 1 the pair loads
-/// of `example-2004-deformable` differ from the pair model's on the same
-/// gear set (by more than 0.5 % of the mesh load
-/// somewhere), while the loads of the pairs one base pitch apart, which
-/// share the same mesh load, add up to the same total on both laws (to 1.5 %
-/// of the nominal mesh load, the grid's linear interpolation included; away
-/// from the passages' ends, where the two laws engage a grid step apart).
+/// The quasi-static wear runs on the deformable law: on the in-phase
+/// variant (every planet carries a quarter of the load at every position,
+/// tests/support/in_phase.rs) the pairs one base pitch apart along planet
+/// 1's sun–planet passage add up to the nominal mesh load (to 1.5 %: the
+/// grid's linear interpolation over the steep onset of a pair's load on
+/// Johnson's term gives up to 1.2 % at four positions, 0.5 % elsewhere;
+/// away from the passage's ends, where the loads jump: the tip corners
+/// carry none), and the pair loads
+/// differ from the pair model's on the same gear set (by more than 0.5 % of
+/// the mesh load somewhere).
 #[test]
 fn the_quasi_static_wear_reads_the_deformable_split() {
-    // The same gear set on either law.
-    let mut on_pairs = Scene::example_2004_deformable();
+    let mut on_pairs = in_phase_scene();
+    let mut deformable = in_phase_scene();
+    deformable.dynamics.contact = ContactModel::Deformable;
     on_pairs.dynamics.contact = ContactModel::Pair;
     let load = on_pairs.validate().unwrap().mesh_load_per_planet();
     let (pb, pos, pair) = pair_loads(on_pairs);
-    let (_, pos_d, deformable) = pair_loads(Scene::example_2004_deformable());
+    let (_, pos_d, loads) = pair_loads(deformable);
     let at = |x: &[f64], y: &[f64], s: f64| -> f64 {
         if s < x[0] || s > x[x.len() - 1] {
             return 0.0;
@@ -234,21 +240,23 @@ fn the_quasi_static_wear_reads_the_deformable_split() {
         let t = (s - x[i - 1]) / (x[i] - x[i - 1]);
         y[i - 1] + t * (y[i] - y[i - 1])
     };
-    let (mut differs, mut worst): (f64, f64) = (0.0, 0.0);
-    for (r, s) in pos.iter().enumerate() {
-        differs = differs.max((at(&pos_d, &deformable, *s) - pair[r]).abs() / load);
-        let total = |x: &[f64], y: &[f64]| (-2..=2).map(|k| at(x, y, s + f64::from(k) * pb)).sum::<f64>();
-        // Not where a shifted position lies within three grid steps of either passage's ends:
-        // the two laws engage a grid step apart, and the loads jump there (the tip corners carry none).
-        let h = pos[1] - pos[0];
-        let ends = [pos[0], pos[pos.len() - 1], pos_d[0], pos_d[pos_d.len() - 1]];
+    let h = pos_d[1] - pos_d[0];
+    let ends = [pos_d[0], pos_d[pos_d.len() - 1]];
+    let (mut differs, mut worst, mut read): (f64, f64, usize) = (0.0, 0.0, 0);
+    for (r, s) in pos_d.iter().enumerate() {
+        differs = differs.max((loads[r] - at(&pos, &pair, *s)).abs() / load);
         if (-2..=2).any(|k| ends.iter().any(|e| (s + f64::from(k) * pb - e).abs() < 3.0 * h)) {
             continue;
         }
-        let e = (total(&pos_d, &deformable) - total(&pos, &pair)).abs() / load;
-        worst = worst.max(e);
+        let total = (-2..=2).map(|k| at(&pos_d, &loads, s + f64::from(k) * pb)).sum::<f64>();
+        worst = worst.max((total / load - 1.0).abs());
+        read += 1;
     }
-    eprintln!("pair loads differ by up to {differs:.4} of the mesh load; totals agree to {worst:.2e}");
+    eprintln!(
+        "pair loads differ from the pair model's by up to {differs:.4} of the mesh load; the pairs sharing \
+         it add up to it within {worst:.2e} ({read} positions)"
+    );
+    assert!(read > 50);
     assert!(differs > 5e-3, "the deformable split was not read");
     assert!(worst < 1.5e-2, "{worst}");
 }

@@ -782,6 +782,19 @@ pub fn mesh_ltca(set: &GearSet, model: &MeshModel, load: f64, samples: usize) ->
     out
 }
 
+/// A mesh's force \[N\] and tangent stiffness [N/m] at reference position s
+/// and approach δ: what the set's equilibrium reads of a mesh law.
+pub trait MeshForce {
+    /// (F, ∂F/∂δ) at (s, δ).
+    fn force_stiffness(&self, s: f64, delta: f64) -> (f64, f64);
+}
+
+impl MeshForce for MeshModel {
+    fn force_stiffness(&self, s: f64, delta: f64) -> (f64, f64) {
+        self.force(s, delta, None)
+    }
+}
+
 /// Contact models of both meshes of a set with its planet phasing.
 #[derive(Clone, Debug)]
 pub struct SetModel {
@@ -864,6 +877,20 @@ impl SetModel {
     /// starting the iterations from `guess` (a neighbouring equilibrium or
     /// [`SetEquilibrium::unloaded`]).
     pub fn equilibrium(&self, total: f64, lambda: f64, guess: &SetEquilibrium) -> SetEquilibrium {
+        self.equilibrium_on(&self.sun_planet, &self.ring_planet, total, lambda, guess)
+    }
+
+    /// [`Self::equilibrium`] with the mesh laws `sp` (sun–planet) and `rp`
+    /// (ring–planet) in place of the pair models (the deformable law: the
+    /// same paths of contact and phasing).
+    pub fn equilibrium_on(
+        &self,
+        sp: &dyn MeshForce,
+        rp: &dyn MeshForce,
+        total: f64,
+        lambda: f64,
+        guess: &SetEquilibrium,
+    ) -> SetEquilibrium {
         let n = self.planet_angles.len();
         let guesses: Vec<f64> =
             (0..n).map(|p| guess.sun_mesh_approach.get(p).copied().unwrap_or(0.0)).collect();
@@ -871,11 +898,11 @@ impl SetModel {
             let mut f = 0.0;
             let mut k = 0.0;
             for (p, guess) in guesses.iter().enumerate() {
-                let (fp, x) = self.planet_load(p, lambda, u, *guess);
+                let (fp, x) = self.planet_load_on(sp, rp, p, lambda, u, *guess);
                 f += fp;
                 // Series stiffness of the planet's two meshes at this state.
-                let ks = self.sun_planet.force(self.sun_position(p, lambda), x, None).1;
-                let kr = self.ring_planet.force(self.ring_position(p, lambda), u - x, None).1;
+                let ks = sp.force_stiffness(self.sun_position(p, lambda), x).1;
+                let kr = rp.force_stiffness(self.ring_position(p, lambda), u - x).1;
                 if ks + kr > 0.0 {
                     k += ks * kr / (ks + kr);
                 }
@@ -889,7 +916,7 @@ impl SetModel {
             planet_load: Vec::with_capacity(n),
         };
         for (p, guess) in guesses.iter().enumerate() {
-            let (f, x) = self.planet_load(p, lambda, us, *guess);
+            let (f, x) = self.planet_load_on(sp, rp, p, lambda, us, *guess);
             out.sun_mesh_approach.push(x);
             out.planet_load.push(f);
         }
@@ -899,15 +926,28 @@ impl SetModel {
     /// Load \[N\] through planet `n` when the sun has advanced `u_s` \[m\]
     /// elastically, with the approach of its sun mesh.
     pub fn planet_load(&self, n: usize, lambda: f64, u_s: f64, guess: f64) -> (f64, f64) {
+        self.planet_load_on(&self.sun_planet, &self.ring_planet, n, lambda, u_s, guess)
+    }
+
+    /// [`Self::planet_load`] on the mesh laws `sp` and `rp`.
+    fn planet_load_on(
+        &self,
+        sp: &dyn MeshForce,
+        rp: &dyn MeshForce,
+        n: usize,
+        lambda: f64,
+        u_s: f64,
+        guess: f64,
+    ) -> (f64, f64) {
         let ss = self.sun_position(n, lambda);
         let sr = self.ring_position(n, lambda);
         let g = |x: f64| {
-            let (fs, ks) = self.sun_planet.force(ss, x, None);
-            let (fr, kr) = self.ring_planet.force(sr, u_s - x, None);
+            let (fs, ks) = sp.force_stiffness(ss, x);
+            let (fr, kr) = rp.force_stiffness(sr, u_s - x);
             (fs - fr, ks + kr)
         };
         let x = solve_increasing(g, 0.0, guess);
-        (self.sun_planet.force(ss, x, None).0, x)
+        (sp.force_stiffness(ss, x).0, x)
     }
 }
 

@@ -11,7 +11,7 @@
 
 use crate::contact::deformable::set::DeformableSet;
 use crate::contact::hertz::{contact_modulus, line_contact};
-use crate::contact::ltca::{loaded_span, Refine, SetEquilibrium, SetModel};
+use crate::contact::ltca::{loaded_span, MeshForce, Refine, SetEquilibrium, SetModel};
 use crate::geometry::profile::ProfileDeviation;
 use crate::model::gear::{ContactModel, GearKind, GearSet, MeshKind};
 use crate::model::run::RunSettings;
@@ -265,7 +265,13 @@ impl WearModel {
     ) {
         let total = self.set.mesh_load_per_planet() * model.planet_angles.len() as f64;
         let lambda = Self::travel(model, &self.set, mesh, planet, s);
-        *guess = model.equilibrium(total, lambda, guess);
+        // The set's equilibrium on the law the scene chose: the planets' shares and each
+        // mesh's approach.
+        let (sp, rp): (&dyn MeshForce, &dyn MeshForce) = match law {
+            Some(d) => (&d.sun_planet, &d.ring_planet),
+            None => (&model.sun_planet, &model.ring_planet),
+        };
+        *guess = model.equilibrium_on(sp, rp, total, lambda, guess);
         let (m, delta) = match mesh {
             MeshKind::SunPlanet => (&model.sun_planet, guess.sun_mesh_approach[planet]),
             MeshKind::RingPlanet => {
@@ -274,15 +280,9 @@ impl WearModel {
         };
         m.pair_slice_forces(s, delta, forces);
         if let Some(d) = law {
-            // The planet's mesh load from the set's equilibrium; its split among the mesh's
-            // pairs from the deformable law, spread evenly over the slices (a transverse law).
-            let load = m.force(s, delta, None).0;
-            let t = &d.mesh(mesh).mesh;
-            let pair = if load > 0.0 {
-                t.approach_for(s, load).and_then(|a| t.solve(s, a)).map_or(f64::NAN, |st| st.pair_force(0))
-            } else {
-                0.0
-            };
+            // The pair's share of its mesh by the deformable law's joint solution at that
+            // approach, spread evenly over the slices (a transverse law).
+            let pair = d.mesh(mesh).mesh.solve(s, delta).map_or(f64::NAN, |st| st.pair_force(0));
             let n = forces.len().max(1);
             forces.clear();
             forces.resize(n, pair / n as f64);

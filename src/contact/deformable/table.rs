@@ -28,7 +28,7 @@
 //! interpolant (two-point Gauss–Legendre per cell of a cubic).
 
 use crate::contact::deformable::law::{check_finite, DeformableError, DeformableMesh, Flank, FlankProblem};
-use crate::contact::ltca::MeshLaw;
+use crate::contact::ltca::{MeshForce, MeshLaw};
 
 /// How to tabulate the mesh force.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -383,5 +383,13 @@ impl TabulatedMesh {
     /// The table.
     pub fn table(&self) -> &ForceTable {
         &self.table
+    }
+}
+
+impl MeshForce for TabulatedMesh {
+    /// The table's force and tangent stiffness (NaN where the law cannot be
+    /// evaluated: a non-finite state).
+    fn force_stiffness(&self, s: f64, delta: f64) -> (f64, f64) {
+        self.force_tangents(s, delta).map_or((f64::NAN, f64::NAN), |l| (l.force, l.approach_stiffness))
     }
 }
