@@ -16,6 +16,23 @@ pub struct Balance {
     pub contact: f64,
 }
 
+impl Balance {
+    /// Prints the balance and asserts that it closes to 1e-3 of the contact
+    /// energy and that the damping took more than ten times its error
+    /// (leaving the damping out would break the balance).
+    pub fn assert_closes(&self) {
+        let Balance { worst, dissipated, contact } = self;
+        eprintln!(
+            "energy balance error {worst:e} J, dissipated {dissipated:e} J, contact energy {contact:e} J"
+        );
+        assert!(*worst < 1e-3 * contact, "balance error {worst} vs contact energy {contact}");
+        assert!(
+            *dissipated > 10.0 * worst,
+            "the damping took {dissipated} J only, against the balance error {worst} J"
+        );
+    }
+}
+
 /// Runs `model` from its static state at `rpm` with generalized-α (ρ∞ = 1,
 /// tolerances 1e-14) at `steps_per_cycle` steps per mesh cycle for `cycles`
 /// mesh cycles, integrating the work rates by the trapezoidal rule; the
