@@ -256,3 +256,26 @@ fn the_quasi_static_wear_reads_the_deformable_split() {
     assert!(differs > 5e-3, "the deformable split was not read");
     assert!(worst < 1.5e-2, "{worst}");
 }
+
+/// A worn state whose flanks differ across the face cannot run on the
+/// transverse deformable law: the dynamic model refuses it with a message
+/// naming `dynamics.contact`, and builds the same state with uniform flanks.
+#[test]
+fn flanks_that_differ_across_the_face_are_refused() {
+    use planetwear::geometry::profile::ProfileDeviation;
+    let set = Scene::example_2004_deformable().validate().unwrap();
+    let worn = MeshFlanks {
+        gear1_drive: ProfileDeviation {
+            roll: vec![0.2, 0.5],
+            depth: vec![2e-6, 1e-6],
+            ..ProfileDeviation::none()
+        },
+        ..MeshFlanks::default()
+    };
+    let uneven =
+        SetModel::with_flanks(&set, &[worn.clone(), MeshFlanks::default()], &vec![MeshFlanks::default(); 2]);
+    let e = PlanetaryDynamics::new(&set, uneven).err().expect("refused").to_string();
+    assert!(e.contains("dynamics.contact") && e.contains("face"), "{e}");
+    let even = SetModel::with_flanks(&set, &[worn.clone(), worn], &vec![MeshFlanks::default(); 2]);
+    assert!(PlanetaryDynamics::new(&set, even).is_ok());
+}

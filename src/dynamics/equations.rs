@@ -278,7 +278,9 @@ fn contact_laws(set: &GearSet, contact: &SetModel) -> Result<ContactLaws, Dynami
     let load = set.mesh_load_per_planet().max(1.0);
     let deformable = match set.contact_model() {
         ContactModel::Pair => None,
-        ContactModel::Deformable => Some(deformable_set(set, contact)?),
+        ContactModel::Deformable => Some(
+            DeformableSet::of_set_model(set, contact).map_err(|e| DynamicsError::Contact(e.to_string()))?,
+        ),
     };
     let view = |kind: MeshKind| match &deformable {
         Some(d) => MeshContact::Deformable(d.mesh(kind)),
@@ -290,29 +292,6 @@ fn contact_laws(set: &GearSet, contact: &SetModel) -> Result<ContactLaws, Dynami
     let k_sp = mean_stiffness(view(MeshKind::SunPlanet), load)?;
     let k_rp = mean_stiffness(view(MeshKind::RingPlanet), load)?;
     Ok((deformable, k_sp, k_rp))
-}
-
-/// The deformable law of both meshes for the flanks of `contact`: one
-/// transverse slice, so the flanks must be the same across the face.
-fn deformable_set(set: &GearSet, contact: &SetModel) -> Result<Arc<DeformableSet>, DynamicsError> {
-    let one = |kind: MeshKind| {
-        let slices = contact.flanks(kind);
-        if slices.iter().all(|f| *f == slices[0]) {
-            Ok(slices[0].clone())
-        } else {
-            Err(DynamicsError::InvalidParameter {
-                name: "dynamics.contact".into(),
-                value: "\"deformable\"".into(),
-                reason: format!(
-                    "the deformable law is transverse (one face slice), but the {kind:?} flanks differ \
-                     across the face ({} slices): use contact = \"pair\" for this worn state",
-                    slices.len()
-                ),
-            })
-        }
-    };
-    let (sp, rp) = (one(MeshKind::SunPlanet)?, one(MeshKind::RingPlanet)?);
-    DeformableSet::of_gear_set(set, &sp, &rp).map_err(|e| DynamicsError::Contact(e.to_string()))
 }
 
 impl PlanetaryDynamics {

@@ -42,24 +42,6 @@ impl PairLoads for QuasiStaticLoads<'_> {
     }
 }
 
-/// The deformable law of a worn state's flanks (one transverse slice: the
-/// state's slices must carry the same deviations).
-fn deformable_law(set: &GearSet, model: &SetModel) -> Result<std::sync::Arc<DeformableSet>, WearError> {
-    let one = |kind: MeshKind| {
-        let slices = model.flanks(kind);
-        if slices.iter().all(|f| *f == slices[0]) {
-            Ok(slices[0].clone())
-        } else {
-            Err(WearError::Contact(format!(
-                "the deformable law is transverse (one face slice), but the worn {kind:?} flanks differ across \
-                 the face ({} slices): use dynamics.contact = \"pair\" for this state",
-                slices.len()
-            )))
-        }
-    };
-    let (sp, rp) = (one(MeshKind::SunPlanet)?, one(MeshKind::RingPlanet)?);
-    DeformableSet::of_gear_set(set, &sp, &rp).map_err(|e| WearError::Contact(e.to_string()))
-}
 /// The Archard wear model of a gear set.
 #[derive(Clone, Debug)]
 pub struct WearModel {
@@ -184,7 +166,10 @@ impl WearModel {
                 let model = state.set_model(&self.set);
                 let law = match self.set.contact_model() {
                     ContactModel::Pair => None,
-                    ContactModel::Deformable => Some(deformable_law(&self.set, &model)?),
+                    ContactModel::Deformable => Some(
+                        DeformableSet::of_set_model(&self.set, &model)
+                            .map_err(|e| WearError::Contact(e.to_string()))?,
+                    ),
                 };
                 let loads = QuasiStaticLoads { wear: self, model: &model, law: law.as_deref() };
                 let cycle = self.cycle_on(state, &model, &loads, source);
@@ -278,14 +263,16 @@ impl WearModel {
                 (&model.ring_planet, guess.sun_approach - guess.sun_mesh_approach[planet])
             }
         };
-        m.pair_slice_forces(s, delta, forces);
-        if let Some(d) = law {
-            // The pair's share of its mesh by the deformable law's joint solution at that
-            // approach, spread evenly over the slices (a transverse law).
-            let pair = d.mesh(mesh).mesh.solve(s, delta).map_or(f64::NAN, |st| st.pair_force(0));
-            let n = forces.len().max(1);
-            forces.clear();
-            forces.resize(n, pair / n as f64);
+        match law {
+            None => m.pair_slice_forces(s, delta, forces),
+            Some(d) => {
+                // The pair's share of its mesh by the deformable law's joint solution at that
+                // approach, spread evenly over the slices (a transverse law).
+                let pair = d.mesh(mesh).mesh.solve(s, delta).map_or(f64::NAN, |st| st.pair_force(0));
+                let n = model.flanks(mesh).len();
+                forces.clear();
+                forces.resize(n, pair / n as f64);
+            }
         }
         for f in forces.iter_mut() {
             // Under the drive load only the drive flanks touch; a back-flank

@@ -13,6 +13,7 @@ use std::sync::{Arc, Mutex};
 use crate::contact::deformable::body::{BodyCompliance, BodySettings};
 use crate::contact::deformable::law::{DeformableError, DeformableMesh, LocalContact};
 use crate::contact::deformable::table::{TableSpec, TabulatedMesh};
+use crate::contact::ltca::SetModel;
 use crate::contact::separation::MeshFlanks;
 use crate::model::gear::{GearSet, MeshKind};
 
@@ -97,6 +98,27 @@ impl DeformableSet {
             );
             Ok(Arc::new(Self { sun_planet: sp?, ring_planet: rp? }))
         })
+    }
+
+    /// The law of both meshes for the flank deviations of `contact` (a set's
+    /// contact models, worn or not): one transverse slice, so the flanks
+    /// must be the same across the face.
+    pub fn of_set_model(set: &GearSet, contact: &SetModel) -> Result<Arc<Self>, DeformableError> {
+        let one = |kind: MeshKind| {
+            let slices = contact.flanks(kind);
+            if slices.iter().all(|f| *f == slices[0]) {
+                Ok(slices[0].clone())
+            } else {
+                Err(DeformableError::Setting {
+                    name: "face slices with different flank deviations",
+                    value: slices.len() as f64,
+                    allowed:
+                        "flanks the same across the face: the deformable law is transverse (one slice); \
+                              use dynamics.contact = \"pair\" for this worn state",
+                })
+            }
+        };
+        Self::of_gear_set(set, &one(MeshKind::SunPlanet)?, &one(MeshKind::RingPlanet)?)
     }
 
     /// The law of mesh `kind`.
