@@ -274,7 +274,7 @@ fn flanks_that_differ_across_the_face_are_refused() {
     };
     let uneven =
         SetModel::with_flanks(&set, &[worn.clone(), MeshFlanks::default()], &vec![MeshFlanks::default(); 2]);
-    let e = PlanetaryDynamics::new(&set, uneven).err().expect("refused").to_string();
+    let e = PlanetaryDynamics::new(&set, uneven).expect_err("refused").to_string();
     assert!(e.contains("dynamics.contact") && e.contains("face"), "{e}");
     let even = SetModel::with_flanks(&set, &[worn.clone(), worn], &vec![MeshFlanks::default(); 2]);
     assert!(PlanetaryDynamics::new(&set, even).is_ok());
