@@ -9,8 +9,10 @@
 //! transmission error.
 
 use crate::contact::deformable::law::DeformableError;
+use crate::contact::deformable::set::DeformableSet;
 use crate::contact::deformable::table::TabulatedMesh;
-use crate::contact::ltca::{MeshModel, PairContact};
+use crate::contact::ltca::{MeshModel, PairContact, SetModel};
+use crate::model::gear::MeshKind;
 use crate::model::mesh::PathOfContact;
 
 /// A mesh's contact law, borrowed.
@@ -22,7 +24,19 @@ pub enum MeshContact<'a> {
     Deformable(&'a TabulatedMesh),
 }
 
-impl MeshContact<'_> {
+impl<'a> MeshContact<'a> {
+    /// Mesh `kind`'s law: the deformable law's when there is one, else the
+    /// pair model of `contact`.
+    pub fn of(contact: &'a SetModel, deformable: Option<&'a DeformableSet>, kind: MeshKind) -> Self {
+        match deformable {
+            Some(d) => Self::Deformable(d.mesh(kind)),
+            None => Self::Pair(match kind {
+                MeshKind::SunPlanet => &contact.sun_planet,
+                MeshKind::RingPlanet => &contact.ring_planet,
+            }),
+        }
+    }
+
     /// The path of contact.
     pub fn path(&self) -> &PathOfContact {
         match self {

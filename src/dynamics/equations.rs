@@ -51,7 +51,7 @@ use crate::dynamics::solver::{
     LowRankJacobian, RankOneTerm, SecondOrderSystem, TangentSystem, TermCoefficients,
 };
 use crate::model::carrier_frame::CarrierFrame;
-use crate::model::gear::{ContactModel, Damping, Drive, GearSet, Member, MeshKind};
+use crate::model::gear::{Damping, Drive, GearSet, Member, MeshKind};
 use crate::model::lumped::{
     add_outer, full_index, planet_bearing_vectors, ring_mesh_vector, sun_mesh_vector, Coordinate, Fidelity,
     LumpedSet, Reduction,
@@ -276,19 +276,9 @@ type ContactLaws = (Option<Arc<DeformableSet>>, f64, f64);
 /// stiffness of the sun–planet and ring–planet meshes on the law read.
 fn contact_laws(set: &GearSet, contact: &SetModel) -> Result<ContactLaws, DynamicsError> {
     let load = set.mesh_load_per_planet().max(1.0);
-    let deformable = match set.contact_model() {
-        ContactModel::Pair => None,
-        ContactModel::Deformable => Some(
-            DeformableSet::of_set_model(set, contact).map_err(|e| DynamicsError::Contact(e.to_string()))?,
-        ),
-    };
-    let view = |kind: MeshKind| match &deformable {
-        Some(d) => MeshContact::Deformable(d.mesh(kind)),
-        None => MeshContact::Pair(match kind {
-            MeshKind::SunPlanet => &contact.sun_planet,
-            MeshKind::RingPlanet => &contact.ring_planet,
-        }),
-    };
+    let deformable =
+        DeformableSet::of_set_model(set, contact).map_err(|e| DynamicsError::Contact(e.to_string()))?;
+    let view = |kind: MeshKind| MeshContact::of(contact, deformable.as_deref(), kind);
     let k_sp = mean_stiffness(view(MeshKind::SunPlanet), load)?;
     let k_rp = mean_stiffness(view(MeshKind::RingPlanet), load)?;
     Ok((deformable, k_sp, k_rp))
@@ -827,10 +817,7 @@ impl PlanetaryDynamics {
 
     /// The contact law of a mesh, pair or deformable.
     pub fn mesh_model(&self, kind: MeshKind) -> MeshContact<'_> {
-        match &self.deformable {
-            Some(d) => MeshContact::Deformable(d.mesh(kind)),
-            None => MeshContact::Pair(self.model(kind)),
-        }
+        MeshContact::of(&self.contact, self.deformable.as_deref(), kind)
     }
 
     /// Full Lin–Parker coordinates of a reduced coordinate vector.

@@ -13,7 +13,7 @@ use crate::contact::deformable::set::DeformableSet;
 use crate::contact::hertz::{contact_modulus, line_contact};
 use crate::contact::ltca::{loaded_span, MeshForce, Refine, SetEquilibrium, SetModel};
 use crate::geometry::profile::ProfileDeviation;
-use crate::model::gear::{ContactModel, GearKind, GearSet, MeshKind};
+use crate::model::gear::{GearKind, GearSet, MeshKind};
 use crate::model::run::RunSettings;
 use crate::wear::archard::{
     passage_wear, Band, CycleWear, FlankWear, Limit, MeshPassage, PairLoads, PressureSource, Stop, WearError,
@@ -164,13 +164,8 @@ impl WearModel {
             PressureSource::QuasiStatic => {
                 self.check(state)?;
                 let model = state.set_model(&self.set);
-                let law = match self.set.contact_model() {
-                    ContactModel::Pair => None,
-                    ContactModel::Deformable => Some(
-                        DeformableSet::of_set_model(&self.set, &model)
-                            .map_err(|e| WearError::Contact(e.to_string()))?,
-                    ),
-                };
+                let law = DeformableSet::of_set_model(&self.set, &model)
+                    .map_err(|e| WearError::Contact(e.to_string()))?;
                 let loads = QuasiStaticLoads { wear: self, model: &model, law: law.as_deref() };
                 let cycle = self.cycle_on(state, &model, &loads, source);
                 let finite = cycle.meshes.iter().all(|m| m.pair_load.iter().flatten().all(|f| f.is_finite()));

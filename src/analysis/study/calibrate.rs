@@ -29,9 +29,9 @@ use serde::{Deserialize, Serialize};
 use crate::analysis::modes::{natural_modes, ModeClass};
 use crate::contact::deformable::set::DeformableSet;
 use crate::contact::ltca::SetModel;
-use crate::contact::separation::MeshFlanks;
+use crate::contact::mesh_law::MeshContact;
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::model::gear::{ContactModel, MeshKind};
+use crate::model::gear::MeshKind;
 use crate::model::lumped::Fidelity;
 use crate::scene::{KeyError, Scene, SceneError};
 
@@ -304,22 +304,17 @@ impl<'a> Evaluator<'a> {
                         fail(format!("the model has {} distinct {class:?} frequencies", distinct.len()))
                     })?
                 }
-                Measure::DoubleContact { mesh } => match set.contact_model() {
-                    ContactModel::Pair => {
-                        let m = match mesh {
-                            MeshKind::SunPlanet => &contact.sun_planet,
-                            MeshKind::RingPlanet => &contact.ring_planet,
-                        };
-                        m.double_contact_share(set.mesh_load_per_planet())
+                Measure::DoubleContact { mesh } => {
+                    // The law the scene chose, on the unworn set (kept once built).
+                    let law = DeformableSet::of_set_model(&set, &contact).map_err(|e| fail(e.to_string()))?;
+                    match MeshContact::of(&contact, law.as_deref(), *mesh) {
+                        MeshContact::Pair(m) => m.double_contact_share(set.mesh_load_per_planet()),
+                        MeshContact::Deformable(t) => t
+                            .mesh
+                            .double_contact_share(set.mesh_load_per_planet())
+                            .map_err(|e| fail(e.to_string()))?,
                     }
-                    // The deformable law of the unworn set (built once per geometry).
-                    ContactModel::Deformable => {
-                        let flat = MeshFlanks::default();
-                        DeformableSet::of_gear_set(&set, &flat, &flat)
-                            .and_then(|d| d.mesh(*mesh).mesh.double_contact_share(set.mesh_load_per_planet()))
-                            .map_err(|e| fail(e.to_string()))?
-                    }
-                },
+                }
             };
             if !(v.is_finite() && v > 0.0) {
                 return Err(fail(format!("measured {v}, which cannot be fitted (it must be positive)")));

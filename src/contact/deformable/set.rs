@@ -15,7 +15,7 @@ use crate::contact::deformable::law::{DeformableError, DeformableMesh, LocalCont
 use crate::contact::deformable::table::{TableSpec, TabulatedMesh};
 use crate::contact::ltca::SetModel;
 use crate::contact::separation::MeshFlanks;
-use crate::model::gear::{GearSet, MeshKind};
+use crate::model::gear::{ContactModel, GearSet, MeshKind};
 
 /// The smallest line load the tables are built for \[N/m\]: a set without
 /// input torque (a speed-driven run) still gets a table over the loads of
@@ -101,9 +101,13 @@ impl DeformableSet {
     }
 
     /// The law of both meshes for the flank deviations of `contact` (a set's
-    /// contact models, worn or not): one transverse slice, so the flanks
-    /// must be the same across the face.
-    pub fn of_set_model(set: &GearSet, contact: &SetModel) -> Result<Arc<Self>, DeformableError> {
+    /// contact models, worn or not) when the set asks for it
+    /// ([`GearSet::contact_model`]), `None` on the pair model: one transverse
+    /// slice, so the flanks must be the same across the face.
+    pub fn of_set_model(set: &GearSet, contact: &SetModel) -> Result<Option<Arc<Self>>, DeformableError> {
+        if set.contact_model() != ContactModel::Deformable {
+            return Ok(None);
+        }
         let one = |kind: MeshKind| {
             let slices = contact.flanks(kind);
             if slices.iter().all(|f| *f == slices[0]) {
@@ -118,7 +122,7 @@ impl DeformableSet {
                 })
             }
         };
-        Self::of_gear_set(set, &one(MeshKind::SunPlanet)?, &one(MeshKind::RingPlanet)?)
+        Self::of_gear_set(set, &one(MeshKind::SunPlanet)?, &one(MeshKind::RingPlanet)?).map(Some)
     }
 
     /// The law of mesh `kind`.
