@@ -200,6 +200,11 @@ struct RunArgs {
     /// multipliers as [re, im] and whether the orbit is stable.
     #[arg(long, default_value = "march")]
     method: String,
+    /// With --method harmonic-balance: condensed (Newton on the contact coordinates' harmonics
+    /// only, one planet's meshes where the planets are equally spaced and the orbit keeps their
+    /// symmetry; docs/PERIODIC.md §2) or full (every coordinate's harmonics).
+    #[arg(long, default_value = "condensed")]
+    balance: String,
 }
 
 /// Speed sweep with continuation: forced-response curves, CSV, plots.

@@ -70,10 +70,18 @@ pub(crate) fn simulate_command(
 const MAX_COMMUNICATION_POINTS: f64 = 1e7;
 
 pub(crate) fn run_command(
-    RunArgs { scene, wear_state, accept_state_difference, speed, json, plots, method }: RunArgs,
+    RunArgs { scene, wear_state, accept_state_difference, speed, json, plots, method, balance }: RunArgs,
 ) -> Result<()> {
     if !["march", "shooting", "harmonic-balance"].contains(&method.as_str()) {
         bail!("--method {method}: allowed are march, shooting, harmonic-balance");
+    }
+    let condensed = match balance.as_str() {
+        "condensed" => true,
+        "full" => false,
+        other => bail!("--balance {other}: allowed are condensed, full"),
+    };
+    if balance != "condensed" && method != "harmonic-balance" {
+        bail!("--balance applies to --method harmonic-balance only");
     }
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     let mut model = PlanetaryDynamics::new(
@@ -88,7 +96,9 @@ pub(crate) fn run_command(
     let (ss, solver) = match method.as_str() {
         "march" => (steady_state(&mut model, &set, &run, omega, None)?, None),
         periodic => {
-            let (ss, line, record) = periodic_point(&model, run.samples_per_mesh_cycle(), omega, periodic)?;
+            let method =
+                if periodic == "harmonic-balance" && condensed { "condensed-balance" } else { periodic };
+            let (ss, line, record) = periodic_point(&model, run.samples_per_mesh_cycle(), omega, method)?;
             (ss, Some((line, record)))
         }
     };
@@ -168,9 +178,13 @@ fn periodic_point(
     } else {
         String::new()
     };
-    let mut hb = HarmonicBalance::new(problem, settings).with_context(|| {
+    let hb = HarmonicBalance::new(problem, settings).with_context(|| {
         format!("harmonic balance at {rpm} rpm (H from the model's highest natural frequency)")
     })?;
+    if method == "condensed-balance" {
+        return condensed_point(hb, omega, &held);
+    }
+    let mut hb = hb;
     let orbit = hb.solve(omega, None).with_context(|| {
         format!(
             "harmonic balance at {rpm} rpm (H = {}); --method shooting or march may find the response",
@@ -208,6 +222,74 @@ fn periodic_point(
         "stable": stable,
     });
     Ok((hb.steady_state(&orbit)?, line, record))
+}
+
+/// [`periodic_point`] by the harmonic balance condensed onto the contact coordinates, one
+/// planet's meshes where the set and the orbit allow; where its Newton does not converge from
+/// the static state, from the full balance's orbit (which starts from the march where it must).
+fn condensed_point(
+    hb: planetwear::dynamics::periodic::HarmonicBalance,
+    omega: f64,
+    held: &str,
+) -> Result<(SteadyState, String, serde_json::Value)> {
+    use planetwear::dynamics::periodic::{all_inside_unit_circle, CondensedBalance, Symmetry};
+    let rpm = rad_per_s_to_rpm(omega);
+    let settings = *hb.settings();
+    let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
+    let (orbit, report, from_full) = match cb.solve(omega, None) {
+        Ok((orbit, report)) => (orbit, report, false),
+        Err(first) => {
+            let full = cb.balance().solve(omega, None).with_context(|| {
+                format!(
+                    "harmonic balance at {rpm} rpm (H = {}): the condensed balance gave {first}",
+                    settings.harmonics
+                )
+            })?;
+            let guess = cb.coordinates_of(&full)?;
+            let (orbit, report) = cb.solve(omega, Some(&guess)).with_context(|| {
+                format!("condensed harmonic balance at {rpm} rpm from the full balance's orbit")
+            })?;
+            (orbit, report, true)
+        }
+    };
+    let multipliers = cb.balance().floquet_multipliers(&orbit, settings.samples)?;
+    let mu = multipliers.first().map_or(0.0, |m| m.modulus());
+    let stable = all_inside_unit_circle(&multipliers);
+    let meshes = match (&report.symmetry, &report.cyclic_refused) {
+        (Symmetry::Cyclic, _) => "planet 1's meshes, the others by the planets' symmetry".to_string(),
+        (_, Some(why)) => format!("every mesh ({why})"),
+        _ => "every mesh".to_string(),
+    };
+    let line = format!(
+        "harmonic balance condensed onto {} contact coordinates ({meshes}): H = {} harmonics{held}, N = {} samples, \
+         {} unknowns, {} Newton iterations, {} Jacobians{}; largest Floquet multiplier |μ| = {mu:.4} of the whole \
+         model ({})",
+        report.coordinates,
+        settings.harmonics,
+        settings.samples,
+        report.unknowns,
+        report.iterations,
+        orbit.factorizations,
+        if from_full { " (from the full balance's orbit)" } else { "" },
+        if stable { "stable" } else { "unstable: time marching leaves this orbit" }
+    );
+    let record = serde_json::json!({
+        "method": "harmonic-balance",
+        "balance": "condensed",
+        "harmonics": settings.harmonics,
+        "samples": settings.samples,
+        "contact_coordinates": report.coordinates,
+        "unknowns": report.unknowns,
+        "symmetry": report.symmetry,
+        "symmetry_residual": report.symmetry_residual,
+        "cyclic_refused": report.cyclic_refused,
+        "newton_iterations": report.iterations,
+        "jacobians": orbit.factorizations,
+        "from_full_balance": from_full,
+        "floquet_multipliers": multipliers.iter().map(|m| [m.re, m.im]).collect::<Vec<_>>(),
+        "stable": stable,
+    });
+    Ok((cb.balance().steady_state(&orbit)?, line, record))
 }
 
 pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {

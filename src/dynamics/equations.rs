@@ -80,6 +80,17 @@ impl Link {
     }
 }
 
+/// Where a mesh reads the model's coordinates q ([`PlanetaryDynamics::mesh_coordinates`]).
+#[derive(Clone, Copy, Debug)]
+pub struct MeshCoordinates<'a> {
+    /// Nonzero entries of the mesh vector b: approach δ = bᵀq.
+    pub approach: &'a [(usize, f64)],
+    /// Nonzero entries of the position vector p: position s = pᵀq + s₀.
+    pub position: &'a [(usize, f64)],
+    /// s₀ \[m\].
+    pub offset: f64,
+}
+
 /// Per-mesh state of the last force evaluation.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MeshState {
@@ -918,45 +929,104 @@ impl PlanetaryDynamics {
             }
             s += link.s0;
             let law = if let Some(d) = &self.deformable {
-                let table = d.mesh(link.kind);
                 if with_events {
-                    events[start..start + 2].copy_from_slice(&table.events(s, delta));
+                    events[start..start + 2].copy_from_slice(&d.mesh(link.kind).events(s, delta));
                     start += 2;
                 }
-                // A law that cannot be evaluated (a non-finite state) passes NaN on to the
-                // integrator, which refuses the step.
-                table.force_tangents(s, delta).unwrap_or(MeshLaw {
-                    force: f64::NAN,
-                    approach_stiffness: f64::NAN,
-                    position_derivative: f64::NAN,
-                    peak_pair_force: f64::NAN,
-                })
+                self.law_at(link.kind, s, delta)
             } else if with_events {
                 let end = start + 2 * self.slots[Self::slot_kind(link.kind)];
                 let law = self.model(link.kind).force_with_derivatives(s, delta, &mut events[start..end]);
                 start = end;
                 law
             } else {
-                self.model(link.kind).force_tangents(s, delta)
+                self.law_at(link.kind, s, delta)
             };
-            let damping_force = if law.approach_stiffness > 0.0 {
+            if law.approach_stiffness > 0.0 {
                 self.touch_stiffness[i] = law.approach_stiffness;
-                link.damping_at(self.mesh_stiffness_damping, law.approach_stiffness) * rate
-            } else {
-                0.0
-            };
-            self.meshes[i] = MeshState {
-                position: s,
-                approach: delta,
-                approach_rate: rate,
-                force: law.force,
-                stiffness: law.approach_stiffness,
-                position_derivative: law.position_derivative,
-                damping_force,
-                peak_pair_force: law.peak_pair_force,
-            };
+            }
+            self.meshes[i] = self.state_of(link, law, s, delta, rate);
         }
         self.events_scratch = events;
+    }
+
+    /// The law of a mesh of kind `kind` at position `s` and approach `delta`
+    /// (no event values). A law that cannot be evaluated (a non-finite state)
+    /// gives NaN, which the integrator and the periodic solvers refuse.
+    fn law_at(&self, kind: MeshKind, s: f64, delta: f64) -> MeshLaw {
+        match &self.deformable {
+            Some(d) => d.mesh(kind).force_tangents(s, delta).unwrap_or(MeshLaw {
+                force: f64::NAN,
+                approach_stiffness: f64::NAN,
+                position_derivative: f64::NAN,
+                peak_pair_force: f64::NAN,
+            }),
+            None => self.model(kind).force_tangents(s, delta),
+        }
+    }
+
+    /// A mesh's state from its law: the damping force acts while a pair touches.
+    fn state_of(&self, link: &Link, law: MeshLaw, s: f64, delta: f64, rate: f64) -> MeshState {
+        let damping_force = if law.approach_stiffness > 0.0 {
+            link.damping_at(self.mesh_stiffness_damping, law.approach_stiffness) * rate
+        } else {
+            0.0
+        };
+        MeshState {
+            position: s,
+            approach: delta,
+            approach_rate: rate,
+            force: law.force,
+            stiffness: law.approach_stiffness,
+            position_derivative: law.position_derivative,
+            damping_force,
+            peak_pair_force: law.peak_pair_force,
+        }
+    }
+
+    /// Mesh `i` alone at position `s` \[m\], approach `delta` \[m\] and approach
+    /// rate `rate` [m/s], with its viscous damping coefficient [N·s/m] at that
+    /// state (0 out of contact): what a solver that samples the contact
+    /// coordinates instead of the whole state evaluates. The model's last
+    /// evaluation is left as it was.
+    pub fn mesh_at(&self, i: usize, s: f64, delta: f64, rate: f64) -> (MeshState, f64) {
+        let link = &self.links[i];
+        let law = self.law_at(link.kind, s, delta);
+        let damping = if law.approach_stiffness > 0.0 {
+            link.damping_at(self.mesh_stiffness_damping, law.approach_stiffness)
+        } else {
+            0.0
+        };
+        (self.state_of(link, law, s, delta, rate), damping)
+    }
+
+    /// Number of event values of mesh `i` ([`Self::mesh_events_at`]).
+    pub fn mesh_event_count(&self, i: usize) -> usize {
+        if self.deformable.is_some() {
+            2
+        } else {
+            2 * self.slots[Self::slot_kind(self.links[i].kind)]
+        }
+    }
+
+    /// The event values of mesh `i` alone at position `s` \[m\] and approach
+    /// `delta` \[m\] into `out` ([`Self::mesh_event_count`] of them): their
+    /// sign changes are where its tooth pairs start or stop touching, as the
+    /// model's events.
+    pub fn mesh_events_at(&self, i: usize, s: f64, delta: f64, out: &mut [f64]) {
+        let kind = self.links[i].kind;
+        match &self.deformable {
+            Some(d) => out.copy_from_slice(&d.mesh(kind).events(s, delta)),
+            None => {
+                self.model(kind).force_with_derivatives(s, delta, out);
+            }
+        }
+    }
+
+    /// Where mesh `i` reads its coordinates.
+    pub fn mesh_coordinates(&self, i: usize) -> MeshCoordinates<'_> {
+        let link = &self.links[i];
+        MeshCoordinates { approach: &link.b_nz, position: &link.p_nz, offset: link.s0 }
     }
 }
 

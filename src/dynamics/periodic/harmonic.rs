@@ -28,8 +28,10 @@
 //! (docs/PERIODIC.md).
 
 mod arc;
+mod condensed;
 
 pub use arc::{refit, ArcLinear, ArcWork, ARC_CHORD_CONTRACTION, SPEED_DIFFERENCE};
+pub use condensed::{CondensedBalance, CondensedReport, Symmetry, CONDENSED_UNKNOWNS, SYMMETRY_TOLERANCE};
 
 use rustfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
@@ -405,38 +407,9 @@ fn assemble(
 ) {
     for b in 0..m {
         for a in 0..m {
-            let PairSpectrum { kc, ks, cc, cs } = &spectra[b * m + a];
-            // Σ ψ_l x φ_c by the product-to-sum identities, ψ the test functions
-            // (1; 2cos lθ; 2sin lθ, with the 1/N of the spectra), φ the basis functions.
-            let at = |row_block: usize, col_block: usize| (row_block * m + a, col_block * m + b);
-            let mut add = |(r, c): (usize, usize), v: f64| put(r, c, v);
-            add(at(0, 0), kc[0]);
-            for c in 1..=h.min(band) {
-                let cf = c as f64;
-                // Row of the constant: (1/N) Σ x cos cθ and Σ x sin cθ; with the damping of
-                // ẏ: cos → −c sin, sin → c cos.
-                add(at(0, 2 * c - 1), kc[c] - cf * cs[c]);
-                add(at(0, 2 * c), ks[c] + cf * cc[c]);
-                // Column of the constant (no velocity).
-                add(at(2 * c - 1, 0), 2.0 * kc[c]);
-                add(at(2 * c, 0), 2.0 * ks[c]);
-            }
-            for l in 1..=h {
-                for c in l.saturating_sub(band).max(1)..=(l + band).min(h) {
-                    let cf = c as f64;
-                    let d = l.abs_diff(c);
-                    // ks(c − l), odd in its argument.
-                    let sign = if c >= l { 1.0 } else { -1.0 };
-                    let (ka, kb, ks1, ks2) = (kc[d], kc[l + c], ks[l + c], sign * ks[d]);
-                    let (ca, cb, cs1, cs2) = (cc[d], cc[l + c], cs[l + c], sign * cs[d]);
-                    // (cos l, cos c) = A + B, (cos l, sin c) = S₁ + S₂,
-                    // (sin l, cos c) = S₁ − S₂, (sin l, sin c) = A − B.
-                    add(at(2 * l - 1, 2 * c - 1), ka + kb - cf * (cs1 + cs2));
-                    add(at(2 * l - 1, 2 * c), ks1 + ks2 + cf * (ca + cb));
-                    add(at(2 * l, 2 * c - 1), ks1 - ks2 - cf * (ca - cb));
-                    add(at(2 * l, 2 * c), ka - kb + cf * (cs1 - cs2));
-                }
-            }
+            pair_entries(h, band, &spectra[b * m + a], |row_block, col_block, v| {
+                put(row_block * m + a, col_block * m + b, v)
+            });
         }
     }
     for cc in 1..=2 * h {
@@ -444,6 +417,44 @@ fn assemble(
             for a in 0..m {
                 put(cc * m + a, cc * m + b, inertia.at(cc, a, b));
             }
+        }
+    }
+}
+
+/// The entries of one tangent pair's Fourier convolution, ∂(coefficients of τ·y + γ·ẏ)/∂(coefficients
+/// of y), as `put(row block, column block, value)`: τ, γ the pair's stiffness and damping
+/// sequences (`spectrum`), the entries whose harmonics lie at most `band` apart (all with band
+/// = H). Blocks as in [`HarmonicOrbit::coefficients`].
+fn pair_entries(h: usize, band: usize, spectrum: &PairSpectrum, mut put: impl FnMut(usize, usize, f64)) {
+    let PairSpectrum { kc, ks, cc, cs } = spectrum;
+    // Σ ψ_l x φ_c by the product-to-sum identities, ψ the test functions
+    // (1; 2cos lθ; 2sin lθ, with the 1/N of the spectra), φ the basis functions.
+    let mut add = |(r, c): (usize, usize), v: f64| put(r, c, v);
+    add((0, 0), kc[0]);
+    for c in 1..=h.min(band) {
+        let cf = c as f64;
+        // Row of the constant: (1/N) Σ x cos cθ and Σ x sin cθ; with the damping of
+        // ẏ: cos → −c sin, sin → c cos.
+        add((0, 2 * c - 1), kc[c] - cf * cs[c]);
+        add((0, 2 * c), ks[c] + cf * cc[c]);
+        // Column of the constant (no velocity).
+        add((2 * c - 1, 0), 2.0 * kc[c]);
+        add((2 * c, 0), 2.0 * ks[c]);
+    }
+    for l in 1..=h {
+        for c in l.saturating_sub(band).max(1)..=(l + band).min(h) {
+            let cf = c as f64;
+            let d = l.abs_diff(c);
+            // ks(c − l), odd in its argument.
+            let sign = if c >= l { 1.0 } else { -1.0 };
+            let (ka, kb, ks1, ks2) = (kc[d], kc[l + c], ks[l + c], sign * ks[d]);
+            let (ca, cb, cs1, cs2) = (cc[d], cc[l + c], cs[l + c], sign * cs[d]);
+            // (cos l, cos c) = A + B, (cos l, sin c) = S₁ + S₂,
+            // (sin l, cos c) = S₁ − S₂, (sin l, sin c) = A − B.
+            add((2 * l - 1, 2 * c - 1), ka + kb - cf * (cs1 + cs2));
+            add((2 * l - 1, 2 * c), ks1 + ks2 + cf * (ca + cb));
+            add((2 * l, 2 * c - 1), ks1 - ks2 - cf * (ca - cb));
+            add((2 * l, 2 * c), ka - kb + cf * (cs1 - cs2));
         }
     }
 }

@@ -42,6 +42,14 @@ pub(super) struct Switch {
     rate: f64,
 }
 
+impl Switch {
+    /// A switch at `time` \[s\] whose residual rows jump by `jump` and whose rates jump by
+    /// `kink` \[1/s\], without a time gradient (it adds no Jacobian term).
+    pub(super) fn new(time: f64, jump: Vec<f64>, kink: Vec<f64>) -> Self {
+        Self { time, jump, kink, time_gradient: None, event: 0, rate: 0.0 }
+    }
+}
+
 /// The series `x` (blocks of m = `y.len()` values as in
 /// `HarmonicOrbit::coefficients`) at `t`, ν = 2π/T its period's angular
 /// frequency: the unknowns' coordinates y, ẏ (units of the static deflection,

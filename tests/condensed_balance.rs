@@ -1,0 +1,167 @@
+//! The harmonic balance condensed onto the contact coordinates (docs/PERIODIC.md §2,
+//! "Condensed onto the contact coordinates"): its orbits against long time marching on the
+//! example at its transverse–torsional fidelity, unworn and worn, off resonance, near
+//! resonance and where the teeth separate; its size independent of the bodies' coordinates;
+//! the planets' symmetry and its refusal where the planets differ.
+
+use planetwear::analysis::accuracy::harmonic_error;
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::periodic::{
+    highest_frequency, CondensedBalance, HarmonicBalance, HarmonicSettings, PeriodicProblem,
+    ShootingSettings, Symmetry,
+};
+use planetwear::dynamics::response::{steady_state, SteadyState};
+use planetwear::model::gear::GearSet;
+use planetwear::model::run::RunSettings;
+use planetwear::scene::{Fidelity, Scene};
+
+const RPM: f64 = std::f64::consts::PI / 30.0;
+
+/// The example's worn states κ = 0..6 (the wear model's, as the FMU ships them).
+fn worn_states() -> &'static [planetwear::wear::state::WornState] {
+    static STATES: std::sync::OnceLock<Vec<planetwear::wear::state::WornState>> = std::sync::OnceLock::new();
+    STATES.get_or_init(|| planetwear::package::pack::example_wear_states().unwrap())
+}
+
+/// The scene's gear set, run settings and model with its flanks worn to state `kappa`.
+fn build(scene: &Scene, kappa: usize) -> (GearSet, RunSettings, PlanetaryDynamics) {
+    let (set, run) = scene.validate_with_run().unwrap_or_else(|e| panic!("{e}"));
+    let contact = if kappa == 0 {
+        SetModel::new(&set)
+    } else {
+        let state = &worn_states()[kappa];
+        state.check_gear_set(&set).unwrap();
+        state.set_model(&set)
+    };
+    let model = PlanetaryDynamics::new(&set, contact).unwrap();
+    (set, run, model)
+}
+
+/// The condensed balance of `model` at `rpm` with the rule's H and N.
+fn condensed(model: &PlanetaryDynamics, rpm: f64, symmetry: Symmetry) -> CondensedBalance {
+    let omega = rpm * RPM;
+    let problem = PeriodicProblem::new(model.clone(), ShootingSettings::default(), omega).unwrap();
+    let settings =
+        HarmonicSettings::for_frequency(highest_frequency(problem.model(), omega), problem.period(omega));
+    CondensedBalance::new(HarmonicBalance::new(problem, settings).unwrap(), symmetry)
+}
+
+/// Planet 1's two meshes' harmonics.
+fn pick(s: &SteadyState) -> Vec<planetwear::dynamics::spectrum::Harmonics> {
+    vec![s.meshes[0].harmonics.clone(), s.meshes[1].harmonics.clone()]
+}
+
+/// E_h of the cyclic condensed orbit at `rpm` against time marching at relative tolerance
+/// 1e-10 from the static state, run in until two successive mesh cycles agree to 1e-10 of
+/// the mean tooth force (at most 12 revolutions); also the largest |μ| and the separation.
+fn against_marching(kappa: usize, rpm: f64) -> (f64, f64, f64) {
+    let (set, run, model) = build(&Scene::example_2004(), kappa);
+    let mut cb = condensed(&model, rpm, Symmetry::Cyclic);
+    let (orbit, report) = cb.solve(rpm * RPM, None).unwrap();
+    let samples = cb.balance().settings().samples;
+    let mu = cb.balance().floquet_multipliers(&orbit, samples).unwrap()[0].modulus();
+    let solved = cb.balance().steady_state(&orbit).unwrap();
+    let long = run
+        .with(|d| {
+            d.relative_tolerance = 1e-10;
+            d.run_in_revolutions = 12.0;
+            d.steady_tolerance = 1e-10;
+            d.measured_revolutions = 0.5;
+            d.samples_per_mesh_cycle = 64;
+        })
+        .unwrap();
+    let mut m = model;
+    let marched = steady_state(&mut m, &set, &long, rpm * RPM, None).unwrap();
+    let e = harmonic_error(&pick(&solved), &pick(&marched));
+    eprintln!(
+        "κ = {kappa}, {rpm} rpm: E_h {e:.3e}, |μ| {mu:.4}, separation {:.4}, {:?} ({} unknowns, {} iterations, \
+         symmetry residual {:?})",
+        solved.meshes[0].separation, report.symmetry, report.unknowns, report.iterations, report.symmetry_residual
+    );
+    (e, mu, solved.meshes[0].separation)
+}
+
+#[test]
+fn condensed_orbits_agree_with_long_marching_unworn() {
+    // Off resonance; near the resonance of 2 f_m with the second rotational mode, on the
+    // branch marching reaches; the teeth separating.
+    for (rpm, separates) in [(3000.0, false), (9000.0, false), (10200.0, true)] {
+        let (e, mu, separation) = against_marching(0, rpm);
+        assert!(e <= 1e-3, "{rpm} rpm: E_h {e:.3e}");
+        assert!(mu < 1.0, "{rpm} rpm: the orbit marching reaches is stable (|μ| {mu:.4})");
+        assert_eq!(separation > 0.0, separates, "{rpm} rpm: separation {separation}");
+    }
+}
+
+#[test]
+fn condensed_orbits_agree_with_long_marching_worn() {
+    // κ = 6: off resonance, near the resonance wear moved to 7350 rpm, and separating at
+    // 8300 rpm (the sun–planet mesh 3 %, the ring–planet 12 % of the period), every planet
+    // alike.
+    for (rpm, separates) in [(3000.0, false), (7350.0, false), (8300.0, true)] {
+        let (e, mu, separation) = against_marching(6, rpm);
+        assert!(e <= 1e-3, "κ = 6, {rpm} rpm: E_h {e:.3e}");
+        assert!(mu < 1.0, "κ = 6, {rpm} rpm: |μ| {mu:.4}");
+        assert_eq!(separation > 0.0, separates, "κ = 6, {rpm} rpm: separation {separation}");
+    }
+}
+
+/// The cost per point does not grow with the bodies' coordinates: the torsional model, the
+/// transverse–torsional example and the example with flexible planet bearings and a floating
+/// sun (a sun bearing of 1 kN/m, five orders below the meshes': the sun held by its meshes) all solve for 4 contact coordinates (planet 1's two approaches and the
+/// two positions), at the same H the same unknowns, while their models' coordinates differ.
+#[test]
+fn the_unknowns_do_not_grow_with_the_bodies_coordinates() {
+    let mut torsional = Scene::example_2004();
+    torsional.dynamics.fidelity = Fidelity::Torsional;
+    let mut floating = Scene::example_2004_flexible();
+    floating.supports.sun_radial_n_per_m = 1.0e3;
+    let settings = HarmonicSettings { harmonics: 48, samples: 768, ..HarmonicSettings::default() };
+    let mut seen = Vec::new();
+    for (name, scene) in [
+        ("torsional", torsional),
+        ("transverse–torsional", Scene::example_2004()),
+        ("flexible, floating sun", floating),
+    ] {
+        let (_, _, model) = build(&scene, 0);
+        let omega = 6000.0 * RPM;
+        let n = planetwear::dynamics::solver::SecondOrderSystem::dim(&model);
+        let problem = PeriodicProblem::new(model, ShootingSettings::default(), omega).unwrap();
+        let mut cb =
+            CondensedBalance::new(HarmonicBalance::new(problem, settings).unwrap(), Symmetry::Cyclic);
+        let (_, report) = cb.solve(omega, None).unwrap();
+        eprintln!(
+            "{name}: {n} coordinates, {} contact coordinates, {} unknowns",
+            report.coordinates, report.unknowns
+        );
+        assert_eq!(report.symmetry, Symmetry::Cyclic);
+        seen.push((n, report.coordinates, report.unknowns));
+    }
+    assert!(seen[0].0 < seen[1].0, "the models' coordinates differ: {seen:?}");
+    assert!(seen.iter().all(|s| s.1 == 4 && s.2 == 4 * 97), "{seen:?}");
+}
+
+/// Planets that differ (one planet bearing softer) have no cyclic symmetry: the balance
+/// asked for it finds every mesh's residual at the cyclic orbit far above the tolerance,
+/// solves with every mesh, and says why; its orbit is the full condensed solve's.
+#[test]
+fn planets_that_differ_are_solved_with_every_mesh() {
+    let mut scene = Scene::example_2004();
+    scene.supports.planet_bearings_n_per_m = Some(vec![3.0e10, 3.0e10, 3.0e9, 3.0e10]);
+    let (_, _, model) = build(&scene, 0);
+    let rpm = 6000.0;
+    let mut asked = condensed(&model, rpm, Symmetry::Cyclic);
+    let (orbit, report) = asked.solve(rpm * RPM, None).unwrap();
+    eprintln!(
+        "{:?}, symmetry residual {:?}: {:?}",
+        report.symmetry, report.symmetry_residual, report.cyclic_refused
+    );
+    assert_eq!(report.symmetry, Symmetry::Full);
+    assert!(report.symmetry_residual.unwrap() > 1e-3);
+    assert!(report.cyclic_refused.is_some());
+    let (full, _) = condensed(&model, rpm, Symmetry::Full).solve(rpm * RPM, None).unwrap();
+    let apart =
+        orbit.coefficients.iter().zip(&full.coefficients).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(apart <= 1e-6, "{apart:.3e}");
+}
