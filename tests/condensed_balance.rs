@@ -165,3 +165,33 @@ fn planets_that_differ_are_solved_with_every_mesh() {
         orbit.coefficients.iter().zip(&full.coefficients).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     assert!(apart <= 1e-6, "{apart:.3e}");
 }
+
+/// Continuation on the cyclic condensed balance follows the example's transverse–torsional
+/// branch over its first fold (8235 rpm) as continuation by shooting does: the same fold
+/// within 1 rpm, each point's largest multiplier the whole model's.
+#[test]
+fn continuation_on_the_condensed_balance_finds_shootings_fold() {
+    use planetwear::analysis::condensed_branch::CondensedBranch;
+    use planetwear::analysis::continuation::{
+        continue_branch, follow_branch, BifurcationKind, ContinuationSettings,
+    };
+    let (_, _, model) = build(&Scene::example_2004(), 0);
+    let settings = ContinuationSettings::new(8000.0 * RPM, 8500.0 * RPM, 50.0 * RPM);
+    let folds = |b: &planetwear::analysis::continuation::Branch| -> Vec<f64> {
+        b.bifurcations.iter().filter(|f| f.kind == BifurcationKind::Fold).map(|f| f.speed / RPM).collect()
+    };
+    let problem = PeriodicProblem::new(model.clone(), ShootingSettings::default(), 8000.0 * RPM).unwrap();
+    let hb = HarmonicBalance::new(problem.clone(), HarmonicSettings::default()).unwrap();
+    let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
+    let condensed = follow_branch(&mut CondensedBranch::new(&mut cb), &settings, |_| {}).unwrap();
+    let mut shooting_problem = problem;
+    let shot = continue_branch(&mut shooting_problem, &settings, |_| {}).unwrap();
+    let (a, b) = (folds(&condensed), folds(&shot));
+    eprintln!(
+        "folds: condensed {a:?} ({} points), shooting {b:?} ({} points)",
+        condensed.points.len(),
+        shot.points.len()
+    );
+    assert!(!a.is_empty() && !b.is_empty(), "a fold near 8235 rpm: condensed {a:?}, shooting {b:?}");
+    assert!((a[0] - b[0]).abs() <= 1.0, "condensed {a:?} against shooting {b:?}");
+}

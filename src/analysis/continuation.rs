@@ -381,7 +381,7 @@ const RESTART_TRIES: usize = 4;
 
 /// The state marching reaches at `omega` from `z`: periods until one changes
 /// the state by at most 1e-3 of the state scales, at most [`RESTART_PERIODS`].
-fn march(
+pub(crate) fn march(
     problem: &mut PeriodicProblem,
     omega: f64,
     z: &[f64],

@@ -6,6 +6,8 @@
 //! May import: every earlier stage ([`crate::files`] to [`crate::wear`]).
 //!
 //! - [`accuracy`]: work-precision of the integrators.
+//! - [`condensed_branch`]: the continuation's solver on the harmonic balance
+//!   condensed onto the contact coordinates.
 //! - [`continuation`]: pseudo-arclength continuation of periodic steady
 //!   states in speed, with stability, folds and period doublings.
 //! - [`frame_sweep`]: speed sweeps by time marching in the rigid-body frame,
@@ -18,6 +20,7 @@
 //!   peaks, validation against the study's claims, and the wear effect.
 
 pub mod accuracy;
+pub mod condensed_branch;
 pub mod continuation;
 pub mod frame_sweep;
 pub mod modes;

@@ -3,13 +3,15 @@
 //! (docs/PERIODIC.md); the CSV and charts of the marching sweep plus
 //! stability, branch segment and Floquet multipliers.
 
+use planetwear::analysis::condensed_branch::CondensedBranch;
 use planetwear::analysis::continuation::{
     branch_events, continue_branch, follow_branch, follow_joining, marching_jumps, nearest_event,
     on_one_stable_branch, BalanceBranch, BifurcationKind, Branch, BranchEvent, BranchPoint,
     ContinuationSettings, CurvePoint, GapKind,
 };
 use planetwear::dynamics::periodic::{
-    HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings, MAX_RULE_HARMONICS,
+    CondensedBalance, HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings, Symmetry,
+    CONDENSED_MAX_HARMONICS, MAX_RULE_HARMONICS,
 };
 use planetwear::dynamics::response::{sweep, Direction, SteadyState};
 use planetwear::report::continuation::{
@@ -51,12 +53,13 @@ pub(crate) fn sweep_continuation(
         ..
     }: SweepArgs,
 ) -> Result<()> {
-    let balance = match solver.as_deref() {
-        None | Some("shooting") => false,
-        Some("harmonic-balance") => true,
-        Some(other) => bail!("--solver {other}: allowed are shooting, harmonic-balance"),
+    let solver_name = match solver.as_deref() {
+        None | Some("shooting") => "shooting",
+        Some("harmonic-balance") => "harmonic-balance",
+        Some("condensed") => "condensed",
+        Some(other) => bail!("--solver {other}: allowed are shooting, harmonic-balance, condensed"),
     };
-    let solver_name = if balance { "harmonic-balance" } else { "shooting" };
+    let balance = solver_name != "shooting";
     let (set, run_settings) = validated_with_run(&load_scene(&scene)?)?;
     // The grid of the marching sweep: the same rules for the same flags (and
     // the grid of `--against-march`).
@@ -111,7 +114,25 @@ pub(crate) fn sweep_continuation(
         };
         let mut states = Vec::new();
         let mut held = None;
-        let branch = if balance {
+        let branch = if solver_name == "condensed" {
+            let hb = HarmonicBalance::new(problem, HarmonicSettings::default())?;
+            let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
+            let mut solver = CondensedBranch::new(&mut cb);
+            let branch = match other {
+                Some(o) => follow_joining(&mut solver, &settings, o, progress)?,
+                None => follow_branch(&mut solver, &settings, progress)?,
+            };
+            let orbits = std::mem::take(&mut solver.orbits);
+            for orbit in &orbits {
+                states.push(cb.balance().steady_state(orbit)?);
+                if orbit.harmonics == CONDENSED_MAX_HARMONICS
+                    && cb.balance().rule_harmonics(orbit.speed) > CONDENSED_MAX_HARMONICS
+                {
+                    held = Some(held.unwrap_or(0.0_f64).max(rad_per_s_to_rpm(orbit.speed)));
+                }
+            }
+            branch
+        } else if balance {
             let mut hb = HarmonicBalance::new(problem, HarmonicSettings::default())?;
             let mut solver = BalanceBranch::new(&mut hb);
             let branch = match other {
@@ -242,14 +263,16 @@ pub(crate) fn sweep_continuation(
         let branch = &r.branch;
         if balance {
             outln!(
-                "{}: {} periodic states from {a} to {b} rpm by harmonic balance ({} force evaluations; \
+                "{}: {} periodic states from {a} to {b} rpm by harmonic balance{} ({} force evaluations; \
                  {} flows over one period in its restarts{}); {}",
                 r.direction,
                 branch.points.len(),
+                if solver_name == "condensed" { " condensed onto the contact coordinates" } else { "" },
                 branch.work.rhs_evaluations,
                 branch.flows,
                 r.held.map_or(String::new(), |rpm| format!(
-                    "; the rule's H held at {MAX_RULE_HARMONICS} up to {rpm:.1} rpm: docs/PERIODIC.md §2"
+                    "; the rule's H held at {} up to {rpm:.1} rpm: docs/PERIODIC.md §2",
+                    if solver_name == "condensed" { CONDENSED_MAX_HARMONICS } else { MAX_RULE_HARMONICS }
                 )),
                 branch.ended,
             )?;

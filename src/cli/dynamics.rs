@@ -232,10 +232,21 @@ fn condensed_point(
     omega: f64,
     held: &str,
 ) -> Result<(SteadyState, String, serde_json::Value)> {
-    use planetwear::dynamics::periodic::{all_inside_unit_circle, CondensedBalance, Symmetry};
+    use planetwear::dynamics::periodic::{
+        all_inside_unit_circle, CondensedBalance, Symmetry, CONDENSED_MAX_HARMONICS,
+    };
     let rpm = rad_per_s_to_rpm(omega);
-    let settings = *hb.settings();
+    let wanted = *hb.settings();
     let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
+    let settings = *cb.balance().settings();
+    let held = if settings.harmonics < wanted.harmonics {
+        format!(
+            "{held} (the rule's {} held at {CONDENSED_MAX_HARMONICS} in the condensed balance)",
+            wanted.harmonics
+        )
+    } else {
+        held.to_string()
+    };
     let (orbit, report, from_full) = match cb.solve(omega, None) {
         Ok((orbit, report)) => (orbit, report, false),
         Err(first) => {

@@ -31,7 +31,10 @@ mod arc;
 mod condensed;
 
 pub use arc::{refit, ArcLinear, ArcWork, ARC_CHORD_CONTRACTION, SPEED_DIFFERENCE};
-pub use condensed::{CondensedBalance, CondensedReport, Symmetry, CONDENSED_UNKNOWNS, SYMMETRY_TOLERANCE};
+pub use condensed::{
+    held, CondensedArc, CondensedBalance, CondensedReport, Symmetry, CONDENSED_MAX_HARMONICS,
+    CONDENSED_UNKNOWNS, SYMMETRY_TOLERANCE,
+};
 
 use rustfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};

@@ -48,6 +48,12 @@ impl Switch {
     pub(super) fn new(time: f64, jump: Vec<f64>, kink: Vec<f64>) -> Self {
         Self { time, jump, kink, time_gradient: None, event: 0, rate: 0.0 }
     }
+
+    /// [`Self::new`] with the switch time's gradient ∂t*/∂y over the unknowns' coordinates
+    /// (its Jacobian term: [`time_terms`]).
+    pub(super) fn with_gradient(time: f64, jump: Vec<f64>, kink: Vec<f64>, gradient: Vec<f64>) -> Self {
+        Self { time, jump, kink, time_gradient: Some(gradient), event: 0, rate: 0.0 }
+    }
 }
 
 /// The series `x` (blocks of m = `y.len()` values as in

@@ -32,17 +32,50 @@
 //! (the full condensed residual at the expanded orbit) and its multipliers
 //! are the full system's.
 
+mod arc;
+
+pub use arc::CondensedArc;
+
 use faer::linalg::solvers::Solve;
 use rustfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
 
-use super::{newton_remainder, pair_entries, DenseLu, HarmonicBalance, HarmonicOrbit, PairSpectrum};
+use super::{
+    newton_remainder, pair_entries, DenseLu, HarmonicBalance, HarmonicOrbit, HarmonicSettings, PairSpectrum,
+};
 use crate::dynamics::equations::{MeshCoordinates, PlanetaryDynamics};
 use crate::dynamics::periodic::series::derivative_coefficient;
-use crate::dynamics::periodic::switches::{add_back, illinois, subtract, Switch};
-use crate::dynamics::periodic::{max_abs, PeriodicError};
+use crate::dynamics::periodic::switches::{add_back, illinois, subtract, time_terms, Switch};
+use crate::dynamics::periodic::{max_abs, PeriodicError, PeriodicProblem};
 use crate::dynamics::rigid_frame::RigidFrame;
 use crate::dynamics::solver::{SecondOrderSystem, TangentSystem};
+
+/// On the projected sums a Newton iteration that lowers the residual by less than this
+/// factor takes a fresh Jacobian at its point (the continuation's corrector's
+/// [`super::ARC_CHORD_CONTRACTION`]).
+const PROJECTED_CONTRACTION: f64 = 0.25;
+
+/// The most harmonics the condensed balance keeps: it holds the rule's H
+/// ([`HarmonicSettings::for_frequency`], up to [`super::MAX_RULE_HARMONICS`]) at this, with
+/// 16 samples each. Below about 2300 rpm the rule's H on the transverse–torsional example
+/// follows its 98–113 kHz planet-on-pin modes; measured against shooting's orbit with the
+/// switches projected (docs/PERIODIC.md §2), the cyclic condensed balance at H = 256 gives
+/// E_h 6.8e-5, 1.7e-5, 5.9e-6, 1.9e-6 and 1.3e-6 at 500, 750, 1250, 1750 and 2250 rpm
+/// (at H = 192: up to 1.8e-4), at a third of the cost of the rule's H at 500 rpm.
+pub const CONDENSED_MAX_HARMONICS: usize = 256;
+
+/// `settings` with H held at [`CONDENSED_MAX_HARMONICS`] (N with it).
+pub fn held(settings: HarmonicSettings) -> HarmonicSettings {
+    if settings.harmonics <= CONDENSED_MAX_HARMONICS {
+        return settings;
+    }
+    let per = settings.samples / settings.harmonics.max(1);
+    HarmonicSettings {
+        harmonics: CONDENSED_MAX_HARMONICS,
+        samples: per * CONDENSED_MAX_HARMONICS,
+        ..settings
+    }
+}
 
 /// The most unknowns the condensed balance solves with its dense LU.
 pub const CONDENSED_UNKNOWNS: usize = 9000;
@@ -100,7 +133,8 @@ struct Layout {
     w: Vec<Vec<f64>>,
     /// For each computed mesh: the coordinate its position reads.
     position_column: Vec<usize>,
-    /// For each computed mesh: s⁰ \[m\] and the rate of s under the rigid motion [m/s].
+    /// For each computed mesh: s⁰ \[m\] and the rate of s under the rigid motion per unit
+    /// input speed [m/rad].
     s0: Vec<f64>,
     rate: Vec<f64>,
     /// The mesh vector b of every model mesh.
@@ -131,13 +165,13 @@ impl Layout {
             let MeshCoordinates { approach: b_nz, position: p_nz, offset } = model.mesh_coordinates(i);
             b.push(dense(n, b_nz));
             let pi = dense(n, p_nz);
-            rate.push(pi.iter().zip(&rigid).map(|(a, r)| a * r).sum::<f64>());
+            rate.push(pi.iter().zip(&rigid).map(|(a, r)| a * r).sum::<f64>() / omega);
             p.push(pi);
             s0.push(offset);
         }
         let (computed, copies) = match symmetry {
             Symmetry::Full => ((0..meshes).collect(), (0..meshes).map(|i| (i, 0.0)).collect()),
-            Symmetry::Cyclic => cyclic_copies(model, &p, &s0, &rate, period, cycles)?,
+            Symmetry::Cyclic => cyclic_copies(model, &p, &s0, &rate, omega * period, cycles)?,
         };
         let mut w: Vec<Vec<f64>> = computed.iter().map(|i| b[*i].clone()).collect();
         let mut position_column = Vec::new();
@@ -177,7 +211,7 @@ fn cyclic_copies(
     p: &[Vec<f64>],
     s0: &[f64],
     rate: &[f64],
-    period: f64,
+    angle: f64,
     cycles: usize,
 ) -> Result<Copies, PeriodicError> {
     let refuse = |reason: &str| PeriodicError::InvalidRequest {
@@ -198,8 +232,9 @@ fn cyclic_copies(
         if p[i] != p[rep] || (rate[i] - rate[rep]).abs() > 1e-12 * rate[rep].abs() || rate[rep] == 0.0 {
             return Err(refuse("the meshes of one kind read different positions"));
         }
-        // s_i(t) = s_rep(t − τ) modulo the base pitch, which the rigid motion covers in one period.
-        let tau = ((s0[rep] - s0[i]) / rate[rep] / period).rem_euclid(1.0);
+        // s_i(t) = s_rep(t − τ) modulo the base pitch, which the rigid motion covers in one
+        // period (the input turning through `angle`).
+        let tau = ((s0[rep] - s0[i]) / rate[rep] / angle).rem_euclid(1.0);
         if let Some(other) = delays[planet] {
             let apart = (tau - other).rem_euclid(1.0);
             if apart.min(1.0 - apart) > 1e-9 {
@@ -221,6 +256,7 @@ fn cyclic_copies(
 struct Linear {
     omega: f64,
     harmonics: usize,
+    samples: usize,
     /// Pᵀ(K₀, C₀, M)P, m × m column-major.
     stiffness: Vec<f64>,
     damping: Vec<f64>,
@@ -268,6 +304,9 @@ struct Steps {
     convolution: Vec<f64>,
     lu: DenseLu,
     forces: usize,
+    /// The receptances J was taken with, and the contact coordinates and computed forces.
+    receptance: Vec<Vec<Complex<f64>>>,
+    dims: (usize, usize),
 }
 
 impl Steps {
@@ -304,11 +343,11 @@ impl Steps {
         }
         debug_assert_eq!(convolution.len(), rows * size);
         lu.factorize(&inner, rows);
-        Self { convolution, lu, forces: rows }
+        Self { convolution, lu, forces: rows, receptance: linear.receptance.clone(), dims: (mz, mf) }
     }
 
     /// The Newton step −J⁻¹r.
-    fn step(&self, linear: &Linear, r: &[f64], dims: (usize, usize)) -> Vec<f64> {
+    fn step(&self, r: &[f64]) -> Vec<f64> {
         let rows = self.forces;
         let mut cr = vec![0.0; rows];
         for (j, v) in r.iter().enumerate().filter(|(_, v)| **v != 0.0) {
@@ -318,14 +357,19 @@ impl Steps {
         }
         // step(v) = −(I + CR)⁻¹v, so w = (I + CR)⁻¹ C r = −step(C r).
         let w: Vec<f64> = self.lu.step(&cr).iter().map(|v| -v).collect();
-        let rw = linear.apply(&w, dims);
+        let rw = respond(&self.receptance, &w, self.dims);
         r.iter().zip(&rw).map(|(r, x)| x - r).collect()
     }
 }
 
 impl CondensedBalance {
     /// The condensed balance of `balance`'s problem and settings (H, N, tolerance, iterations).
-    pub fn new(balance: HarmonicBalance, symmetry: Symmetry) -> Self {
+    /// H is held at [`CONDENSED_MAX_HARMONICS`].
+    pub fn new(mut balance: HarmonicBalance, symmetry: Symmetry) -> Self {
+        let settings = held(balance.settings);
+        if settings != balance.settings {
+            balance.set_settings(settings).expect("fewer harmonics of valid settings are valid");
+        }
         Self { balance, symmetry, projected: true, layout: None, linear: None, expanded: None }
     }
 
@@ -337,8 +381,12 @@ impl CondensedBalance {
 
     /// The full balance it condenses (settings, problem, multipliers, steady state).
     pub fn balance(&mut self) -> &mut HarmonicBalance {
-        self.linear = None;
         &mut self.balance
+    }
+
+    /// The shooting problem it solves.
+    pub fn problem(&self) -> &PeriodicProblem {
+        &self.balance.problem
     }
 
     /// Contact coordinates at `omega` [rad/s] (per time), once the layout is built.
@@ -355,7 +403,9 @@ impl CondensedBalance {
     /// Builds the linear part at `omega` unless it is the one kept.
     fn prepare(&mut self, omega: f64) -> Result<(), PeriodicError> {
         let h = self.balance.settings.harmonics;
-        if self.linear.as_ref().is_some_and(|l| l.omega == omega && l.harmonics == h) {
+        let samples = self.balance.settings.samples;
+        if self.linear.as_ref().is_some_and(|l| l.omega == omega && l.harmonics == h && l.samples == samples)
+        {
             return Ok(());
         }
         self.layout_at(omega)?;
@@ -377,7 +427,7 @@ impl CondensedBalance {
         let layout = self.layout.as_ref().expect("prepared");
         let model = &mut self.balance.problem.model;
         model.set_drive_speed(omega);
-        let reference = reference_springs(model, layout, &q0, period, samples);
+        let reference = reference_springs(model, layout, &q0, (omega, period), samples);
         let structure = model.low_rank_jacobian().ok_or_else(|| {
             PeriodicError::invalid("condensed balance", 0.0, "needs the model's constant tangents")
         })?;
@@ -449,6 +499,7 @@ impl CondensedBalance {
         let mut linear = Linear {
             omega,
             harmonics: h,
+            samples,
             reference,
             stiffness,
             damping,
@@ -520,6 +571,7 @@ impl CondensedBalance {
         let model = &self.balance.problem.model;
         let mut forces = Vec::with_capacity(mf);
         let mut tangents = Vec::new();
+        let mut switch_terms = Vec::new();
         let mut samples = vec![0.0; ns];
         let (mut kt, mut ct, mut gt) = (vec![0.0; ns], vec![0.0; ns], vec![0.0; ns]);
         for g in 0..mf {
@@ -529,7 +581,7 @@ impl CondensedBalance {
             for j in 0..ns {
                 let t = period * j as f64 / ns as f64;
                 let delta = q_scale * value[g][j];
-                let s = layout.s0[g] + layout.rate[g] * t + q_scale * sigma[j];
+                let s = layout.s0[g] + layout.rate[g] * omega * t + q_scale * sigma[j];
                 let approach_rate = q_scale * rate[g][j];
                 let (state, c) = model.mesh_at(i, s, delta, approach_rate);
                 let total = state.force + state.damping_force - k_ref * delta - c_ref * approach_rate;
@@ -547,11 +599,14 @@ impl CondensedBalance {
             }
             *evaluations += ns as u64;
             let found = if switches {
-                self.mesh_switches(g, x, (&value[g], sigma), period, evaluations)?
+                self.mesh_switches(g, x, (&value[g], sigma), (omega, period), jacobian, evaluations)?
             } else {
                 Vec::new()
             };
             subtract(&found, period, &mut samples);
+            if jacobian {
+                switch_terms.push((g, time_terms(&found, period, h)));
+            }
             let mut coefficients = vec![0.0; top];
             self.balance.analyse(&samples, &mut buffer, &mut coefficients);
             add_back(&found, nu, h, &mut coefficients);
@@ -582,6 +637,16 @@ impl CondensedBalance {
                     conv[(rb * mf + g) + rows * (cb * mz + column)] += v
                 });
             }
+            // With the switches projected: what their jumps contribute through their times.
+            for (g, terms) in &switch_terms {
+                for (u, v) in terms {
+                    for (c, column) in v.iter().enumerate().filter(|(_, v)| **v != 0.0) {
+                        for (rb, weight) in u.iter().enumerate() {
+                            conv[(rb * mf + g) + rows * c] += weight * column;
+                        }
+                    }
+                }
+            }
             conv
         });
         Ok(Evaluation { residual, forces, convolution })
@@ -598,7 +663,8 @@ impl CondensedBalance {
         g: usize,
         x: &[f64],
         (approach, position): (&[f64], &[f64]),
-        period: f64,
+        (omega, period): (f64, f64),
+        gradients: bool,
         evaluations: &mut u64,
     ) -> Result<Vec<Switch>, PeriodicError> {
         let layout = self.layout.as_ref().expect("prepared");
@@ -613,7 +679,7 @@ impl CondensedBalance {
         let at = |t: f64| {
             let (delta, rate) = series_at(x, mz, g, h, nu, t);
             let (sigma, _) = series_at(x, mz, layout.position_column[g], h, nu, t);
-            (layout.s0[g] + layout.rate[g] * t + q_scale * sigma, q_scale * delta, q_scale * rate)
+            (layout.s0[g] + layout.rate[g] * omega * t + q_scale * sigma, q_scale * delta, q_scale * rate)
         };
         let event = |t: f64, e: usize, out: &mut Vec<f64>| {
             let (s, delta, _) = at(t);
@@ -630,7 +696,7 @@ impl CondensedBalance {
         let mut scratch = vec![0.0; count];
         // At the samples from the samples of the series; at t = T from the series.
         for j in 0..ns {
-            let s = layout.s0[g] + layout.rate[g] * (j as f64 * dt) + q_scale * position[j];
+            let s = layout.s0[g] + layout.rate[g] * omega * (j as f64 * dt) + q_scale * position[j];
             model.mesh_events_at(i, s, q_scale * approach[j], &mut scratch);
             values[j * count..(j + 1) * count].copy_from_slice(&scratch);
         }
@@ -644,7 +710,7 @@ impl CondensedBalance {
                 if (ga > 0.0) == (gb > 0.0) {
                     continue;
                 }
-                let [(ta, _), (tb, _)] = illinois(
+                let [(ta, ha), (tb, hb)] = illinois(
                     |t| {
                         *evaluations += 1;
                         event(t, e, &mut scratch)
@@ -653,19 +719,19 @@ impl CondensedBalance {
                     1e-6 * dt,
                     50,
                 );
-                located.push(0.5 * (ta + tb));
+                located.push((0.5 * (ta + tb), e, (hb - ha) / (tb - ta)));
             }
         }
-        located.sort_by(f64::total_cmp);
+        located.sort_by(|a, b| a.0.total_cmp(&b.0));
         let eps = 1e-4 * dt;
         let mut found = Vec::new();
         let mut first = 0;
         while first < located.len() {
             let mut end = first + 1;
-            while end < located.len() && located[end] - located[end - 1] <= 2.5 * eps {
+            while end < located.len() && located[end].0 - located[end - 1].0 <= 2.5 * eps {
                 end += 1;
             }
-            let (time, last) = (located[first], located[end - 1]);
+            let ((time, e, rate), last) = (located[first], located[end - 1].0);
             first = end;
             let (left, left2, right, right2) =
                 (force(time - eps), force(time - 2.0 * eps), force(last + eps), force(last + 2.0 * eps));
@@ -680,7 +746,33 @@ impl CondensedBalance {
                     "gives a non-finite mesh force at a contact switch: the iterate diverged",
                 ));
             }
-            found.push(Switch::new(time.rem_euclid(period), vec![jump], vec![kink]));
+            let time = time.rem_euclid(period);
+            if !gradients {
+                found.push(Switch::new(time, vec![jump], vec![kink]));
+                continue;
+            }
+            // ∂t*/∂x = −(∂h/∂z_b)/ḣ times the basis at t*, for the two coordinates the
+            // event reads: the approach and the position (differences of 1e-7 of the static
+            // deflection).
+            let (s, delta, _) = at(time);
+            let step = 1e-7 * q_scale;
+            let mut h = |s: f64, d: f64| {
+                model.mesh_events_at(i, s, d, &mut scratch);
+                scratch[e]
+            };
+            let base = h(s, delta);
+            let (by_approach, by_position) =
+                ((h(s, delta + step) - base) / step, (h(s + step, delta) - base) / step);
+            *evaluations += 3;
+            let mut gradient = vec![0.0; mz];
+            if rate.is_finite() && rate != 0.0 {
+                gradient[g] = -by_approach * q_scale / rate;
+                gradient[layout.position_column[g]] = -by_position * q_scale / rate;
+            }
+            if gradient.iter().any(|v| !v.is_finite()) {
+                gradient.iter_mut().for_each(|v| *v = 0.0);
+            }
+            found.push(Switch::with_gradient(time, vec![jump], vec![kink], gradient));
         }
         Ok(found)
     }
@@ -789,60 +881,60 @@ impl CondensedBalance {
         // the settings' `chord_contraction` or more.
         let mut steps: Option<Steps> = None;
         let mut factorizations = 0;
-        loop {
-            let norm = max_abs(&last.residual);
-            let scale = max_abs(&x).max(1.0);
-            if norm <= settings.tolerance * scale {
-                break;
-            }
-            if iterations == settings.max_iterations {
-                return Err(PeriodicError::NotConverged { speed: omega, iterations, residual: norm });
-            }
-            iterations += 1;
-            let linear = self.linear.as_ref().expect("prepared");
-            if let Some(conv) = last.convolution.take() {
-                let storage = steps.take().map(|s| s.lu).unwrap_or_default();
-                steps = Some(Steps::new(linear, conv, dims, storage));
-                factorizations += 1;
-            }
-            let step = steps.as_ref().expect("factorised").step(linear, &last.residual, dims);
-            let mut lambda = 1.0;
-            let (trial, at) = loop {
-                let xt: Vec<f64> = x.iter().zip(&step).map(|(x, d)| x + lambda * d).collect();
-                let t = self.evaluate(omega, &xt, (false, false), &mut evaluations)?;
-                if max_abs(&t.residual) < norm || lambda < 1.0 / 64.0 {
-                    break (xt, t);
+        // From a given guess (an orbit near, of the projected sums) straight to the projected
+        // sums: where the teeth separate the plain sums' root lies several per cent away.
+        let plain = guess.is_none() || !self.projected;
+        if plain {
+            loop {
+                let norm = max_abs(&last.residual);
+                let scale = max_abs(&x).max(1.0);
+                if norm <= settings.tolerance * scale {
+                    break;
                 }
-                lambda *= 0.5;
-            };
-            x = trial;
-            let contracted = max_abs(&at.residual) <= settings.chord_contraction * norm;
-            last = if contracted { at } else { self.evaluate(omega, &x, (true, false), &mut evaluations)? };
-            if lambda * max_abs(&step) <= settings.tolerance * scale && max_abs(&last.residual) <= norm {
-                break;
+                if iterations == settings.max_iterations {
+                    return Err(PeriodicError::NotConverged { speed: omega, iterations, residual: norm });
+                }
+                iterations += 1;
+                let linear = self.linear.as_ref().expect("prepared");
+                if let Some(conv) = last.convolution.take() {
+                    let storage = steps.take().map(|s| s.lu).unwrap_or_default();
+                    steps = Some(Steps::new(linear, conv, dims, storage));
+                    factorizations += 1;
+                }
+                let step = steps.as_ref().expect("factorised").step(&last.residual);
+                let mut lambda = 1.0;
+                let (trial, at) = loop {
+                    let xt: Vec<f64> = x.iter().zip(&step).map(|(x, d)| x + lambda * d).collect();
+                    let t = self.evaluate(omega, &xt, (false, false), &mut evaluations)?;
+                    if max_abs(&t.residual) < norm || lambda < 1.0 / 64.0 {
+                        break (xt, t);
+                    }
+                    lambda *= 0.5;
+                };
+                x = trial;
+                let contracted = max_abs(&at.residual) <= settings.chord_contraction * norm;
+                last =
+                    if contracted { at } else { self.evaluate(omega, &x, (true, false), &mut evaluations)? };
+                if lambda * max_abs(&step) <= settings.tolerance * scale && max_abs(&last.residual) <= norm {
+                    break;
+                }
             }
         }
         if self.projected {
-            // From the plain root, the projected sums' root by chord iterations on the plain
-            // sums' Jacobian (the switches' times move with x; the corrections converge
-            // linearly and stop on the steps' contraction).
-            if steps.is_none() {
-                let conv = match last.convolution.take() {
-                    Some(c) => c,
-                    None => self
-                        .evaluate(omega, &x, (true, false), &mut evaluations)?
-                        .convolution
-                        .expect("asked for"),
-                };
-                steps =
-                    Some(Steps::new(self.linear.as_ref().expect("prepared"), conv, dims, DenseLu::default()));
-                factorizations += 1;
-            }
-            let steps = steps.take().expect("factorised");
+            // From the plain root, the projected sums' root: Newton on their Jacobian (the
+            // plain sums' with the switches' time terms), kept as a chord while an iteration
+            // lowers the residual by PROJECTED_CONTRACTION or more; stopped on the steps'
+            // contraction.
+            let storage = steps.take().map(|s| s.lu).unwrap_or_default();
+            let mut at = self.evaluate(omega, &x, (true, true), &mut evaluations)?;
+            let conv = at.convolution.take().expect("asked for");
+            let mut steps = Steps::new(self.linear.as_ref().expect("prepared"), conv, dims, storage);
+            factorizations += 1;
+            last = at;
             let mut previous = None;
-            last = self.evaluate(omega, &x, (false, true), &mut evaluations)?;
             loop {
-                let step = steps.step(self.linear.as_ref().expect("prepared"), &last.residual, dims);
+                let norm = max_abs(&last.residual);
+                let step = steps.step(&last.residual);
                 x.iter_mut().zip(&step).for_each(|(x, d)| *x += d);
                 last = self.evaluate(omega, &x, (false, true), &mut evaluations)?;
                 iterations += 1;
@@ -858,6 +950,14 @@ impl CondensedBalance {
                     });
                 }
                 previous = Some(length);
+                if max_abs(&last.residual) > PROJECTED_CONTRACTION * norm {
+                    let mut fresh = self.evaluate(omega, &x, (true, true), &mut evaluations)?;
+                    let conv = fresh.convolution.take().expect("asked for");
+                    steps = Steps::new(self.linear.as_ref().expect("prepared"), conv, dims, steps.lu);
+                    factorizations += 1;
+                    last = fresh;
+                    previous = None;
+                }
             }
         }
         let residual = max_abs(&last.residual);
@@ -1001,20 +1101,8 @@ impl CondensedBalance {
 impl Linear {
     /// R f: the contact coordinates' response (blocks of `mz`) to the computed forces'
     /// coefficients `f` (blocks of `mf`).
-    fn apply(&self, f: &[f64], (mz, mf): (usize, usize)) -> Vec<f64> {
-        let mut out = vec![0.0; mz * (2 * self.harmonics + 1)];
-        for (k, r) in self.receptance.iter().enumerate() {
-            for g in 0..mf {
-                let fg = amplitude_of(f, mf, k, g);
-                if fg == Complex::new(0.0, 0.0) {
-                    continue;
-                }
-                for a in 0..mz {
-                    add_complex(&mut out, mz, k, a, r[a * mf + g] * fg);
-                }
-            }
-        }
-        out
+    fn apply(&self, f: &[f64], dims: (usize, usize)) -> Vec<f64> {
+        respond(&self.receptance, f, dims)
     }
 
     /// Solves A_k X = B for the complex columns `columns` (m each).
@@ -1050,7 +1138,7 @@ fn reference_springs(
     model: &PlanetaryDynamics,
     layout: &Layout,
     q0: &[f64],
-    period: f64,
+    (omega, period): (f64, f64),
     samples: usize,
 ) -> Vec<(f64, f64)> {
     layout
@@ -1065,7 +1153,7 @@ fn reference_springs(
             for j in 0..samples {
                 let t = period * j as f64 / samples as f64;
                 let (state, damping) =
-                    model.mesh_at(*i, layout.s0[g] + layout.rate[g] * t + position, delta, 0.0);
+                    model.mesh_at(*i, layout.s0[g] + layout.rate[g] * omega * t + position, delta, 0.0);
                 if state.stiffness.is_finite() && damping.is_finite() {
                     k += state.stiffness;
                     c += damping;
@@ -1074,6 +1162,24 @@ fn reference_springs(
             (k / samples as f64, c / samples as f64)
         })
         .collect()
+}
+
+/// R f for the receptances `receptance` (one per harmonic): the contact coordinates'
+/// response (blocks of `mz`) to the computed forces' coefficients `f` (blocks of `mf`).
+fn respond(receptance: &[Vec<Complex<f64>>], f: &[f64], (mz, mf): (usize, usize)) -> Vec<f64> {
+    let mut out = vec![0.0; mz * (2 * receptance.len() - 1)];
+    for (k, r) in receptance.iter().enumerate() {
+        for g in 0..mf {
+            let fg = amplitude_of(f, mf, k, g);
+            if fg == Complex::new(0.0, 0.0) {
+                continue;
+            }
+            for a in 0..mz {
+                add_complex(&mut out, mz, k, a, r[a * mf + g] * fg);
+            }
+        }
+    }
+    out
 }
 
 /// Coordinate `a`'s value and rate at `t` \[s\] on the series `x` (blocks of `width`, `h`
@@ -1221,9 +1327,41 @@ mod tests {
         let (mut cb, omega) = condensed(Fidelity::TransverseTorsional, 16, 6000.0, Symmetry::Full);
         cb.prepare(omega).unwrap();
         let x = cb.cold_start(omega);
+        for (k, off) in jacobian_against_differences(&mut cb, omega, &x, false).into_iter().enumerate() {
+            assert!(off <= 1e-5, "direction {k}: off by {off:.3e} of the product");
+        }
+    }
+
+    /// With the switches projected, on the separating orbit at 10 200 rpm (the sun–planet mesh
+    /// apart for 4.7 % of the period), the Jacobian with the switches' time terms is the
+    /// derivative of the projected residual to 1.5e-2 of the product (central differences of
+    /// steps 1e-2 to 1e-3 agree with each other): measured 1.17e-2, against 1.48e-2 without
+    /// the time terms. What it leaves out is the jumps' sizes moving with x times the
+    /// difference between the sawtooth's exact and sampled coefficients (1.3 % at k = H with
+    /// N = 16 H), so Newton on the projected sums contracts by about 1e-2 per iteration.
+    #[test]
+    fn the_projected_jacobian_carries_the_switches_times() {
+        let (mut cb, omega) = condensed(Fidelity::TransverseTorsional, 50, 10200.0, Symmetry::Cyclic);
+        let (orbit, _) = cb.solve(omega, None).unwrap();
+        let x = cb.coordinates_of(&orbit).unwrap();
+        let offs = jacobian_against_differences(&mut cb, omega, &x, true);
+        for (k, off) in offs.into_iter().enumerate() {
+            assert!(off <= 1.5e-2, "direction {k}: off by {off:.3e} of the product");
+        }
+    }
+
+    /// The largest difference, relative to the product's largest entry, between J d and
+    /// central differences of the residual along three directions d at `x`.
+    fn jacobian_against_differences(
+        cb: &mut CondensedBalance,
+        omega: f64,
+        x: &[f64],
+        switches: bool,
+    ) -> Vec<f64> {
         let size = x.len();
         let mut evaluations = 0;
-        let at = cb.evaluate(omega, &x, (true, false), &mut evaluations).unwrap();
+        cb.prepare(omega).unwrap();
+        let at = cb.evaluate(omega, x, (true, switches), &mut evaluations).unwrap();
         let conv = at.convolution.unwrap();
         let layout = cb.layout.as_ref().unwrap();
         let dims = (layout.coordinates(), layout.computed.len());
@@ -1238,21 +1376,18 @@ mod tests {
         let directions: Vec<Vec<f64>> =
             (0..3).map(|k| (0..size).map(|i| 1e-3 * ((i * (k + 3)) as f64 * 0.37).sin()).collect()).collect();
         let products: Vec<Vec<f64>> = directions.iter().map(|d| times(d)).collect();
-        for (k, (d, product)) in directions.iter().zip(&products).enumerate() {
-            let shifted = |sign: f64, cb: &mut CondensedBalance, e: &mut u64| {
+        let mut offs = Vec::new();
+        for (d, product) in directions.iter().zip(&products) {
+            let mut shifted = |sign: f64| {
                 let xs: Vec<f64> = x.iter().zip(d.iter()).map(|(x, d)| x + sign * 1e-4 * d).collect();
-                cb.evaluate(omega, &xs, (false, false), e).unwrap().residual
+                cb.evaluate(omega, &xs, (false, switches), &mut evaluations).unwrap().residual
             };
-            let (rp, rm) =
-                (shifted(1.0, &mut cb, &mut evaluations), shifted(-1.0, &mut cb, &mut evaluations));
+            let (rp, rm) = (shifted(1.0), shifted(-1.0));
             let difference: Vec<f64> = rp.iter().zip(&rm).map(|(p, m)| (p - m) / 2e-4).collect();
             let off = product.iter().zip(&difference).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-            assert!(
-                off <= 1e-5 * max_abs(product),
-                "direction {k}: off by {off:.3e} of {:.3e}",
-                max_abs(product)
-            );
+            offs.push(off / max_abs(product));
         }
+        offs
     }
 
     /// Condensed and full: the condensed root, expanded to every coordinate, is the full

@@ -1,0 +1,329 @@
+//! The condensed balance bordered by one linear equation in its coefficients and the speed,
+//! for pseudo-arclength continuation (`analysis::continuation`, docs/PERIODIC.md §3): the
+//! bordered system of the full balance's `arc` module on the contact coordinates, its steps
+//! by block elimination on the condensed Jacobian's Woodbury solve.
+
+use super::*;
+use crate::dynamics::periodic::harmonic::{refit, ARC_CHORD_CONTRACTION, SPEED_DIFFERENCE};
+use crate::dynamics::periodic::{HarmonicSettings, PeriodicProblem};
+use crate::dynamics::response::Work;
+
+/// The condensed balance linearized at a point of a branch ([`CondensedBalance::arc_linearize`]).
+pub struct CondensedArc {
+    /// Harmonics H of the point.
+    harmonics: usize,
+    /// R at the point (switches projected).
+    residual: Vec<f64>,
+    /// a = J⁻¹ ∂R/∂λ.
+    solved_derivative: Vec<f64>,
+    /// J's factorisation (the plain sums' Jacobian at the point).
+    steps: Steps,
+}
+
+impl CondensedArc {
+    /// Largest residual coefficient at the point.
+    pub fn residual(&self) -> f64 {
+        max_abs(&self.residual)
+    }
+}
+
+impl CondensedBalance {
+    /// The balance linearized at the contact coordinates' coefficients `x` and speed `omega`
+    /// [rad/s] with the switches projected, λ in units of `unit` [rad/s]; its force
+    /// evaluations go to `evaluations`.
+    pub fn arc_linearize(
+        &mut self,
+        omega: f64,
+        x: &[f64],
+        unit: f64,
+        evaluations: &mut u64,
+    ) -> Result<CondensedArc, PeriodicError> {
+        self.balance.samples = self.balance.settings.samples;
+        self.prepare(omega)?;
+        if x.len() != self.unknowns() {
+            return Err(PeriodicError::invalid(
+                "condensed harmonic-balance coefficients",
+                x.len() as f64,
+                "must hold the contact coordinates × (2H + 1) values for the balance's H",
+            ));
+        }
+        let dims = self.dims();
+        let mut at = self.evaluate(omega, x, (true, true), evaluations)?;
+        let conv = at.convolution.take().expect("asked for");
+        let steps = Steps::new(self.linear.as_ref().expect("prepared"), conv, dims, DenseLu::default());
+        let d_omega = SPEED_DIFFERENCE * omega.abs().max(unit);
+        self.prepare(omega + d_omega)?;
+        let ahead = self.evaluate(omega + d_omega, x, (false, true), evaluations)?;
+        let derivative: Vec<f64> =
+            ahead.residual.iter().zip(&at.residual).map(|(a, r)| (a - r) / d_omega * unit).collect();
+        // step(v) = −J⁻¹v.
+        let solved_derivative = steps.step(&derivative).iter().map(|v| -v).collect();
+        Ok(CondensedArc {
+            harmonics: self.balance.settings.harmonics,
+            residual: at.residual,
+            solved_derivative,
+            steps,
+        })
+    }
+
+    /// The unit tangent of the branch at `linear`'s point, (−J⁻¹∂R/∂λ, 1) normalized,
+    /// oriented along `previous` (same length, λ last).
+    pub fn arc_tangent(&self, linear: &CondensedArc, previous: &[f64]) -> Vec<f64> {
+        let mut t: Vec<f64> = linear.solved_derivative.iter().map(|v| -v).chain([1.0]).collect();
+        let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let along: f64 = t.iter().zip(previous).map(|(a, b)| a * b).sum();
+        let sign = if along < 0.0 { -1.0 } else { 1.0 };
+        t.iter_mut().for_each(|v| *v *= sign / norm);
+        t
+    }
+
+    /// The bordered solve H_k `v` on `linear` by block elimination, with the Broyden
+    /// `updates` a ỹᵀ added (as the full balance's `arc_apply`).
+    fn condensed_apply(
+        linear: &CondensedArc,
+        v: &[f64],
+        constraint: &[f64],
+        updates: &[(Vec<f64>, Vec<f64>)],
+    ) -> Vec<f64> {
+        let n = v.len() - 1;
+        let b: Vec<f64> = linear.steps.step(&v[..n]).iter().map(|x| -x).collect();
+        let a = &linear.solved_derivative;
+        let (cx, cl) = constraint.split_at(n);
+        let dot = |u: &[f64], w: &[f64]| u.iter().zip(w).map(|(p, q)| p * q).sum::<f64>();
+        let dl = (v[n] - dot(cx, &b)) / (cl[0] - dot(cx, a));
+        let mut out: Vec<f64> = b.iter().zip(a).map(|(bi, ai)| bi - dl * ai).chain([dl]).collect();
+        for (a, y) in updates {
+            let along: f64 = y.iter().zip(v).map(|(p, q)| p * q).sum();
+            out.iter_mut().zip(a).for_each(|(o, ai)| *o += along * ai);
+        }
+        out
+    }
+
+    /// Newton's corrections of the bordered balance from `predicted` (x, λ) on
+    /// R(x, λ·`unit`) = 0, cᵀ(Y − `predicted`) = 0 with c = `constraint`, on `linear` (or a
+    /// fresh linearization at `predicted` when `fresh`), at most `max_corrections`: the full
+    /// balance's corrector (`HarmonicBalance::arc_correct`: a fresh linearization where an
+    /// iteration contracts less than [`ARC_CHORD_CONTRACTION`], Broyden's updates of the
+    /// bordered inverse otherwise, the stop on the steps' contraction; a fresh linearization
+    /// too where `linear` was taken at other harmonics). The corrected point and the
+    /// corrections it took, or `None`.
+    pub fn arc_correct(
+        &mut self,
+        linear: &CondensedArc,
+        fresh: bool,
+        constraint: &[f64],
+        predicted: &[f64],
+        (unit, max_corrections): (f64, usize),
+        evaluations: &mut u64,
+    ) -> Option<(Vec<f64>, usize)> {
+        let n = predicted.len() - 1;
+        if n != self.unknowns() || constraint.len() != n + 1 {
+            return None;
+        }
+        let mut own = None;
+        // A linearization at other harmonics (the rule's H changed with the speed) is not
+        // this balance's: a fresh one at the predicted point.
+        if fresh || linear.harmonics != self.balance.settings.harmonics {
+            own = Some(self.arc_linearize(predicted[n] * unit, &predicted[..n], unit, evaluations).ok()?);
+        }
+        let mut y = predicted.to_vec();
+        let mut previous = f64::INFINITY;
+        let mut last = None;
+        let tolerance = self.balance.settings.tolerance;
+        let mut updates: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+        let mut before: Option<Vec<f64>> = None;
+        for iteration in 1..=max_corrections {
+            let omega = y[n] * unit;
+            let r = match (&own, iteration) {
+                (Some(l), 1) => l.residual.clone(),
+                _ => {
+                    self.prepare(omega).ok()?;
+                    self.evaluate(omega, &y[..n], (false, true), evaluations).ok()?.residual
+                }
+            };
+            let norm = max_abs(&r);
+            if !norm.is_finite() || (norm >= previous && iteration > 2) {
+                return None;
+            }
+            let g =
+                -constraint.iter().zip(y.iter().zip(predicted)).map(|(c, (a, b))| c * (a - b)).sum::<f64>();
+            let mut f = r;
+            f.push(-g);
+            let mut update = None;
+            if norm > ARC_CHORD_CONTRACTION * previous {
+                own = Some(self.arc_linearize(omega, &y[..n], unit, evaluations).ok()?);
+                updates.clear();
+            } else if let Some(f_before) = before.take() {
+                let dy: Vec<f64> = f.iter().zip(&f_before).map(|(a, b)| a - b).collect();
+                let yy: f64 = dy.iter().map(|v| v * v).sum();
+                if yy > 0.0 {
+                    update = Some(dy.into_iter().map(|v| v / yy).collect::<Vec<f64>>());
+                }
+            }
+            previous = norm;
+            let l = own.as_ref().unwrap_or(linear);
+            let w = Self::condensed_apply(l, &f, constraint, &updates);
+            let step: Vec<f64> = match update {
+                Some(ytilde) => {
+                    let along: f64 = ytilde.iter().zip(&f).map(|(p, q)| p * q).sum();
+                    let step = w.iter().map(|v| -v * (1.0 - along)).collect();
+                    updates.push((w.iter().map(|v| -v).collect(), ytilde));
+                    step
+                }
+                None => w.iter().map(|v| -v).collect(),
+            };
+            if step.iter().any(|v| !v.is_finite()) {
+                return None;
+            }
+            before = Some(f);
+            y.iter_mut().zip(&step).for_each(|(a, d)| *a += d);
+            let length = max_abs(&step[..n]) / max_abs(&y[..n]).max(1.0);
+            let length = length.max(step[n].abs() / y[n].abs().max(1.0));
+            let remainder = newton_remainder(last, length);
+            if length <= tolerance || remainder <= tolerance {
+                return Some((y, iteration - 1));
+            }
+            last = Some(length);
+        }
+        None
+    }
+
+    /// The orbit, in the full balance's coordinates, at the contact coordinates' coefficients
+    /// `x` and speed `omega` [rad/s] (switches projected); `iterations` and `evaluations`
+    /// are the work that found it.
+    pub fn orbit_at(
+        &mut self,
+        omega: f64,
+        x: &[f64],
+        iterations: usize,
+        evaluations: &mut u64,
+    ) -> Result<HarmonicOrbit, PeriodicError> {
+        self.prepare(omega)?;
+        let at = self.evaluate(omega, x, (false, self.projected), evaluations)?;
+        let coefficients = self.expand(omega, &at.forces);
+        let problem = &self.balance.problem;
+        Ok(HarmonicOrbit {
+            speed: omega,
+            period: problem.period(omega),
+            cycles: problem.cycles(),
+            harmonics: self.balance.settings.harmonics,
+            coefficients,
+            iterations,
+            residual: max_abs(&at.residual),
+            last_step: 0.0,
+            factorizations: 0,
+            products: 0,
+            force_evaluations: *evaluations,
+            march_steps: 0,
+            neighbour: None,
+            crossings: Vec::new(),
+        })
+    }
+
+    /// Takes the harmonics (and samples) the rule gives at `omega` [rad/s], held at
+    /// [`CONDENSED_MAX_HARMONICS`]; whether they
+    /// changed (coefficients taken before are then brought to them by [`refit`]).
+    pub fn arc_fit(&mut self, omega: f64) -> Result<bool, PeriodicError> {
+        let wanted = held(self.balance.settings_for_speed(omega));
+        if wanted.harmonics == self.balance.settings.harmonics {
+            return Ok(false);
+        }
+        let settings = HarmonicSettings {
+            harmonics: wanted.harmonics,
+            samples: wanted.samples,
+            ..self.balance.settings
+        };
+        self.balance.set_settings(settings)?;
+        self.linear = None;
+        Ok(true)
+    }
+
+    /// `vectors` (each Y, λ last) brought to the balance's unknowns.
+    pub fn refit_all(&self, vectors: &mut [&mut Vec<f64>]) {
+        let unknowns = self.unknowns();
+        for v in vectors.iter_mut().filter(|v| v.len() != unknowns + 1) {
+            **v = refit(v, unknowns, true);
+        }
+    }
+
+    /// The relative state at t = 0 (the shooting problem's unknowns) of the orbit at the
+    /// contact coordinates' coefficients `x` at `omega` [rad/s].
+    pub fn state_of(&mut self, omega: f64, x: &[f64], work: &mut Work) -> Result<Vec<f64>, PeriodicError> {
+        let mut evaluations = 0;
+        let orbit = self.orbit_at(omega, x, 0, &mut evaluations)?;
+        work.rhs_evaluations += evaluations;
+        Ok(self.balance.initial_unknowns(&orbit))
+    }
+
+    /// The contact coordinates of the periodic state at `omega` [rad/s] from the relative
+    /// state `z` (a march's): `z`'s period sampled at the settings' N and analysed, then
+    /// Newton on the condensed balance from its contact coordinates (where that fails, from
+    /// the orbit shooting finds from `z`); the work into `work`.
+    pub fn solve_from_state(
+        &mut self,
+        omega: f64,
+        z: &[f64],
+        work: &mut Work,
+    ) -> Result<Vec<f64>, PeriodicError> {
+        match self.solve_from_state_once(omega, z, work) {
+            Ok(x) => Ok(x),
+            Err(_) => {
+                // Where Newton does not reach the orbit from the marched period, shooting from
+                // the marched state, and the balance from shooting's orbit.
+                let orbit = self.balance.problem.solve(omega, Some(z))?;
+                work.steps += orbit.work.steps;
+                work.rhs_evaluations += orbit.work.rhs_evaluations;
+                work.newton_iterations += orbit.work.newton_iterations;
+                self.solve_from_state_once(omega, &orbit.z, work)
+            }
+        }
+    }
+
+    fn solve_from_state_once(
+        &mut self,
+        omega: f64,
+        z: &[f64],
+        work: &mut Work,
+    ) -> Result<Vec<f64>, PeriodicError> {
+        let samples = self.balance.settings.samples;
+        let coordinates = self.balance.problem.sampled_flow(omega, z, samples, work)?;
+        let y = self.balance.analyse_samples(&coordinates);
+        let problem = &self.balance.problem;
+        let marched = HarmonicOrbit {
+            speed: omega,
+            period: problem.period(omega),
+            cycles: problem.cycles(),
+            harmonics: self.balance.settings.harmonics,
+            coefficients: y,
+            iterations: 0,
+            residual: 0.0,
+            last_step: 0.0,
+            factorizations: 0,
+            products: 0,
+            force_evaluations: 0,
+            march_steps: 0,
+            neighbour: None,
+            crossings: Vec::new(),
+        };
+        let guess = self.coordinates_of(&marched)?;
+        let (solved, report) = self.solve(omega, Some(&guess))?;
+        work.rhs_evaluations += report.law_evaluations;
+        work.newton_iterations += report.iterations as u64;
+        self.coordinates_of(&solved)
+    }
+
+    /// The shooting problem, to march on (the continuation's restarts).
+    pub fn problem_mut(&mut self) -> &mut PeriodicProblem {
+        &mut self.balance.problem
+    }
+
+    /// Newton's unknowns: contact coordinates × (2H + 1).
+    pub fn unknowns(&self) -> usize {
+        self.layout.as_ref().map_or(0, |l| l.coordinates()) * (2 * self.balance.settings.harmonics + 1)
+    }
+
+    fn dims(&self) -> (usize, usize) {
+        let layout = self.layout.as_ref().expect("prepared");
+        (layout.coordinates(), layout.computed.len())
+    }
+}
