@@ -418,11 +418,12 @@ fn torsional_scene_file(dir: &std::path::Path) -> std::path::PathBuf {
 }
 
 /// `planetwear run --method` on the torsional example at 3000 rpm: shooting
-/// and harmonic balance print the marching's harmonics (to 2e-3 of F1, the
-/// printed rounding included) with a line that says how the orbit was found
-/// and its largest Floquet multiplier; the transverse–torsional example's
-/// harmonic balance (6365 unknowns) takes GMRES's steps, says how many
-/// products they took, and prints the marching's harmonics too.
+/// and harmonic balance (condensed, the default, and full) print the
+/// marching's harmonics (to 2e-3 of F1, the printed rounding included) with a
+/// line that says how the orbit was found and its largest Floquet multiplier;
+/// the transverse–torsional example's full harmonic balance (6365 unknowns)
+/// takes GMRES's steps, says how many products they took, and prints the
+/// marching's harmonics too, as its condensed balance does (1340 unknowns).
 #[test]
 fn the_run_command_solves_a_point_by_each_method() {
     let dir = std::env::temp_dir().join(format!("planetwear-periodic-run-{}", std::process::id()));
@@ -430,7 +431,8 @@ fn the_run_command_solves_a_point_by_each_method() {
     let bin = env!("CARGO_BIN_EXE_planetwear");
     let run = |scene: &str, method: &str| {
         std::process::Command::new(bin)
-            .args(["run", "--scene", scene, "--speed", "3000", "--method", method])
+            .args(["run", "--scene", scene, "--speed", "3000", "--method"])
+            .args(method.split_whitespace())
             .output()
             .unwrap()
     };
@@ -445,12 +447,16 @@ fn the_run_command_solves_a_point_by_each_method() {
     };
     let harmonics = |method: &str| harmonics_of(scene.to_str().unwrap(), method);
     let (march, _) = harmonics("march");
-    for method in ["shooting", "harmonic-balance"] {
+    for method in ["shooting", "harmonic-balance", "harmonic-balance --balance full"] {
         let (values, text) = harmonics(method);
         for (a, b) in values.iter().zip(&march) {
             assert!((a - b).abs() <= 2e-3 * march[0], "{method}: {values:?} against {march:?}");
         }
-        let said = if method == "shooting" { "shooting: " } else { "harmonic balance: H = " };
+        let said = match method {
+            "shooting" => "shooting: ",
+            "harmonic-balance" => "harmonic balance condensed onto 4 contact coordinates",
+            _ => "harmonic balance: H = ",
+        };
         assert!(text.contains(said) && text.contains("largest Floquet multiplier"), "{text}");
         // The header counts the solver's Newton iterations, as its line does.
         let count = |line: &str| -> u64 {
@@ -488,11 +494,21 @@ fn the_run_command_solves_a_point_by_each_method() {
     }
     assert!((largest[0] - largest[1]).abs() <= 5e-3, "largest |μ|: {largest:?}");
     let (march, _) = harmonics_of("example-2004", "march");
-    let (values, text) = harmonics_of("example-2004", "harmonic-balance");
+    let (values, text) = harmonics_of("example-2004", "harmonic-balance --balance full");
     for (a, b) in values.iter().zip(&march) {
         assert!((a - b).abs() <= 2e-3 * march[0], "transverse–torsional: {values:?} against {march:?}");
     }
     assert!(text.contains("GMRES products"), "{text}");
+    // The default, condensed: planet 1's meshes, 4 contact coordinates × 335 unknowns.
+    let (values, text) = harmonics_of("example-2004", "harmonic-balance");
+    for (a, b) in values.iter().zip(&march) {
+        assert!((a - b).abs() <= 2e-3 * march[0], "condensed: {values:?} against {march:?}");
+    }
+    assert!(text.contains("planet 1's meshes") && text.contains("1340 unknowns"), "{text}");
+    let out = run("example-2004", "shooting --balance full");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("--balance applies to --method harmonic-balance only")
+    );
     let out = run("example-2004", "newton");
     assert!(String::from_utf8_lossy(&out.stderr).contains("allowed are march, shooting, harmonic-balance"));
     let _ = std::fs::remove_dir_all(&dir);
@@ -505,8 +521,17 @@ fn the_run_command_solves_a_point_by_each_method() {
 fn the_run_command_says_where_the_cap_holds_the_rules_harmonics() {
     let bin = env!("CARGO_BIN_EXE_planetwear");
     let run = |extra: &[&str]| {
-        let mut args =
-            vec!["run", "--scene", "example-2004", "--speed", "500", "--method", "harmonic-balance"];
+        let mut args = vec![
+            "run",
+            "--scene",
+            "example-2004",
+            "--speed",
+            "500",
+            "--method",
+            "harmonic-balance",
+            "--balance",
+            "full",
+        ];
         args.extend_from_slice(extra);
         let out = std::process::Command::new(bin).args(&args).output().unwrap();
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));

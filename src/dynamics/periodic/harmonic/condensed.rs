@@ -287,6 +287,14 @@ pub struct CondensedBalance {
     expanded: Option<Vec<f64>>,
 }
 
+/// A solve's work: mesh-law evaluations, Newton iterations and factorisations.
+#[derive(Default)]
+struct Count {
+    evaluations: u64,
+    iterations: usize,
+    factorizations: usize,
+}
+
 /// A residual evaluation: the residual, the computed forces' coefficients and, when asked, the
 /// Fourier convolution C of the laws' tangents (computed forces' coefficients × unknowns,
 /// column-major): the Jacobian is I + R C.
@@ -466,36 +474,8 @@ impl CondensedBalance {
                 }
             }
         }
-        // g(t): the force at the rigid motion itself with the meshes' forces added back.
-        let rigid = model.rigid_velocity_at(omega);
-        let mut frame = RigidFrame::new(model, rigid);
-        let zero = vec![0.0; n];
-        let mut f = vec![0.0; n];
-        let mut g_samples = vec![vec![0.0; samples]; m];
-        for j in 0..samples {
-            let t = period * j as f64 / samples as f64;
-
-            frame.force(t, &zero, &zero, &mut f);
-            for (state, b) in frame.model().meshes.iter().zip(&layout.b) {
-                let total = state.force + state.damping_force;
-                for (fi, bi) in f.iter_mut().zip(b) {
-                    *fi += bi * total;
-                }
-            }
-            for (samples_a, g) in g_samples.iter_mut().zip(project(&f)) {
-                samples_a[j] = g;
-            }
-        }
-        let mut pg = vec![vec![Complex::new(0.0, 0.0); m]; h + 1];
-        let mut buffer = vec![Complex::new(0.0, 0.0); samples];
-        let mut coefficients = vec![0.0; 2 * h + 1];
-        for (a, g) in g_samples.iter().enumerate() {
-            self.balance.analyse(g, &mut buffer, &mut coefficients);
-            pg[0][a] = Complex::new(coefficients[0], 0.0);
-            for k in 1..=h {
-                pg[k][a] = Complex::new(coefficients[2 * k - 1], -coefficients[2 * k]);
-            }
-        }
+        let pg = self.forcing(omega, &project);
+        let layout = self.layout.as_ref().expect("prepared");
         let mut linear = Linear {
             omega,
             harmonics: h,
@@ -538,6 +518,47 @@ impl CondensedBalance {
             }
         }
         Ok(linear)
+    }
+
+    /// Pᵀg_k per harmonic (complex amplitudes, m each): g(t) the force at the rigid motion
+    /// itself with the meshes' forces added back, sampled at the settings' N and analysed;
+    /// `project` gives Pᵀv.
+    fn forcing(&mut self, omega: f64, project: &dyn Fn(&[f64]) -> Vec<f64>) -> Vec<Vec<Complex<f64>>> {
+        let (m, n, h) = (self.balance.m, self.balance.n, self.balance.settings.harmonics);
+        let samples = self.balance.settings.samples;
+        let period = self.balance.problem.period(omega);
+        let layout = self.layout.as_ref().expect("prepared");
+        let model = &mut self.balance.problem.model;
+        let rigid = model.rigid_velocity_at(omega);
+        let mut frame = RigidFrame::new(model, rigid);
+        let zero = vec![0.0; n];
+        let mut f = vec![0.0; n];
+        let mut g_samples = vec![vec![0.0; samples]; m];
+        for j in 0..samples {
+            let t = period * j as f64 / samples as f64;
+
+            frame.force(t, &zero, &zero, &mut f);
+            for (state, b) in frame.model().meshes.iter().zip(&layout.b) {
+                let total = state.force + state.damping_force;
+                for (fi, bi) in f.iter_mut().zip(b) {
+                    *fi += bi * total;
+                }
+            }
+            for (samples_a, g) in g_samples.iter_mut().zip(project(&f)) {
+                samples_a[j] = g;
+            }
+        }
+        let mut pg = vec![vec![Complex::new(0.0, 0.0); m]; h + 1];
+        let mut buffer = vec![Complex::new(0.0, 0.0); samples];
+        let mut coefficients = vec![0.0; 2 * h + 1];
+        for (a, g) in g_samples.iter().enumerate() {
+            self.balance.analyse(g, &mut buffer, &mut coefficients);
+            pg[0][a] = Complex::new(coefficients[0], 0.0);
+            for k in 1..=h {
+                pg[k][a] = Complex::new(coefficients[2 * k - 1], -coefficients[2 * k]);
+            }
+        }
+        pg
     }
 
     /// The residual at the contact coordinates' coefficients `x` at `omega`, with its
@@ -808,9 +829,9 @@ impl CondensedBalance {
         guess: Option<&[f64]>,
     ) -> Result<(HarmonicOrbit, CondensedReport), PeriodicError> {
         if self.symmetry == Symmetry::Full {
-            return self.solve_here(omega, guess);
+            return self.solve_started(omega, guess);
         }
-        match self.solve_here(omega, guess) {
+        match self.solve_started(omega, guess) {
             Ok((orbit, report)) if report.symmetry_residual.is_some_and(|r| r <= SYMMETRY_TOLERANCE) => {
                 Ok((orbit, report))
             }
@@ -825,11 +846,55 @@ impl CondensedBalance {
             }
             Err(PeriodicError::InvalidRequest { name, reason, .. }) if name == "symmetry" => {
                 self.use_every_mesh();
-                let (orbit, mut report) = self.solve_here(omega, None)?;
+                let (orbit, mut report) = self.solve_started(omega, None)?;
                 report.cyclic_refused = Some(reason);
                 Ok((orbit, report))
             }
             Err(e) => Err(e),
+        }
+    }
+
+    /// [`Self::solve_here`]; where Newton does not converge from the static state, again from
+    /// the period the march reaches after shooting's run-in (the full balance's cold start).
+    fn solve_started(
+        &mut self,
+        omega: f64,
+        guess: Option<&[f64]>,
+    ) -> Result<(HarmonicOrbit, CondensedReport), PeriodicError> {
+        match self.solve_here(omega, guess) {
+            Err(PeriodicError::NotConverged { .. }) if guess.is_none() => {
+                let mut newton = super::Newton::default();
+                let y = self.balance.marched_start(omega, &mut newton)?;
+                let marched = self.series(omega, y);
+                let start = self.coordinates_of(&marched)?;
+                let (mut orbit, report) = self.solve_here(omega, Some(&start))?;
+                orbit.march_steps = newton.march_steps;
+                orbit.force_evaluations += newton.evaluations;
+                Ok((orbit, report))
+            }
+            other => other,
+        }
+    }
+
+    /// The series `coefficients` (the full balance's blocks at the settings' H) at `omega`
+    /// [rad/s] as an orbit without work.
+    fn series(&self, omega: f64, coefficients: Vec<f64>) -> HarmonicOrbit {
+        let problem = &self.balance.problem;
+        HarmonicOrbit {
+            speed: omega,
+            period: problem.period(omega),
+            cycles: problem.cycles(),
+            harmonics: self.balance.settings.harmonics,
+            coefficients,
+            iterations: 0,
+            residual: 0.0,
+            last_step: 0.0,
+            factorizations: 0,
+            products: 0,
+            force_evaluations: 0,
+            march_steps: 0,
+            neighbour: None,
+            crossings: Vec::new(),
         }
     }
 
@@ -872,94 +937,20 @@ impl CondensedBalance {
             }
             None => self.cold_start(omega),
         };
-        let settings = self.balance.settings;
-        let mut evaluations = 0;
         let dims = (mz, self.layout.as_ref().expect("prepared").computed.len());
-        let mut iterations = 0;
-        let mut last = self.evaluate(omega, &x, (true, false), &mut evaluations)?;
-        // The factorised Jacobian, kept as a chord while an iteration lowers the residual by
-        // the settings' `chord_contraction` or more.
-        let mut steps: Option<Steps> = None;
-        let mut factorizations = 0;
+        let mut count = Count::default();
         // From a given guess (an orbit near, of the projected sums) straight to the projected
         // sums: where the teeth separate the plain sums' root lies several per cent away.
-        let plain = guess.is_none() || !self.projected;
-        if plain {
-            loop {
-                let norm = max_abs(&last.residual);
-                let scale = max_abs(&x).max(1.0);
-                if norm <= settings.tolerance * scale {
-                    break;
-                }
-                if iterations == settings.max_iterations {
-                    return Err(PeriodicError::NotConverged { speed: omega, iterations, residual: norm });
-                }
-                iterations += 1;
-                let linear = self.linear.as_ref().expect("prepared");
-                if let Some(conv) = last.convolution.take() {
-                    let storage = steps.take().map(|s| s.lu).unwrap_or_default();
-                    steps = Some(Steps::new(linear, conv, dims, storage));
-                    factorizations += 1;
-                }
-                let step = steps.as_ref().expect("factorised").step(&last.residual);
-                let mut lambda = 1.0;
-                let (trial, at) = loop {
-                    let xt: Vec<f64> = x.iter().zip(&step).map(|(x, d)| x + lambda * d).collect();
-                    let t = self.evaluate(omega, &xt, (false, false), &mut evaluations)?;
-                    if max_abs(&t.residual) < norm || lambda < 1.0 / 64.0 {
-                        break (xt, t);
-                    }
-                    lambda *= 0.5;
-                };
-                x = trial;
-                let contracted = max_abs(&at.residual) <= settings.chord_contraction * norm;
-                last =
-                    if contracted { at } else { self.evaluate(omega, &x, (true, false), &mut evaluations)? };
-                if lambda * max_abs(&step) <= settings.tolerance * scale && max_abs(&last.residual) <= norm {
-                    break;
-                }
-            }
+        let (mut last, mut steps) = (None, None);
+        if guess.is_none() || !self.projected {
+            let (evaluation, factorised) = self.plain_newton(omega, &mut x, dims, &mut count)?;
+            (last, steps) = (Some(evaluation), factorised);
         }
         if self.projected {
-            // From the plain root, the projected sums' root: Newton on their Jacobian (the
-            // plain sums' with the switches' time terms), kept as a chord while an iteration
-            // lowers the residual by PROJECTED_CONTRACTION or more; stopped on the steps'
-            // contraction.
-            let storage = steps.take().map(|s| s.lu).unwrap_or_default();
-            let mut at = self.evaluate(omega, &x, (true, true), &mut evaluations)?;
-            let conv = at.convolution.take().expect("asked for");
-            let mut steps = Steps::new(self.linear.as_ref().expect("prepared"), conv, dims, storage);
-            factorizations += 1;
-            last = at;
-            let mut previous = None;
-            loop {
-                let norm = max_abs(&last.residual);
-                let step = steps.step(&last.residual);
-                x.iter_mut().zip(&step).for_each(|(x, d)| *x += d);
-                last = self.evaluate(omega, &x, (false, true), &mut evaluations)?;
-                iterations += 1;
-                let length = max_abs(&step) / max_abs(&x).max(1.0);
-                if length <= settings.tolerance || newton_remainder(previous, length) <= settings.tolerance {
-                    break;
-                }
-                if iterations >= 3 * settings.max_iterations || !length.is_finite() {
-                    return Err(PeriodicError::NotConverged {
-                        speed: omega,
-                        iterations,
-                        residual: max_abs(&last.residual),
-                    });
-                }
-                previous = Some(length);
-                if max_abs(&last.residual) > PROJECTED_CONTRACTION * norm {
-                    let mut fresh = self.evaluate(omega, &x, (true, true), &mut evaluations)?;
-                    let conv = fresh.convolution.take().expect("asked for");
-                    steps = Steps::new(self.linear.as_ref().expect("prepared"), conv, dims, steps.lu);
-                    factorizations += 1;
-                    last = fresh;
-                    previous = None;
-                }
-            }
+            last = Some(self.projected_newton(omega, &mut x, dims, steps, &mut count)?);
         }
+        let last = last.expect("the plain or the projected run");
+        let Count { evaluations, iterations, factorizations } = count;
         let residual = max_abs(&last.residual);
         let symmetry_residual = match self.symmetry {
             Symmetry::Full => None,
@@ -994,6 +985,112 @@ impl CondensedBalance {
             cyclic_refused: None,
         };
         Ok((orbit, report))
+    }
+
+    /// Newton on the plain sums from `x` (to their root, in place), with a backtracking line
+    /// search; the factorised Jacobian kept as a chord while an iteration lowers the residual
+    /// by the settings' `chord_contraction` or more. The last evaluation and factorisation.
+    fn plain_newton(
+        &mut self,
+        omega: f64,
+        x: &mut Vec<f64>,
+        dims: (usize, usize),
+        count: &mut Count,
+    ) -> Result<(Evaluation, Option<Steps>), PeriodicError> {
+        let settings = self.balance.settings;
+        let mut steps: Option<Steps> = None;
+        let mut last = self.evaluate(omega, x, (true, false), &mut count.evaluations)?;
+        loop {
+            let norm = max_abs(&last.residual);
+            let scale = max_abs(x).max(1.0);
+            if norm <= settings.tolerance * scale {
+                return Ok((last, steps));
+            }
+            if count.iterations == settings.max_iterations {
+                return Err(PeriodicError::NotConverged {
+                    speed: omega,
+                    iterations: count.iterations,
+                    residual: norm,
+                });
+            }
+            count.iterations += 1;
+            let linear = self.linear.as_ref().expect("prepared");
+            if let Some(conv) = last.convolution.take() {
+                let storage = steps.take().map(|s| s.lu).unwrap_or_default();
+                steps = Some(Steps::new(linear, conv, dims, storage));
+                count.factorizations += 1;
+            }
+            let step = steps.as_ref().expect("factorised").step(&last.residual);
+            let mut lambda = 1.0;
+            let (trial, at) = loop {
+                let xt: Vec<f64> = x.iter().zip(&step).map(|(x, d)| x + lambda * d).collect();
+                let t = self.evaluate(omega, &xt, (false, false), &mut count.evaluations)?;
+                if max_abs(&t.residual) < norm || lambda < 1.0 / 64.0 {
+                    break (xt, t);
+                }
+                lambda *= 0.5;
+            };
+            *x = trial;
+            let contracted = max_abs(&at.residual) <= settings.chord_contraction * norm;
+            last =
+                if contracted { at } else { self.evaluate(omega, x, (true, false), &mut count.evaluations)? };
+            if lambda * max_abs(&step) <= settings.tolerance * scale && max_abs(&last.residual) <= norm {
+                return Ok((last, steps));
+            }
+        }
+    }
+
+    /// Newton on the projected sums from `x` (in place): their Jacobian is the plain sums'
+    /// with the switches' time terms, kept as a chord while an iteration lowers the residual
+    /// by [`PROJECTED_CONTRACTION`] or more; stopped on the steps' contraction. `steps` lends
+    /// its storage. The last evaluation.
+    fn projected_newton(
+        &mut self,
+        omega: f64,
+        x: &mut [f64],
+        dims: (usize, usize),
+        steps: Option<Steps>,
+        count: &mut Count,
+    ) -> Result<Evaluation, PeriodicError> {
+        let tolerance = self.balance.settings.tolerance;
+        let limit = 3 * self.balance.settings.max_iterations;
+        let mut storage = steps.map(|s| s.lu).unwrap_or_default();
+        let mut previous = None;
+        let mut fresh = true;
+        let mut last = self.evaluate(omega, x, (true, true), &mut count.evaluations)?;
+        let mut steps = None;
+        loop {
+            if fresh {
+                let conv = last.convolution.take().expect("asked for");
+                let taken: Option<Steps> = steps.take();
+                let lu = taken.map(|s| s.lu).unwrap_or_else(|| std::mem::take(&mut storage));
+                steps = Some(Steps::new(self.linear.as_ref().expect("prepared"), conv, dims, lu));
+                count.factorizations += 1;
+                previous = None;
+            }
+            let norm = max_abs(&last.residual);
+            let step = steps.as_ref().expect("factorised").step(&last.residual);
+            x.iter_mut().zip(&step).for_each(|(x, d)| *x += d);
+            last = self.evaluate(omega, x, (false, true), &mut count.evaluations)?;
+            count.iterations += 1;
+            let length = max_abs(&step) / max_abs(x).max(1.0);
+            if length <= tolerance || newton_remainder(previous, length) <= tolerance {
+                return Ok(last);
+            }
+            if count.iterations >= limit || !length.is_finite() {
+                let residual = max_abs(&last.residual);
+                return Err(PeriodicError::NotConverged {
+                    speed: omega,
+                    iterations: count.iterations,
+                    residual,
+                });
+            }
+            previous = Some(length);
+            fresh = max_abs(&last.residual) > PROJECTED_CONTRACTION * norm;
+            if fresh {
+                last = self.evaluate(omega, x, (true, true), &mut count.evaluations)?;
+            }
+        }
     }
 
     /// The static state's contact coordinates, no harmonics.

@@ -201,22 +201,11 @@ impl CondensedBalance {
         self.prepare(omega)?;
         let at = self.evaluate(omega, x, (false, self.projected), evaluations)?;
         let coefficients = self.expand(omega, &at.forces);
-        let problem = &self.balance.problem;
         Ok(HarmonicOrbit {
-            speed: omega,
-            period: problem.period(omega),
-            cycles: problem.cycles(),
-            harmonics: self.balance.settings.harmonics,
-            coefficients,
             iterations,
             residual: max_abs(&at.residual),
-            last_step: 0.0,
-            factorizations: 0,
-            products: 0,
             force_evaluations: *evaluations,
-            march_steps: 0,
-            neighbour: None,
-            crossings: Vec::new(),
+            ..self.series(omega, coefficients)
         })
     }
 
@@ -288,23 +277,7 @@ impl CondensedBalance {
         let samples = self.balance.settings.samples;
         let coordinates = self.balance.problem.sampled_flow(omega, z, samples, work)?;
         let y = self.balance.analyse_samples(&coordinates);
-        let problem = &self.balance.problem;
-        let marched = HarmonicOrbit {
-            speed: omega,
-            period: problem.period(omega),
-            cycles: problem.cycles(),
-            harmonics: self.balance.settings.harmonics,
-            coefficients: y,
-            iterations: 0,
-            residual: 0.0,
-            last_step: 0.0,
-            factorizations: 0,
-            products: 0,
-            force_evaluations: 0,
-            march_steps: 0,
-            neighbour: None,
-            crossings: Vec::new(),
-        };
+        let marched = self.series(omega, y);
         let guess = self.coordinates_of(&marched)?;
         let (solved, report) = self.solve(omega, Some(&guess))?;
         work.rhs_evaluations += report.law_evaluations;
