@@ -202,75 +202,9 @@ impl HarmonicBalance {
         if fresh || !self.arc_current(linear) {
             own = Some(self.arc_linearize(predicted[n] * unit, &predicted[..n], unit, work).ok()?);
         }
-        let mut y = predicted.to_vec();
-        let mut previous = f64::INFINITY;
-        let mut last = None;
         let tolerance = self.settings.tolerance;
-        // Broyden's updates of the bordered system's inverse since the last linearization,
-        // H_k = H_0 + Σ a_i ỹ_iᵀ ("bad" Broyden: no transposed solves), and the residual
-        // f = (R, −g) of the last correction's start.
-        let mut updates: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
-        let mut before: Option<Vec<f64>> = None;
-        for iteration in 1..=max_corrections {
-            let omega = y[n] * unit;
-            let r = match (&own, iteration) {
-                // A fresh linearization at the predicted point holds its residual.
-                (Some(l), 1) => l.residual.clone(),
-                _ => self.evaluate(omega, &y[..n], None, &mut work.evaluations, true).ok()?,
-            };
-            let norm = max_abs(&r);
-            if !norm.is_finite() || (norm >= previous && iteration > 2) {
-                return None;
-            }
-            let g =
-                -constraint.iter().zip(y.iter().zip(predicted)).map(|(c, (a, b))| c * (a - b)).sum::<f64>();
-            let mut f = r.clone();
-            f.push(-g);
-            // H_k f, and the step −H_{k+1} f with Broyden's update from the last
-            // correction s_k = −H_k f_k: H_{k+1} = H_k + a ỹᵀ with ỹ = y / yᵀy, y = f − f_k
-            // and a = s_k − H_k y = −H_k f, so H_{k+1} f = H_k f (1 − ỹᵀf), one solve.
-            let mut update = None;
-            if norm > ARC_CHORD_CONTRACTION * previous {
-                own = Some(self.arc_linearize(omega, &y[..n], unit, work).ok()?);
-                updates.clear();
-            } else if let Some(f_before) = before.take() {
-                let dy: Vec<f64> = f.iter().zip(&f_before).map(|(a, b)| a - b).collect();
-                let yy: f64 = dy.iter().map(|v| v * v).sum();
-                if yy > 0.0 {
-                    update = Some(dy.into_iter().map(|v| v / yy).collect::<Vec<f64>>());
-                }
-            }
-            previous = norm;
-            let l = own.as_ref().unwrap_or(linear);
-            let w = self.arc_apply(l, &f, constraint, &updates, work);
-            let step: Vec<f64> = match update {
-                Some(ytilde) => {
-                    let along: f64 = ytilde.iter().zip(&f).map(|(p, q)| p * q).sum();
-                    let step = w.iter().map(|v| -v * (1.0 - along)).collect();
-                    updates.push((w.iter().map(|v| -v).collect(), ytilde));
-                    step
-                }
-                None => w.iter().map(|v| -v).collect(),
-            };
-            if step.iter().any(|v| !v.is_finite()) {
-                return None;
-            }
-            before = Some(f);
-            work.corrections += 1;
-            y.iter_mut().zip(&step).for_each(|(a, d)| *a += d);
-            // The step, or the distance to the root it leaves estimated from the steps'
-            // contraction ([`newton_remainder`]; the Jacobian of the plain sums is not the
-            // projected residual's, and the corrections converge linearly), at most the
-            // tolerance, in x and in λ alike.
-            let length = max_abs(&step[..n]) / max_abs(&y[..n]).max(1.0);
-            let length = length.max(step[n].abs() / y[n].abs().max(1.0));
-            let remainder = newton_remainder(last, length);
-            if length <= tolerance || remainder <= tolerance {
-                return Some((y, iteration - 1));
-            }
-            last = Some(length);
-        }
-        None
+        let mut run = FullArc { balance: self, unit, work };
+        bordered_correct(&mut run, linear, own, constraint, predicted, (unit, max_corrections), tolerance)
     }
 
     /// The orbit at the coefficients `x` and speed `omega` [rad/s] whose
@@ -340,6 +274,155 @@ impl HarmonicBalance {
     /// The shooting problem, to march on (the continuation's restarts).
     pub fn problem_mut(&mut self) -> &mut PeriodicProblem {
         &mut self.problem
+    }
+}
+
+/// What the bordered corrector ([`bordered_correct`]) asks of a balance: the full one
+/// ([`HarmonicBalance::arc_correct`]) or the condensed one.
+pub(super) trait Bordered {
+    /// A linearization at a point.
+    type Linear;
+    /// The residual at the coefficients `x` and speed `omega` [rad/s] (switches projected).
+    fn residual_at(&mut self, omega: f64, x: &[f64]) -> Option<Vec<f64>>;
+    /// A fresh linearization at `x` and `omega`.
+    fn linearize_at(&mut self, omega: f64, x: &[f64]) -> Option<Self::Linear>;
+    /// The residual a linearization was taken with.
+    fn residual_of(linear: &Self::Linear) -> &[f64];
+    /// H_k `v`: the bordered solve on `linear` with the Broyden `updates` a ỹᵀ added.
+    fn bordered_solve(
+        &mut self,
+        linear: &Self::Linear,
+        v: &[f64],
+        constraint: &[f64],
+        updates: &[(Vec<f64>, Vec<f64>)],
+    ) -> Vec<f64>;
+    /// Counts a correction.
+    fn corrected(&mut self) {}
+}
+
+/// Newton's corrections of a bordered balance from `predicted` (x, λ) on R(x, λ·`unit`) =
+/// 0, cᵀ(Y − `predicted`) = 0 with c = `constraint`, starting on `own` (a fresh
+/// linearization at `predicted`) or on `linear`, at most `max_corrections`: an iteration that
+/// contracts the residual less than [`ARC_CHORD_CONTRACTION`] takes a fresh linearization at
+/// its point, and the others update the bordered system's inverse by Broyden's rank-one
+/// formula with the change of the residual the last correction made (the balance's Jacobian
+/// is not exactly the projected residual's: without the updates the corrections contract by
+/// 0.2 to 0.5 each and near a fold run out; torsional example, 9000 to 10 500 rpm: 140 points
+/// without, 80 with, docs/PERIODIC.md §3). Stops when the step, or the distance to the root
+/// it leaves estimated from the steps' contraction, is at most `tolerance`. The corrected
+/// point and the corrections it took (the last, below the tolerance, not counted), or `None`
+/// where the residual grows, an evaluation fails or the corrections run out.
+pub(super) fn bordered_correct<B: Bordered>(
+    balance: &mut B,
+    linear: &B::Linear,
+    mut own: Option<B::Linear>,
+    constraint: &[f64],
+    predicted: &[f64],
+    (unit, max_corrections): (f64, usize),
+    tolerance: f64,
+) -> Option<(Vec<f64>, usize)> {
+    let n = predicted.len() - 1;
+    let mut y = predicted.to_vec();
+    let mut previous = f64::INFINITY;
+    let mut last = None;
+    // Broyden's updates of the bordered system's inverse since the last linearization,
+    // H_k = H_0 + Σ a_i ỹ_iᵀ ("bad" Broyden: no transposed solves), and the residual
+    // f = (R, −g) of the last correction's start.
+    let mut updates: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+    let mut before: Option<Vec<f64>> = None;
+    for iteration in 1..=max_corrections {
+        let omega = y[n] * unit;
+        let r = match (&own, iteration) {
+            // A fresh linearization at the predicted point holds its residual.
+            (Some(l), 1) => B::residual_of(l).to_vec(),
+            _ => balance.residual_at(omega, &y[..n])?,
+        };
+        let norm = max_abs(&r);
+        if !norm.is_finite() || (norm >= previous && iteration > 2) {
+            return None;
+        }
+        let g = -constraint.iter().zip(y.iter().zip(predicted)).map(|(c, (a, b))| c * (a - b)).sum::<f64>();
+        let mut f = r;
+        f.push(-g);
+        // H_k f, and the step −H_{k+1} f with Broyden's update from the last correction
+        // s_k = −H_k f_k: H_{k+1} = H_k + a ỹᵀ with ỹ = y / yᵀy, y = f − f_k and
+        // a = s_k − H_k y = −H_k f, so H_{k+1} f = H_k f (1 − ỹᵀf), one solve.
+        let mut update = None;
+        if norm > ARC_CHORD_CONTRACTION * previous {
+            own = Some(balance.linearize_at(omega, &y[..n])?);
+            updates.clear();
+        } else if let Some(f_before) = before.take() {
+            let dy: Vec<f64> = f.iter().zip(&f_before).map(|(a, b)| a - b).collect();
+            let yy: f64 = dy.iter().map(|v| v * v).sum();
+            if yy > 0.0 {
+                update = Some(dy.into_iter().map(|v| v / yy).collect::<Vec<f64>>());
+            }
+        }
+        previous = norm;
+        let l = own.as_ref().unwrap_or(linear);
+        let w = balance.bordered_solve(l, &f, constraint, &updates);
+        let step: Vec<f64> = match update {
+            Some(ytilde) => {
+                let along: f64 = ytilde.iter().zip(&f).map(|(p, q)| p * q).sum();
+                let step = w.iter().map(|v| -v * (1.0 - along)).collect();
+                updates.push((w.iter().map(|v| -v).collect(), ytilde));
+                step
+            }
+            None => w.iter().map(|v| -v).collect(),
+        };
+        if step.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        before = Some(f);
+        balance.corrected();
+        y.iter_mut().zip(&step).for_each(|(a, d)| *a += d);
+        // The step, or the distance to the root it leaves estimated from the steps'
+        // contraction ([`newton_remainder`]), at most the tolerance, in x and in λ alike.
+        let length = max_abs(&step[..n]) / max_abs(&y[..n]).max(1.0);
+        let length = length.max(step[n].abs() / y[n].abs().max(1.0));
+        let remainder = newton_remainder(last, length);
+        if length <= tolerance || remainder <= tolerance {
+            return Some((y, iteration - 1));
+        }
+        last = Some(length);
+    }
+    None
+}
+
+/// The full balance in a corrector's run: its speed unit and work.
+struct FullArc<'a> {
+    balance: &'a mut HarmonicBalance,
+    unit: f64,
+    work: &'a mut ArcWork,
+}
+
+impl Bordered for FullArc<'_> {
+    type Linear = ArcLinear;
+
+    fn residual_at(&mut self, omega: f64, x: &[f64]) -> Option<Vec<f64>> {
+        self.balance.evaluate(omega, x, None, &mut self.work.evaluations, true).ok()
+    }
+
+    fn linearize_at(&mut self, omega: f64, x: &[f64]) -> Option<ArcLinear> {
+        self.balance.arc_linearize(omega, x, self.unit, self.work).ok()
+    }
+
+    fn residual_of(linear: &ArcLinear) -> &[f64] {
+        &linear.residual
+    }
+
+    fn bordered_solve(
+        &mut self,
+        linear: &ArcLinear,
+        v: &[f64],
+        constraint: &[f64],
+        updates: &[(Vec<f64>, Vec<f64>)],
+    ) -> Vec<f64> {
+        self.balance.arc_apply(linear, v, constraint, updates, self.work)
+    }
+
+    fn corrected(&mut self) {
+        self.work.corrections += 1;
     }
 }
 

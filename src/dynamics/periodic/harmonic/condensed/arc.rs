@@ -4,7 +4,8 @@
 //! by block elimination on the condensed Jacobian's Woodbury solve.
 
 use super::*;
-use crate::dynamics::periodic::harmonic::{refit, ARC_CHORD_CONTRACTION, SPEED_DIFFERENCE};
+use crate::dynamics::periodic::harmonic::arc::{bordered_correct, Bordered};
+use crate::dynamics::periodic::harmonic::{refit, SPEED_DIFFERENCE};
 use crate::dynamics::periodic::{HarmonicSettings, PeriodicProblem};
 use crate::dynamics::response::Work;
 
@@ -77,28 +78,6 @@ impl CondensedBalance {
         t
     }
 
-    /// The bordered solve H_k `v` on `linear` by block elimination, with the Broyden
-    /// `updates` a ỹᵀ added (as the full balance's `arc_apply`).
-    fn condensed_apply(
-        linear: &CondensedArc,
-        v: &[f64],
-        constraint: &[f64],
-        updates: &[(Vec<f64>, Vec<f64>)],
-    ) -> Vec<f64> {
-        let n = v.len() - 1;
-        let b: Vec<f64> = linear.steps.step(&v[..n]).iter().map(|x| -x).collect();
-        let a = &linear.solved_derivative;
-        let (cx, cl) = constraint.split_at(n);
-        let dot = |u: &[f64], w: &[f64]| u.iter().zip(w).map(|(p, q)| p * q).sum::<f64>();
-        let dl = (v[n] - dot(cx, &b)) / (cl[0] - dot(cx, a));
-        let mut out: Vec<f64> = b.iter().zip(a).map(|(bi, ai)| bi - dl * ai).chain([dl]).collect();
-        for (a, y) in updates {
-            let along: f64 = y.iter().zip(v).map(|(p, q)| p * q).sum();
-            out.iter_mut().zip(a).for_each(|(o, ai)| *o += along * ai);
-        }
-        out
-    }
-
     /// Newton's corrections of the bordered balance from `predicted` (x, λ) on
     /// R(x, λ·`unit`) = 0, cᵀ(Y − `predicted`) = 0 with c = `constraint`, on `linear` (or a
     /// fresh linearization at `predicted` when `fresh`), at most `max_corrections`: the full
@@ -126,66 +105,9 @@ impl CondensedBalance {
         if fresh || linear.harmonics != self.balance.settings.harmonics {
             own = Some(self.arc_linearize(predicted[n] * unit, &predicted[..n], unit, evaluations).ok()?);
         }
-        let mut y = predicted.to_vec();
-        let mut previous = f64::INFINITY;
-        let mut last = None;
         let tolerance = self.balance.settings.tolerance;
-        let mut updates: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
-        let mut before: Option<Vec<f64>> = None;
-        for iteration in 1..=max_corrections {
-            let omega = y[n] * unit;
-            let r = match (&own, iteration) {
-                (Some(l), 1) => l.residual.clone(),
-                _ => {
-                    self.prepare(omega).ok()?;
-                    self.evaluate(omega, &y[..n], (false, true), evaluations).ok()?.residual
-                }
-            };
-            let norm = max_abs(&r);
-            if !norm.is_finite() || (norm >= previous && iteration > 2) {
-                return None;
-            }
-            let g =
-                -constraint.iter().zip(y.iter().zip(predicted)).map(|(c, (a, b))| c * (a - b)).sum::<f64>();
-            let mut f = r;
-            f.push(-g);
-            let mut update = None;
-            if norm > ARC_CHORD_CONTRACTION * previous {
-                own = Some(self.arc_linearize(omega, &y[..n], unit, evaluations).ok()?);
-                updates.clear();
-            } else if let Some(f_before) = before.take() {
-                let dy: Vec<f64> = f.iter().zip(&f_before).map(|(a, b)| a - b).collect();
-                let yy: f64 = dy.iter().map(|v| v * v).sum();
-                if yy > 0.0 {
-                    update = Some(dy.into_iter().map(|v| v / yy).collect::<Vec<f64>>());
-                }
-            }
-            previous = norm;
-            let l = own.as_ref().unwrap_or(linear);
-            let w = Self::condensed_apply(l, &f, constraint, &updates);
-            let step: Vec<f64> = match update {
-                Some(ytilde) => {
-                    let along: f64 = ytilde.iter().zip(&f).map(|(p, q)| p * q).sum();
-                    let step = w.iter().map(|v| -v * (1.0 - along)).collect();
-                    updates.push((w.iter().map(|v| -v).collect(), ytilde));
-                    step
-                }
-                None => w.iter().map(|v| -v).collect(),
-            };
-            if step.iter().any(|v| !v.is_finite()) {
-                return None;
-            }
-            before = Some(f);
-            y.iter_mut().zip(&step).for_each(|(a, d)| *a += d);
-            let length = max_abs(&step[..n]) / max_abs(&y[..n]).max(1.0);
-            let length = length.max(step[n].abs() / y[n].abs().max(1.0));
-            let remainder = newton_remainder(last, length);
-            if length <= tolerance || remainder <= tolerance {
-                return Some((y, iteration - 1));
-            }
-            last = Some(length);
-        }
-        None
+        let mut run = CondensedRun { balance: self, unit, evaluations };
+        bordered_correct(&mut run, linear, own, constraint, predicted, (unit, max_corrections), tolerance)
     }
 
     /// The orbit, in the full balance's coordinates, at the contact coordinates' coefficients
@@ -298,5 +220,52 @@ impl CondensedBalance {
     fn dims(&self) -> (usize, usize) {
         let layout = self.layout.as_ref().expect("prepared");
         (layout.coordinates(), layout.computed.len())
+    }
+}
+
+/// The condensed balance in a corrector's run: its speed unit and evaluations.
+struct CondensedRun<'a> {
+    balance: &'a mut CondensedBalance,
+    unit: f64,
+    evaluations: &'a mut u64,
+}
+
+impl Bordered for CondensedRun<'_> {
+    type Linear = CondensedArc;
+
+    fn residual_at(&mut self, omega: f64, x: &[f64]) -> Option<Vec<f64>> {
+        self.balance.prepare(omega).ok()?;
+        Some(self.balance.evaluate(omega, x, (false, true), self.evaluations).ok()?.residual)
+    }
+
+    fn linearize_at(&mut self, omega: f64, x: &[f64]) -> Option<CondensedArc> {
+        self.balance.arc_linearize(omega, x, self.unit, self.evaluations).ok()
+    }
+
+    fn residual_of(linear: &CondensedArc) -> &[f64] {
+        &linear.residual
+    }
+
+    /// By block elimination on `linear`'s Woodbury solve (b = J⁻¹v_R, δλ = (v_c − cₓᵀb) /
+    /// (c_λ − cₓᵀa), δx = b − δλ a), with the `updates` a ỹᵀ added.
+    fn bordered_solve(
+        &mut self,
+        linear: &CondensedArc,
+        v: &[f64],
+        constraint: &[f64],
+        updates: &[(Vec<f64>, Vec<f64>)],
+    ) -> Vec<f64> {
+        let n = v.len() - 1;
+        let b: Vec<f64> = linear.steps.step(&v[..n]).iter().map(|x| -x).collect();
+        let a = &linear.solved_derivative;
+        let (cx, cl) = constraint.split_at(n);
+        let dot = |u: &[f64], w: &[f64]| u.iter().zip(w).map(|(p, q)| p * q).sum::<f64>();
+        let dl = (v[n] - dot(cx, &b)) / (cl[0] - dot(cx, a));
+        let mut out: Vec<f64> = b.iter().zip(a).map(|(bi, ai)| bi - dl * ai).chain([dl]).collect();
+        for (a, y) in updates {
+            let along: f64 = y.iter().zip(v).map(|(p, q)| p * q).sum();
+            out.iter_mut().zip(a).for_each(|(o, ai)| *o += along * ai);
+        }
+        out
     }
 }
