@@ -82,7 +82,7 @@ impl CondensedBalance {
     /// R(x, λ·`unit`) = 0, cᵀ(Y − `predicted`) = 0 with c = `constraint`, on `linear` (or a
     /// fresh linearization at `predicted` when `fresh`), at most `max_corrections`: the full
     /// balance's corrector (`HarmonicBalance::arc_correct`: a fresh linearization where an
-    /// iteration contracts less than [`ARC_CHORD_CONTRACTION`], Broyden's updates of the
+    /// iteration contracts less than [`super::super::ARC_CHORD_CONTRACTION`], Broyden's updates of the
     /// bordered inverse otherwise, the stop on the steps' contraction; a fresh linearization
     /// too where `linear` was taken at other harmonics). The corrected point and the
     /// corrections it took, or `None`.
