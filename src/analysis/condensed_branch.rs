@@ -5,7 +5,7 @@
 //! Floquet multipliers the whole model's (so an orbit of the planets' symmetry that loses
 //! stability to one that breaks it shows as a multiplier leaving the unit circle).
 
-use crate::analysis::continuation::{march, BranchSolver};
+use crate::analysis::continuation::{balance_point, march, BranchSolver};
 use crate::dynamics::periodic::{
     CondensedArc, CondensedBalance, HarmonicOrbit, PeriodicError, PeriodicOrbit,
 };
@@ -46,19 +46,7 @@ impl<'a> CondensedBranch<'a> {
         work.rhs_evaluations += evaluations;
         let full = self.balance.balance();
         let intervals = MULTIPLIER_INTERVALS_PER_HARMONIC * full.settings().harmonics;
-        let multipliers = full.floquet_multipliers(&orbit, intervals)?;
-        let z = full.initial_unknowns(&orbit);
-        let point = PeriodicOrbit {
-            speed: omega,
-            period: full.problem().period(omega),
-            cycles: full.problem().cycles(),
-            z,
-            residual,
-            newton_iterations: corrections,
-            multipliers,
-            flows: *flows,
-            work: *work,
-        };
+        let point = balance_point(full, &orbit, intervals, (corrections, residual), (work, flows))?;
         self.orbits.push(orbit);
         Ok(point)
     }

@@ -571,21 +571,37 @@ impl<'a> BalanceBranch<'a> {
     ) -> Result<PeriodicOrbit, PeriodicError> {
         let orbit = self.balance.arc_orbit(omega, x, linear, corrections, arc);
         let intervals = self.balance.settings().samples;
-        let multipliers = self.balance.floquet_multipliers(&orbit, intervals)?;
-        let z = self.balance.initial_unknowns(&orbit);
+        let point =
+            balance_point(self.balance, &orbit, intervals, (corrections, linear.residual()), (work, flows))?;
         self.orbits.push(orbit);
-        Ok(PeriodicOrbit {
-            speed: omega,
-            period: self.balance.problem().period(omega),
-            cycles: self.balance.problem().cycles(),
-            z,
-            residual: linear.residual(),
-            newton_iterations: corrections,
-            multipliers,
-            flows: *flows,
-            work: *work,
-        })
+        Ok(point)
     }
+}
+
+/// A branch point of the balance's `orbit` (its speed the orbit's) with its Floquet
+/// multipliers on `intervals` ([`HarmonicBalance::floquet_multipliers`]): its state at t = 0
+/// as the shooting problem's unknowns, the `corrections` that found it and its `residual`,
+/// the step's `work` and `flows`.
+pub(crate) fn balance_point(
+    balance: &mut HarmonicBalance,
+    orbit: &HarmonicOrbit,
+    intervals: usize,
+    (corrections, residual): (usize, f64),
+    (work, flows): (&mut Work, &mut usize),
+) -> Result<PeriodicOrbit, PeriodicError> {
+    let multipliers = balance.floquet_multipliers(orbit, intervals)?;
+    let omega = orbit.speed;
+    Ok(PeriodicOrbit {
+        speed: omega,
+        period: balance.problem().period(omega),
+        cycles: balance.problem().cycles(),
+        z: balance.initial_unknowns(orbit),
+        residual,
+        newton_iterations: corrections,
+        multipliers,
+        flows: *flows,
+        work: *work,
+    })
 }
 
 /// `arc`'s force evaluations and corrections into `work`.
