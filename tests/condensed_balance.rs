@@ -4,6 +4,10 @@
 //! resonance and where the teeth separate; its size independent of the bodies' coordinates;
 //! the planets' symmetry and its refusal where the planets differ.
 
+#[path = "support/long_marching.rs"]
+mod long_marching;
+
+use long_marching::{long_marched, planet_one, worn_states};
 use planetwear::analysis::accuracy::harmonic_error;
 use planetwear::contact::ltca::SetModel;
 use planetwear::dynamics::equations::PlanetaryDynamics;
@@ -11,18 +15,11 @@ use planetwear::dynamics::periodic::{
     highest_frequency, CondensedBalance, HarmonicBalance, HarmonicSettings, PeriodicProblem,
     ShootingSettings, Symmetry,
 };
-use planetwear::dynamics::response::{steady_state, SteadyState};
 use planetwear::model::gear::GearSet;
 use planetwear::model::run::RunSettings;
 use planetwear::scene::{Fidelity, Scene};
 
 const RPM: f64 = std::f64::consts::PI / 30.0;
-
-/// The example's worn states κ = 0..6 (the wear model's, as the FMU ships them).
-fn worn_states() -> &'static [planetwear::wear::state::WornState] {
-    static STATES: std::sync::OnceLock<Vec<planetwear::wear::state::WornState>> = std::sync::OnceLock::new();
-    STATES.get_or_init(|| planetwear::package::pack::example_wear_states().unwrap())
-}
 
 /// The scene's gear set, run settings and model with its flanks worn to state `kappa`.
 fn build(scene: &Scene, kappa: usize) -> (GearSet, RunSettings, PlanetaryDynamics) {
@@ -47,11 +44,6 @@ fn condensed(model: &PlanetaryDynamics, rpm: f64, symmetry: Symmetry) -> Condens
     CondensedBalance::new(HarmonicBalance::new(problem, settings).unwrap(), symmetry)
 }
 
-/// Planet 1's two meshes' harmonics.
-fn pick(s: &SteadyState) -> Vec<planetwear::dynamics::spectrum::Harmonics> {
-    vec![s.meshes[0].harmonics.clone(), s.meshes[1].harmonics.clone()]
-}
-
 /// E_h of the cyclic condensed orbit at `rpm` against time marching at relative tolerance
 /// 1e-10 from the static state, run in until two successive mesh cycles agree to 1e-10 of
 /// the mean tooth force (at most 12 revolutions); also the largest |μ| and the separation.
@@ -62,18 +54,8 @@ fn against_marching(kappa: usize, rpm: f64) -> (f64, f64, f64) {
     let samples = cb.balance().settings().samples;
     let mu = cb.balance().floquet_multipliers(&orbit, samples).unwrap()[0].modulus();
     let solved = cb.balance().steady_state(&orbit).unwrap();
-    let long = run
-        .with(|d| {
-            d.relative_tolerance = 1e-10;
-            d.run_in_revolutions = 12.0;
-            d.steady_tolerance = 1e-10;
-            d.measured_revolutions = 0.5;
-            d.samples_per_mesh_cycle = 64;
-        })
-        .unwrap();
-    let mut m = model;
-    let marched = steady_state(&mut m, &set, &long, rpm * RPM, None).unwrap();
-    let e = harmonic_error(&pick(&solved), &pick(&marched));
+    let marched = long_marched(&set, &run, model, rpm * RPM);
+    let e = harmonic_error(&planet_one(&solved), &planet_one(&marched));
     eprintln!(
         "κ = {kappa}, {rpm} rpm: E_h {e:.3e}, |μ| {mu:.4}, separation {:.4}, {:?} ({} unknowns, {} iterations, \
          symmetry residual {:?})",

@@ -3,6 +3,10 @@
 //! docs/ACCURACY.md), the folds against the marching sweep's jump, the
 //! period and the removal of the free rotation, and the command line.
 
+#[path = "support/long_marching.rs"]
+mod long_marching;
+
+use long_marching::{long_marched, planet_one, worn_states};
 use planetwear::analysis::accuracy::harmonic_error;
 use planetwear::analysis::continuation::{
     continue_branch, follow_branch, follow_joining, BalanceBranch, BifurcationKind, Branch,
@@ -14,7 +18,7 @@ use planetwear::dynamics::periodic::{
     excitation_period, HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings,
     NOISE_FLOOR_FACTOR,
 };
-use planetwear::dynamics::response::{steady_state, sweep, Direction};
+use planetwear::dynamics::response::{sweep, Direction};
 use planetwear::dynamics::solver::SecondOrderSystem;
 use planetwear::model::gear::GearSet;
 use planetwear::model::run::RunSettings;
@@ -50,12 +54,6 @@ fn shooting_error(scene: &Scene, rpm: f64) -> (f64, f64, bool) {
     shooting_error_at(scene, rpm, 0)
 }
 
-/// The example's worn states κ = 0..6 (the wear model's, as the FMU ships them).
-fn worn_states() -> &'static [planetwear::wear::state::WornState] {
-    static STATES: std::sync::OnceLock<Vec<planetwear::wear::state::WornState>> = std::sync::OnceLock::new();
-    STATES.get_or_init(|| planetwear::package::pack::example_wear_states().unwrap())
-}
-
 /// [`shooting_error`] with the flanks worn to state `kappa` (0: unworn).
 fn shooting_error_at(scene: &Scene, rpm: f64, kappa: usize) -> (f64, f64, bool) {
     let (set, run, model) = build(scene);
@@ -70,21 +68,8 @@ fn shooting_error_at(scene: &Scene, rpm: f64, kappa: usize) -> (f64, f64, bool) 
     let mut problem = PeriodicProblem::new(model.clone(), ShootingSettings::default(), omega).unwrap();
     let orbit = problem.solve(omega, None).unwrap();
     let shot = problem.steady_state(&orbit).unwrap();
-    let long = run
-        .with(|d| {
-            d.relative_tolerance = 1e-10;
-            d.run_in_revolutions = 12.0;
-            d.steady_tolerance = 1e-10;
-            d.measured_revolutions = 0.5;
-            d.samples_per_mesh_cycle = 64;
-        })
-        .unwrap();
-    let mut m = model;
-    let marched = steady_state(&mut m, &set, &long, omega, None).unwrap();
-    let pick = |s: &planetwear::dynamics::response::SteadyState| {
-        vec![s.meshes[0].harmonics.clone(), s.meshes[1].harmonics.clone()]
-    };
-    let e = harmonic_error(&pick(&shot), &pick(&marched));
+    let marched = long_marched(&set, &run, model, omega);
+    let e = harmonic_error(&planet_one(&shot), &planet_one(&marched));
     eprintln!(
         "κ = {kappa}, {rpm} rpm: E_h {e:.3e}, |mu| {:.4}, separation {:.4}, {} flows, {} Newton iterations",
         orbit.largest_multiplier(),
