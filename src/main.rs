@@ -314,6 +314,11 @@ struct ValidateArgs {
     /// Reduced grid (3000–14000 rpm in 250 rpm steps, 100 rpm from 6000 to 10000; no wear-resolution check).
     #[arg(long)]
     quick: bool,
+    /// The forced-response rows from marching sweeps up and down on the grid, read a second
+    /// time at a third of the tolerance where attractors coexist (the exhaustive reading),
+    /// instead of from the continuation's branches (the default).
+    #[arg(long)]
+    full: bool,
     /// The scene to validate (default the built-in example-2004).
     #[arg(long, default_value = "example-2004")]
     scene: String,

@@ -1,6 +1,7 @@
 //! The calibrated example (`example-2004`): its relieved chamfer edges, the
-//! calibration that makes it (`planetwear calibrate`), and the frequency and
-//! wear-shape rows of the validation report on the reduced grid.
+//! calibration that makes it (`planetwear calibrate`), the frequency and
+//! wear-shape rows of the validation report on the reduced grid, and its
+//! forced response from the continuation's branches and from marching sweeps.
 
 use planetwear::analysis::modes::{natural_modes, ModeClass};
 use planetwear::analysis::study::calibrate::{
@@ -224,40 +225,22 @@ fn the_reduced_validation_keeps_its_frequency_and_wear_shape_rows() {
         let expected = if KNOWN_FAILING.contains(&r.id.as_str()) { Verdict::Fail } else { Verdict::Pass };
         assert_eq!(r.verdict, expected, "{}: study {}, ours {} ({})", r.id, r.study, r.ours, r.tolerance);
     }
-    // The forced-response rows are read twice: the finer sweeps start below
-    // the lowest speed where the directions differ (the jump) and run to the
-    // grid's end; below it the curves are the first sweeps'.
-    let from = v.check_from.expect("the reduced plan reads the sweeps twice");
-    let jump = v.row("jump-softening").and_then(|r| r.value).expect("the reduced sweeps jump");
-    assert!(from < jump, "second reading from {from} rpm, the jump's branches from {jump} rpm");
-    assert_eq!(v.check_curves.len(), 4);
-    for (first, again) in v.curves.iter().zip(&v.check_curves) {
-        assert_eq!(first.points.len(), again.points.len());
-        let mut moved = 0;
-        for (a, b) in first.points.iter().zip(&again.points) {
-            assert_eq!(a.speed, b.speed);
-            if rad_per_s_to_rpm(a.speed) < from - 1e-6 {
-                assert_eq!(a, b, "below {from} rpm the curves are the first sweeps'");
-            } else if a.rms != b.rms {
-                moved += 1;
-            }
-        }
-        assert!(moved > 0, "the finer sweeps changed no figure of κ = {} {:?}", first.kappa, first.direction);
+    // The forced-response rows come from the continuation's branches: one
+    // reading, so no row is undecided; the four curves lie on the plan's grid;
+    // the jump row names the branches' folds; the spot checks by marching
+    // agree with the branches within their tolerance.
+    assert!(v.check_curves.is_empty() && v.check_from.is_none());
+    assert!(v.rows.iter().all(|r| r.verdict != Verdict::Undecided));
+    assert_eq!(v.curves.len(), 4);
+    for c in &v.curves {
+        assert_eq!(c.points.len(), v.curves[0].points.len());
+        assert!(c.points.iter().all(|p| p.rms.iter().all(|f| f.is_finite() && *f > 0.0)), "{c:?}");
     }
-    for id in [
-        "peak-8500",
-        "peak-10750",
-        "off-resonance-2750",
-        "jump-softening",
-        "separation-large-peak",
-        "separation-ring-upper-branch",
-        "wear-new-peaks",
-        "wear-near-resonance-upper-branch",
-        "wear-near-resonance-separating",
-    ] {
-        let r = v.row(id).unwrap_or_else(|| panic!("no row {id}"));
-        assert!(r.error.contains("at a third of the tolerance"), "{id}: {}", r.error);
-    }
+    let jump = v.row("jump-softening").expect("a jump row");
+    assert!(jump.ours.contains("κ = 0 up: folds at"), "{}", jump.ours);
+    let spot = v.row("forced-response-spot-check").expect("a spot-check row");
+    assert_eq!(spot.verdict, Verdict::Pass, "{}", spot.ours);
+    assert!(spot.value.is_some_and(|d| d <= 0.01), "{}", spot.ours);
     // The calibration's targets are labelled fitted, the rows that follow
     // from the model's construction identities; the headline counts the
     // independent rows alone.
@@ -286,4 +269,36 @@ fn the_reduced_validation_keeps_its_frequency_and_wear_shape_rows() {
     for r in &v.rows {
         assert!(!r.ours.is_empty() && !r.tolerance.is_empty() && r.seconds >= 0.0, "{r:?}");
     }
+}
+
+/// The exhaustive reading (`validate --full`): marching sweeps, read a
+/// second time at a third of the tolerance from below the lowest speed
+/// where the directions differ; here on the stretch of the jump.
+#[test]
+fn the_marching_reading_reads_the_sweeps_twice_from_below_the_jump() {
+    let plan = ValidationPlan { sweep: vec![(6000.0, 10000.0, 100.0)], ..ValidationPlan::quick().marching() };
+    let v = validate(&Scene::example_2004(), &plan).unwrap();
+    let from = v.check_from.expect("the marching plan reads the sweeps twice");
+    let jump = v.row("jump-softening").and_then(|r| r.value).expect("the sweeps jump");
+    assert!(from < jump, "second reading from {from} rpm, the jump's branches from {jump} rpm");
+    assert_eq!(v.check_curves.len(), 4);
+    for (first, again) in v.curves.iter().zip(&v.check_curves) {
+        assert_eq!(first.points.len(), again.points.len());
+        let mut moved = 0;
+        for (a, b) in first.points.iter().zip(&again.points) {
+            assert_eq!(a.speed, b.speed);
+            if rad_per_s_to_rpm(a.speed) < from - 1e-6 {
+                assert_eq!(a, b, "below {from} rpm the curves are the first sweeps'");
+            } else if a.rms != b.rms {
+                moved += 1;
+            }
+        }
+        assert!(moved > 0, "the finer sweeps changed no figure of κ = {} {:?}", first.kappa, first.direction);
+    }
+    for id in ["peak-8500", "jump-softening", "separation-large-peak", "separation-ring-upper-branch"] {
+        let r = v.row(id).unwrap_or_else(|| panic!("no row {id}"));
+        assert!(r.error.contains("at a third of the tolerance"), "{id}: {}", r.error);
+        assert!(r.method.starts_with("marching sweeps"), "{id}: {}", r.method);
+    }
+    assert!(v.row("forced-response-spot-check").is_none(), "no spot checks on marching sweeps");
 }

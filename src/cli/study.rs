@@ -3,27 +3,38 @@
 
 use crate::*;
 
-pub(crate) fn validate_command(ValidateArgs { out, quick, scene, compare }: ValidateArgs) -> Result<()> {
+pub(crate) fn validate_command(
+    ValidateArgs { out, quick, full, scene, compare }: ValidateArgs,
+) -> Result<()> {
     use planetwear::analysis::study::validation::{headline, validate, ValidationPlan};
     let s = load_scene(&scene)?;
     let set = validated(&s)?;
     let plan = if quick { ValidationPlan::quick() } else { ValidationPlan::full() };
+    let plan = if full { plan.marching() } else { plan };
     // The compared scene is loaded and checked before the long run.
     let other_scene =
         compare.as_deref().map(|c| load_scene(c).and_then(|o| validated(&o).map(|_| o))).transpose()?;
-    let v = validate(&s, &plan).map_err(|e| anyhow::anyhow!("validation of {scene}: {e}"))?;
-    let other = match (&other_scene, &compare) {
-        (Some(o), Some(name)) => {
-            let plan =
-                ValidationPlan { attractor_check: false, wear_resolution_check: false, ..plan.clone() };
-            Some(validate(o, &plan).map_err(|e| anyhow::anyhow!("validation of --compare {name}: {e}"))?)
-        }
-        _ => None,
-    };
+    // The two validations side by side: each leaves a core idle on its
+    // sequential stretches (a run's continuation, a marching sweep).
+    let (v, other) = rayon::join(
+        || validate(&s, &plan).map_err(|e| anyhow::anyhow!("validation of {scene}: {e}")),
+        || match (&other_scene, &compare) {
+            (Some(o), Some(name)) => {
+                let plan =
+                    ValidationPlan { attractor_check: false, wear_resolution_check: false, ..plan.clone() };
+                validate(o, &plan)
+                    .map(Some)
+                    .map_err(|e| anyhow::anyhow!("validation of --compare {name}: {e}"))
+            }
+            _ => Ok(None),
+        },
+    );
+    let (v, other) = (v?, other?);
     let command = format!(
-        "planetwear validate --out {}{}{}{}",
+        "planetwear validate --out {}{}{}{}{}",
         out.display(),
         if quick { " --quick" } else { "" },
+        if full { " --full" } else { "" },
         if scene == "example-2004" { String::new() } else { format!(" --scene {scene}") },
         compare.as_deref().map(|c| format!(" --compare {c}")).unwrap_or_default()
     );

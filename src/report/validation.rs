@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use super::plot::{write_chart, Chart, PlotError, Series};
 use super::write_atomic;
-use crate::analysis::study::validation::{headline, Validation, Verdict, STUDY_PEAKS};
+use crate::analysis::study::validation::{headline, ForcedResponse, Validation, Verdict, STUDY_PEAKS};
 use crate::dynamics::response::Direction;
 use crate::scene::units::rad_per_s_to_rpm;
 
@@ -72,11 +72,14 @@ pub fn comparison_markdown(v: &Validation, other: &Validation) -> String {
     );
     let _ = writeln!(
         out,
-        "The same claims on the built-in scene `{}` ({:.0} s; its forced-response rows read once, without the \
-         second reading at a third of the tolerance, and its wear without the resolution check). `{}`: **{}** \
-         `{}`: **{}**\n",
+        "The same claims on the built-in scene `{}` ({:.0} s; {}, and its wear without the resolution check). \
+         `{}`: **{}** `{}`: **{}**\n",
         other.scene,
         other.seconds,
+        match other.plan.forced {
+            ForcedResponse::Continuation => "its forced-response rows from the continuation's branches",
+            ForcedResponse::Marching => "its forced-response rows read once, without the second reading at a third of the tolerance",
+        },
         v.scene,
         headline(&v.rows),
         other.scene,
@@ -114,6 +117,36 @@ pub fn comparison_markdown(v: &Validation, other: &Validation) -> String {
     out
 }
 
+/// How the forced-response rows were read, in a paragraph (empty when there is nothing to say).
+fn reading_words(v: &Validation) -> String {
+    let mut out = String::new();
+    if let Some(from) = v.check_from {
+        let _ = writeln!(
+            out,
+            "The forced-response rows are read twice: on the sweeps, and on the same sweeps run again at a third of \
+             the tolerance from {from:.0} rpm up, below the lowest speed where the up and down sweeps differ (several \
+             attractors coexist there). A row whose verdict differs between the two readings is **undecided**: \
+             which attractor a sweep rides turns on errors of the integrator's size, so the model does not decide \
+             the claim at the accuracy computed.\n"
+        );
+    }
+    if v.plan.forced == ForcedResponse::Continuation {
+        let _ = writeln!(
+            out,
+            "The forced-response rows are read on the continuation's branches: the periodic states of the harmonic \
+             balance condensed onto the contact coordinates, followed up and down in speed through their folds, \
+             with their stability from the whole model's Floquet multipliers (docs/PERIODIC.md §4). Each \
+             direction's curve is the first stable stretch of its run that spans each speed, so a claim about the \
+             upper or the lower branch is read on that branch and no row depends on which attractor an \
+             integrator's error picks. Where no stable periodic state spans a speed, a sweep leaves the branch: \
+             those speeds are read on a marching sweep over the stretch started from the branch's state. The \
+             spot-check row marches from stable branch points. `planetwear validate --full` reads the same rows \
+             on marching sweeps instead.\n"
+        );
+    }
+    out
+}
+
 /// The report as Markdown; `figures` is the figures' folder relative to the report,
 /// `command` the command that made it; `compare`, a second scene's validation
 /// set beside it ([`comparison_markdown`]).
@@ -147,17 +180,12 @@ pub fn markdown(
          and the transverse–torsional frequencies, which follow from the torsional ones through the near-rigid \
          planet bearings chosen); its pass checks the code.\n"
     );
-    if let Some(from) = v.check_from {
-        let _ = writeln!(
-            out,
-            "The forced-response rows are read twice: on the sweeps, and on the same sweeps run again at a third of \
-             the tolerance from {from:.0} rpm up, below the lowest speed where the up and down sweeps differ (several \
-             attractors coexist there). A row whose verdict differs between the two readings is **undecided**: \
-             which attractor a sweep rides turns on errors of the integrator's size, so the model does not decide \
-             the claim at the accuracy computed.\n"
-        );
-    }
-    let _ = writeln!(out, "Dynamic rows: {}.\n", v.integrator);
+    out.push_str(&reading_words(v));
+    let _ = writeln!(
+        out,
+        "Time-marching rows (off resonance, phasing, spot checks, or the sweeps with `--full`): {}.\n",
+        v.integrator
+    );
     match previous {
         Some(p) => {
             let moved = moved_rows(p, v);

@@ -29,6 +29,7 @@
 
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use self::rows::{Rows, SweepReading};
@@ -48,6 +49,7 @@ use crate::wear::flank::Flank;
 use crate::wear::state::WornState;
 use crate::wear::stepper::WearModel;
 
+mod continued;
 mod rows;
 mod rules;
 
@@ -77,7 +79,41 @@ pub struct ValidationPlan {
     /// speeds where several attractors coexist ([`CHECK_REFINEMENT`]).
     #[serde(default)]
     pub attractor_check: bool,
+    /// How the forced-response rows are computed (reports written before
+    /// the field read as marching).
+    #[serde(default = "ForcedResponse::marching")]
+    pub forced: ForcedResponse,
 }
+
+/// How the validation computes its forced response.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ForcedResponse {
+    /// The continuation's branches on the cyclic condensed harmonic balance,
+    /// up and down, stable and unstable, with their folds; each direction's
+    /// curve read on the branch its run rides; spot-checked by marching from
+    /// branch points ([`SPOT_SPEEDS`]).
+    Continuation,
+    /// Marching sweeps up and down on the grid, read a second time at a
+    /// third of the tolerance where the plan asks (`validate --full`).
+    Marching,
+}
+
+impl ForcedResponse {
+    fn marching() -> Self {
+        ForcedResponse::Marching
+    }
+}
+
+/// Speeds \[rpm\] at which the continuation's curves are spot-checked by
+/// marching, each κ and direction (those on the plan's grid): the study's
+/// off-resonance example, its four peaks, and the two-branch band's middle.
+pub const SPOT_SPEEDS: [f64; 6] = [2750.0, 4200.0, 8000.0, 8500.0, 10750.0, 13000.0];
+
+/// A spot check's march may differ from the branch by this share of
+/// F^(rms): the marching integrator's error (E_h up to 2.9e-3,
+/// docs/ACCURACY.md) with a margin for its run-in.
+pub const SPOT_TOLERANCE: f64 = 0.01;
 
 /// The second reading of the sweeps runs them at the run's relative
 /// tolerance divided by this (generalized-α: this many times the steps).
@@ -101,6 +137,7 @@ impl ValidationPlan {
             reference_tolerance: 1e-8,
             wear_resolution_check: true,
             attractor_check: true,
+            forced: ForcedResponse::Continuation,
         }
     }
 
@@ -113,7 +150,14 @@ impl ValidationPlan {
             reference_tolerance: 1e-8,
             wear_resolution_check: false,
             attractor_check: true,
+            forced: ForcedResponse::Continuation,
         }
+    }
+
+    /// The same plan with the forced response from marching sweeps, read
+    /// twice where attractors coexist (`validate --full`).
+    pub fn marching(self) -> Self {
+        Self { forced: ForcedResponse::Marching, attractor_check: true, ..self }
     }
 
     fn speeds(&self) -> Vec<f64> {
@@ -396,19 +440,7 @@ pub fn prominent_peaks(x: &[f64], y: &[f64], share: f64) -> Vec<(f64, f64)> {
 }
 
 fn curve(s: &Sweep, kappa: u32) -> Curve {
-    let mut points: Vec<CurvePoint> = s
-        .points
-        .iter()
-        .map(|p| {
-            let m = |k: MeshKind| p.meshes.iter().find(|m| m.planet == 0 && m.mesh == k);
-            let (a, b) = (m(MeshKind::SunPlanet), m(MeshKind::RingPlanet));
-            CurvePoint {
-                speed: p.input_speed,
-                rms: [a.map_or(0.0, |m| m.harmonics.rms), b.map_or(0.0, |m| m.harmonics.rms)],
-                separation: [a.map_or(0.0, |m| m.separation), b.map_or(0.0, |m| m.separation)],
-            }
-        })
-        .collect();
+    let mut points: Vec<CurvePoint> = s.points.iter().map(continued::measures).collect();
     points.sort_by(|a, b| a.speed.total_cmp(&b.speed));
     Curve { kappa, direction: s.direction, points }
 }
@@ -602,8 +634,9 @@ impl WearRun {
     }
 }
 
-/// The four sweeps (κ = 0 and the worn κ, up and down) and, when the plan
-/// asks, their second reading.
+/// The four forced-response curves (κ = 0 and the worn κ, up and down):
+/// from the continuation's branches, or from marching sweeps and, when the
+/// plan asks, their second reading.
 struct SweepRun {
     /// The four curves in the order κ = 0 up, down, worn up, down.
     curves: Vec<Curve>,
@@ -611,10 +644,40 @@ struct SweepRun {
     check_curves: Vec<Curve>,
     /// Lowest speed of the second reading's sweeps \[rpm\].
     check_from: Option<f64>,
-    /// Speeds per sweep.
-    speeds: usize,
-    /// Time of both readings' sweeps \[s\].
+    /// How the curves were computed, in words.
+    method: String,
+    /// The continuation's folds, in words (empty for marching sweeps).
+    folds: String,
+    /// The spot checks by marching (empty for marching sweeps).
+    spots: Vec<Spot>,
+    /// Time of the curves (both readings, or the branches) \[s\].
     seconds: f64,
+    /// Time of the spot checks \[s\].
+    spot_seconds: f64,
+}
+
+/// A march from a stable branch point against the branch.
+#[derive(Clone, Debug)]
+struct Spot {
+    /// Geometry state.
+    kappa: u32,
+    /// The run the point is on.
+    direction: Direction,
+    /// The point's speed \[rpm\].
+    rpm: f64,
+    /// F^(rms) of the sun–planet and the ring–planet mesh on the branch \[N\].
+    branch: [f64; 2],
+    /// The same after marching from the point's state \[N\].
+    marched: [f64; 2],
+}
+
+impl Spot {
+    /// The larger relative difference of the two meshes' F^(rms).
+    fn difference(&self) -> f64 {
+        (0..2)
+            .map(|k| (self.marched[k] - self.branch[k]).abs() / self.branch[k].abs().max(1e-300))
+            .fold(0.0, f64::max)
+    }
 }
 
 impl SweepRun {
@@ -622,9 +685,28 @@ impl SweepRun {
         set: &GearSet,
         run: &RunSettings,
         plan: &ValidationPlan,
+        models: [&PlanetaryDynamics; 2],
+        kappa: u32,
+        integrator: &str,
+    ) -> Result<Self, String> {
+        match plan.forced {
+            ForcedResponse::Continuation => continued::sweep_run(set, run, plan, models, kappa, integrator),
+            ForcedResponse::Marching => {
+                Self::marched(set, run, plan, models[0], models[1], kappa, integrator)
+            }
+        }
+    }
+
+    /// The curves from marching sweeps and, where the plan asks, their second reading.
+    #[allow(clippy::too_many_arguments)]
+    fn marched(
+        set: &GearSet,
+        run: &RunSettings,
+        plan: &ValidationPlan,
         model0: &PlanetaryDynamics,
         model6: &PlanetaryDynamics,
         kappa: u32,
+        integrator: &str,
     ) -> Result<Self, String> {
         let t = Instant::now();
         let speeds: Vec<f64> = plan.speeds().into_iter().map(rpm_to_rad_per_s).collect();
@@ -685,12 +767,28 @@ impl SweepRun {
                 (0..4).map(|k| splice(&curves[k], &curve(&again[k], kappas[k]))).collect()
             }
         };
+        let check_from = check_index.map(|i| rad_per_s_to_rpm(speeds[i]));
+        let method = format!(
+            "marching sweeps {}, up and down, κ = 0 and κ = {kappa} (4 sweeps, {} speeds each, run in parallel; {integrator}){}",
+            plan.describe(),
+            speeds.len(),
+            match check_from {
+                Some(r) => format!(
+                    "; read again on the same sweeps at a third of the tolerance from {r:.0} rpm up ({CHECK_LEAD_STEPS} steps below the lowest speed where up and down differ by more than {:.0} %)",
+                    100.0 * DIRECTIONS_DIFFER
+                ),
+                None => String::new(),
+            }
+        );
         Ok(Self {
             curves,
             check_curves,
-            check_from: check_index.map(|i| rad_per_s_to_rpm(speeds[i])),
-            speeds: speeds.len(),
+            check_from,
+            method,
+            folds: String::new(),
+            spots: Vec::new(),
             seconds: t.elapsed().as_secs_f64(),
+            spot_seconds: 0.0,
         })
     }
 }
@@ -723,19 +821,24 @@ impl OffResonance {
                 d.relative_tolerance = plan.reference_tolerance;
             })
             .map_err(|e| e.to_string())?;
-        let mut figures = Vec::new();
-        for rpm in OFF_RESONANCE {
-            let omega = rpm_to_rad_per_s(rpm);
-            let at = |r: &RunSettings, m: &PlanetaryDynamics| -> Result<(f64, f64), String> {
-                let mut m = m.clone();
-                steady_state(&mut m, set, r, omega, None)
-                    .map(|ss| sun_planet(&ss))
-                    .map_err(|e| format!("{rpm} rpm: {e}"))
-            };
-            let (a0, a6) = (at(run, models[0])?, at(run, models[1])?);
-            let (r0, r6) = (at(&tight, models[0])?, at(&tight, models[1])?);
-            figures.push((rpm, a0, a6, r0, r6));
-        }
+        // The sixteen steady states on rayon's threads.
+        let figures = OFF_RESONANCE
+            .par_iter()
+            .map(|&rpm| {
+                let omega = rpm_to_rad_per_s(rpm);
+                let at = |r: &RunSettings, m: &PlanetaryDynamics| -> Result<(f64, f64), String> {
+                    let mut m = m.clone();
+                    steady_state(&mut m, set, r, omega, None)
+                        .map(|ss| sun_planet(&ss))
+                        .map_err(|e| format!("{rpm} rpm: {e}"))
+                };
+                let ((a0, a6), (r0, r6)) = rayon::join(
+                    || rayon::join(|| at(run, models[0]), || at(run, models[1])),
+                    || rayon::join(|| at(&tight, models[0]), || at(&tight, models[1])),
+                );
+                Ok((rpm, a0?, a6?, r0?, r6?))
+            })
+            .collect::<Result<Vec<_>, String>>()?;
         let method = format!(
             "steady states from the static deflection at each speed; {integrator}; reference RK 5(4) at {:e}",
             plan.reference_tolerance
@@ -762,11 +865,17 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
 
     let model0 = PlanetaryDynamics::new(&set, wear.unworn.set_model(&set)).map_err(|e| e.to_string())?;
     let model6 = PlanetaryDynamics::new(&set, wear.worn.set_model(&set)).map_err(|e| e.to_string())?;
-    let sweeps = SweepRun::compute(&set, &run, plan, &model0, &model6, wear.worn.kappa)?;
-    let reading = SweepReading::new(&set, plan, &modes.tt, wear.worn.kappa, &sweeps, &integrator, &run);
+    // The off-resonance steady states beside the curves (a core is idle on
+    // the curves' sequential stretches).
+    let (sweeps, off) = rayon::join(
+        || SweepRun::compute(&set, &run, plan, [&model0, &model6], wear.worn.kappa, &integrator),
+        || OffResonance::compute(&set, &run, plan, [&model0, &model6], &integrator),
+    );
+    let (sweeps, off) = (sweeps?, off?);
+    let reading = SweepReading::new(&set, plan, &modes.tt, wear.worn.kappa, &sweeps, &run);
     rows::peak_rows(&mut rows, &reading);
     rows::jump_rows(&mut rows, &reading);
-    let off = OffResonance::compute(&set, &run, plan, [&model0, &model6], &integrator)?;
+    rows::spot_row(&mut rows, &reading);
     rows::rise_rows(&mut rows, &reading, &off);
     rows::worn_sweep_rows(&mut rows, &reading);
     rows::phasing_row(&mut rows, &set, &run, &model0, &integrator)?;

@@ -12,7 +12,7 @@ use super::rules::{
 };
 use super::{
     distinct, read, Curve, Evidence, Modes, OffResonance, Readings, Row, SweepRun, ValidationPlan, Verdict,
-    WearRun, CHECK_LEAD_STEPS, DIRECTIONS_DIFFER, STUDY_FREQUENCIES, STUDY_PEAKS,
+    WearRun, SPOT_TOLERANCE, STUDY_FREQUENCIES, STUDY_PEAKS,
 };
 use crate::analysis::modes::{Mode, ModeClass};
 use crate::analysis::study::peaks::excited_family;
@@ -20,7 +20,7 @@ use crate::contact::hertz::{contact_modulus, line_contact};
 use crate::contact::iso6336::{iso_stiffness, IsoPair};
 use crate::contact::ltca::SetModel;
 use crate::dynamics::equations::PlanetaryDynamics;
-use crate::dynamics::response::steady_state;
+use crate::dynamics::response::{steady_state, Direction};
 use crate::dynamics::spectrum::mesh_phases;
 use crate::model::gear::{GearSet, MeshKind};
 use crate::model::lumped::Fidelity;
@@ -93,7 +93,6 @@ impl<'a> SweepReading<'a> {
         tt: &'a [Mode],
         kappa: u32,
         sweeps: &'a SweepRun,
-        integrator: &str,
         run: &RunSettings,
     ) -> Self {
         let step = plan.sweep.iter().map(|s| s.2).fold(0.0, f64::max);
@@ -102,18 +101,7 @@ impl<'a> SweepReading<'a> {
         let first = read(&sweeps.curves, step, fm_per_rpm, f_rot1);
         let second =
             (!sweeps.check_curves.is_empty()).then(|| read(&sweeps.check_curves, step, fm_per_rpm, f_rot1));
-        let method = format!(
-            "continuation sweeps {}, up and down, κ = 0 and κ = {kappa} (4 sweeps, {} speeds each, run in parallel; {integrator}){}",
-            plan.describe(),
-            sweeps.speeds,
-            match sweeps.check_from {
-                Some(r) => format!(
-                    "; read again on the same sweeps at a third of the tolerance from {r:.0} rpm up ({CHECK_LEAD_STEPS} steps below the lowest speed where up and down differ by more than {:.0} %)",
-                    100.0 * DIRECTIONS_DIFFER
-                ),
-                None => String::new(),
-            }
-        );
+        let method = sweeps.method.clone();
         let samples = run.samples_per_mesh_cycle();
         Self { set, plan, tt, kappa, sweeps, first, second, method, fm_per_rpm, f_rot1, samples }
     }
@@ -594,7 +582,10 @@ fn ring_separation(r: &SweepReading, curves: &[Curve], x: &Readings) -> (Vec<(f6
 
 /// The jump near f₂ ≈ 2 f_m and the separation on its upper branch, on both meshes.
 pub(super) fn jump_rows(rows: &mut Rows, r: &SweepReading) {
-    let ((ours, ok, value), again) = r.both(|_, x| jump(r, x));
+    let ((mut ours, ok, value), again) = r.both(|_, x| jump(r, x));
+    if !r.sweeps.folds.is_empty() {
+        ours += &format!("; the branches: {}", r.sweeps.folds);
+    }
     let edges = |t: &(String, bool, Option<f64>)| t.0.split(';').next().unwrap_or_default().to_string();
     rows.push(
         "jump-softening",
@@ -667,6 +658,48 @@ pub(super) fn jump_rows(rows: &mut Rows, r: &SweepReading) {
             again.map_or(String::new(), |a| r.again_words(words(&a.0)))
         ),
         r.sweeps.seconds,
+    );
+}
+
+/// The continuation's curves against marching: each spot check marches
+/// from a stable branch point's state with the run's integrator and
+/// compares F^(rms) of both meshes; a march that left the branch, or a
+/// branch state that is not a solution of the equations of motion, shows
+/// as a difference far above the integrator's error.
+pub(super) fn spot_row(rows: &mut Rows, r: &SweepReading) {
+    if r.sweeps.spots.is_empty() {
+        return;
+    }
+    let spots = &r.sweeps.spots;
+    let worst = spots.iter().max_by(|a, b| a.difference().total_cmp(&b.difference())).expect("not empty");
+    let dir = |d: Direction| if d == Direction::Up { "up" } else { "down" };
+    let each = spots
+        .iter()
+        .map(|s| format!("κ = {} {} {:.0} rpm {:.2e}", s.kappa, dir(s.direction), s.rpm, s.difference()))
+        .collect::<Vec<_>>()
+        .join(", ");
+    rows.push(
+        "forced-response-spot-check",
+        FORCED_SECTION,
+        Evidence::Identity,
+        "the continuation's stable branch points are the steady states time marching reaches from them",
+        "—".into(),
+        format!(
+            "largest difference of F^(rms) {:.2e} (κ = {} {} at {:.0} rpm: {:.1} against {:.1} N/mm on the branch); {} points: {each}",
+            worst.difference(),
+            worst.kappa,
+            dir(worst.direction),
+            worst.rpm,
+            r.per_mm(worst.marched[0]),
+            r.per_mm(worst.branch[0]),
+            spots.len()
+        ),
+        Some(worst.difference()),
+        &format!("≤ {SPOT_TOLERANCE} of F^(rms), both meshes (the marching integrator's error with a margin for its run-in)"),
+        worst.difference() <= SPOT_TOLERANCE,
+        &format!("marching from each branch point's state at the period's end; {}", r.method),
+        "the marching integrator's error (docs/ACCURACY.md)".into(),
+        r.sweeps.spot_seconds,
     );
 }
 

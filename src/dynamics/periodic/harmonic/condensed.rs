@@ -387,6 +387,16 @@ impl CondensedBalance {
         self.projected = projected;
     }
 
+    /// The full balance it condenses, given back (its settings hold the condensed H).
+    pub fn into_balance(self) -> HarmonicBalance {
+        self.balance
+    }
+
+    /// The meshes it computes now: [`Symmetry::Full`] once a cyclic solve was refused.
+    pub fn symmetry(&self) -> Symmetry {
+        self.symmetry
+    }
+
     /// The full balance it condenses (settings, problem, multipliers, steady state).
     pub fn balance(&mut self) -> &mut HarmonicBalance {
         &mut self.balance

@@ -1,0 +1,519 @@
+//! The validation's forced response from the continuation's branches: the
+//! periodic states of the harmonic balance condensed onto the contact
+//! coordinates (`CondensedBalance`, the planets' cyclic symmetry checked at
+//! every point), followed up and down in speed through their folds, with
+//! their stability from the whole model's Floquet multipliers.
+//!
+//! A direction's curve is what its run passes on stable states: at each
+//! speed of the plan's grid, the first stretch of the branch (in the order
+//! the run followed it) whose two ends are stable and which spans that
+//! speed. So the up run's curve holds the lower branch of a softening jump
+//! up to its fold and the down run's the upper one down to its fold; no
+//! reading depends on which attractor an integrator's error picked.
+//! Where no stable stretch spans a speed, the curve takes the branch's
+//! unstable state there, and the count of such speeds is reported.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::{Curve, CurvePoint, ForcedResponse, Spot, SweepRun, ValidationPlan, SPOT_SPEEDS};
+use crate::analysis::condensed_branch::CondensedBranch;
+use crate::analysis::continuation::{
+    follow_branch, follow_joining, BifurcationKind, Branch, ContinuationSettings,
+};
+use crate::dynamics::equations::PlanetaryDynamics;
+use crate::dynamics::periodic::{
+    CondensedBalance, HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings, Symmetry,
+};
+use crate::dynamics::response::{steady_state, sweep_from, Direction, State, SteadyState, Window};
+use crate::model::gear::GearSet;
+use crate::model::gear::MeshKind;
+use crate::model::run::RunSettings;
+use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
+
+/// One direction's continuation, reduced to what the rows read.
+pub(super) struct Continued {
+    /// The measures of each branch point, in branch order.
+    pub points: Vec<CurvePoint>,
+    /// Whether each point is stable.
+    pub stable: Vec<bool>,
+    /// Whether each point is the first after a gap (not joined to the one before).
+    pub after_gap: Vec<bool>,
+    /// Each point's state at the period's end (where a march from it starts).
+    pub ends: Vec<State>,
+    /// Fold speeds \[rpm\], in the order met.
+    pub folds: Vec<f64>,
+    /// Period-doubling speeds \[rpm\].
+    pub doublings: Vec<f64>,
+    /// Why the run ended.
+    pub ended: String,
+    /// For each speed asked for a spot check, the stable point nearest it:
+    /// its measures and its state at the period's end (where a march from it starts).
+    pub spots: Vec<(CurvePoint, State)>,
+    /// The speed \[rad/s\] where the run joined an earlier run's branch and
+    /// ended (`None`: it ran to its last speed or stopped for another reason).
+    pub joined: Option<f64>,
+    /// Whether the run kept the planets' cyclic symmetry to its end (else it
+    /// went on with every mesh from the first orbit that broke it).
+    pub cyclic: bool,
+}
+
+/// F^(rms) and separation of planet 1's sun–planet and ring–planet mesh.
+pub(super) fn measures(ss: &SteadyState) -> CurvePoint {
+    let m = |k: MeshKind| ss.meshes.iter().find(|m| m.planet == 0 && m.mesh == k);
+    let (a, b) = (m(MeshKind::SunPlanet), m(MeshKind::RingPlanet));
+    CurvePoint {
+        speed: ss.input_speed,
+        rms: [a.map_or(0.0, |m| m.harmonics.rms), b.map_or(0.0, |m| m.harmonics.rms)],
+        separation: [a.map_or(0.0, |m| m.separation), b.map_or(0.0, |m| m.separation)],
+    }
+}
+
+/// Follows the periodic states of `model` from `from` to `to` \[rad/s\] at
+/// the nominal step `step` \[rad/s\] on the cyclic condensed balance, and
+/// keeps the stable point nearest each of `spots` \[rad/s\] for its spot
+/// check. With `joining`, an earlier run of the same model from `to`
+/// towards `from`, the run ends where it joins that run's unbroken stretch
+/// (`follow_joining`: beyond, it would retrace it). Also gives the branch.
+pub(super) fn follow(
+    model: &PlanetaryDynamics,
+    (from, to, step): (f64, f64, f64),
+    spots: &[f64],
+    joining: Option<&Branch>,
+) -> Result<(Continued, Branch), String> {
+    let problem =
+        PeriodicProblem::new(model.clone(), ShootingSettings::default(), from).map_err(|e| e.to_string())?;
+    let hb = HarmonicBalance::new(problem, HarmonicSettings::default()).map_err(|e| e.to_string())?;
+    let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
+    let settings = ContinuationSettings::new(from, to, step);
+    let mut solver = CondensedBranch::new(&mut cb);
+    let branch = match joining {
+        Some(other) => follow_joining(&mut solver, &settings, other, |_| {}),
+        None => follow_branch(&mut solver, &settings, |_| {}),
+    }
+    .map_err(|e| e.to_string())?;
+    let orbits = std::mem::take(&mut solver.orbits);
+    let cyclic = cb.symmetry() == Symmetry::Cyclic;
+    let mut points = Vec::with_capacity(orbits.len());
+    let mut ends = Vec::with_capacity(orbits.len());
+    let mut nearest: Vec<Option<(f64, CurvePoint, State)>> = vec![None; spots.len()];
+    for (orbit, p) in orbits.iter().zip(&branch.points) {
+        let ss = cb.balance().steady_state(orbit).map_err(|e| e.to_string())?;
+        let m = measures(&ss);
+        for (near, spot) in nearest.iter_mut().zip(spots) {
+            let d = (orbit.speed - spot).abs();
+            if p.stable && near.as_ref().is_none_or(|n| d < n.0) {
+                *near = Some((d, m, ss.end.clone()));
+            }
+        }
+        points.push(m);
+        ends.push(ss.end);
+    }
+    let mut run = Continued::of(&branch, points, cyclic);
+    run.ends = ends;
+    run.spots = nearest.into_iter().flatten().map(|(_, m, s)| (m, s)).collect();
+    Ok((run, branch))
+}
+
+impl Continued {
+    fn of(branch: &Branch, points: Vec<CurvePoint>, cyclic: bool) -> Self {
+        let at = |kind: BifurcationKind| {
+            branch.bifurcations.iter().filter(|b| b.kind == kind).map(|b| rad_per_s_to_rpm(b.speed)).collect()
+        };
+        Self {
+            stable: branch.points.iter().map(|p| p.stable).collect(),
+            after_gap: branch.points.iter().map(|p| p.after_gap).collect(),
+            ends: Vec::new(),
+            folds: at(BifurcationKind::Fold),
+            doublings: at(BifurcationKind::PeriodDoubling),
+            ended: branch.ended.clone(),
+            joined: branch
+                .ended
+                .starts_with("joined")
+                .then(|| branch.points.last().map(|p| p.orbit.speed))
+                .flatten(),
+            spots: Vec::new(),
+            cyclic,
+            points,
+        }
+    }
+
+    /// The direction's curve on `grid` \[rad/s, ascending\] (see the module's
+    /// words) and, for each of its speeds, the branch point nearest it on the
+    /// stretch read, or `None` where that stretch is stable.
+    pub fn curve(&self, grid: &[f64], kappa: u32, direction: Direction) -> (Curve, Vec<Option<usize>>) {
+        let mut unstable = Vec::with_capacity(grid.len());
+        let points = grid
+            .iter()
+            .map(|&speed| {
+                let (p, stable, near) = self.at(speed);
+                unstable.push((!stable).then_some(near));
+                p
+            })
+            .collect();
+        (Curve { kappa, direction, points }, unstable)
+    }
+
+    /// The measures at `speed` on the first stretch spanning it whose ends
+    /// are both stable; failing that, one end stable; failing that, any;
+    /// with no stretch spanning it, the nearest point. Linear in speed
+    /// between the stretch's ends. Also whether the state read is stable, and
+    /// the branch point nearest `speed` of those read.
+    fn at(&self, speed: f64) -> (CurvePoint, bool, usize) {
+        let spans = |i: usize| {
+            let (a, b) = (self.points[i].speed, self.points[i + 1].speed);
+            !self.after_gap[i + 1] && speed >= a.min(b) && speed <= a.max(b)
+        };
+        let stable_ends = |i: usize| usize::from(self.stable[i]) + usize::from(self.stable[i + 1]);
+        let pairs = 0..self.points.len().saturating_sub(1);
+        let found = [2, 1, 0]
+            .into_iter()
+            .find_map(|need| pairs.clone().find(|&i| spans(i) && stable_ends(i) >= need).map(|i| (i, need)));
+        match found {
+            Some((i, need)) => {
+                let (a, b) = (&self.points[i], &self.points[i + 1]);
+                let t = if b.speed == a.speed { 0.0 } else { (speed - a.speed) / (b.speed - a.speed) };
+                let mix = |x: f64, y: f64| x + (y - x) * t;
+                let point = CurvePoint {
+                    speed,
+                    rms: [mix(a.rms[0], b.rms[0]), mix(a.rms[1], b.rms[1])],
+                    separation: [
+                        mix(a.separation[0], b.separation[0]),
+                        mix(a.separation[1], b.separation[1]),
+                    ],
+                };
+                let near = if (speed - a.speed).abs() <= (speed - b.speed).abs() { i } else { i + 1 };
+                (point, need == 2, near)
+            }
+            None => {
+                let i = (0..self.points.len())
+                    .min_by(|&i, &j| {
+                        (self.points[i].speed - speed).abs().total_cmp(&(self.points[j].speed - speed).abs())
+                    })
+                    .unwrap_or(0);
+                let mut p = self.points.get(i).copied().unwrap_or(CurvePoint {
+                    speed,
+                    rms: [f64::NAN; 2],
+                    separation: [f64::NAN; 2],
+                });
+                p.speed = speed;
+                (p, self.stable.get(i).copied().unwrap_or(false), i)
+            }
+        }
+    }
+}
+
+/// What the steps of the validation's continuation share.
+struct Continuing<'a> {
+    set: &'a GearSet,
+    run: &'a RunSettings,
+    /// The models at κ = 0 and at the worn κ.
+    models: [&'a PlanetaryDynamics; 2],
+    /// The geometry states of the two models.
+    kappas: [u32; 2],
+    /// The plan's grid \[rad/s, ascending\].
+    speeds: Vec<f64>,
+    /// The runs' ends and nominal step \[rad/s\].
+    first: f64,
+    last: f64,
+    step: f64,
+    /// The spot checks' speeds \[rad/s\].
+    spots: Vec<f64>,
+}
+
+/// One run and the curve read on it, with the count of its speeds read by marching.
+struct Read {
+    run: Continued,
+    curve: Curve,
+    marched: usize,
+}
+
+impl Continuing<'_> {
+    /// Model `s`'s up run, then its down run ending where it joins the up run's
+    /// unbroken stretch (below, it would retrace it); the up run's curve is
+    /// read (its unstable stretches marched) while the down run is followed
+    /// and read.
+    fn state(&self, s: usize) -> Result<[Read; 2], String> {
+        let model = self.models[s];
+        let (up, branch) = follow(model, (self.first, self.last, self.step), &self.spots, None)?;
+        let (up, down) = rayon::join(
+            || self.read(s, up, Direction::Up),
+            || {
+                let (down, _) =
+                    follow(model, (self.last, self.first, self.step), &self.spots, Some(&branch))?;
+                self.read(s, down, Direction::Down)
+            },
+        );
+        let (up, mut down) = (up?, down?);
+        // Below the down run's join its curve is the up run's.
+        if let Some(joined) = down.run.joined {
+            for i in (0..self.speeds.len()).filter(|&i| self.speeds[i] < joined) {
+                down.curve.points[i] = up.curve.points[i];
+            }
+        }
+        Ok([up, down])
+    }
+
+    /// The curve of `run` on the grid. Where the run's periodic state is
+    /// unstable, a sweep leaves it for another attractor (a longer period, a
+    /// torus): those speeds are read on a marching sweep over each such
+    /// stretch, in the run's direction, started from the branch's state at
+    /// its first speed. Speeds below a run's join are left to the caller.
+    fn read(&self, s: usize, run: Continued, direction: Direction) -> Result<Read, String> {
+        let (mut curve, mut unstable) = run.curve(&self.speeds, self.kappas[s], direction);
+        if let Some(joined) = run.joined {
+            for (u, w) in unstable.iter_mut().zip(&self.speeds) {
+                if *w < joined {
+                    *u = None;
+                }
+            }
+        }
+        let stretches = unstable_stretches(&unstable, direction);
+        let marched = stretches
+            .par_iter()
+            .map(|(indices, near)| {
+                let grid: Vec<f64> = indices.iter().map(|&i| self.speeds[i]).collect();
+                let mut m = self.models[s].clone();
+                let start = &run.ends[*near];
+                sweep_from(
+                    self.set,
+                    self.run,
+                    &mut m,
+                    direction,
+                    &grid,
+                    &[],
+                    Window::Fixed,
+                    Some(start),
+                    |_| {},
+                )
+                .map(|sweep| (indices, sweep))
+                .map_err(|e| {
+                    format!(
+                        "marching over an unstable stretch from {:.0} rpm: {e}",
+                        rad_per_s_to_rpm(grid[0])
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        let mut count = 0;
+        for (indices, sweep) in marched {
+            count += indices.len();
+            for (&i, ss) in indices.iter().zip(&sweep.points) {
+                curve.points[i] = measures(ss);
+            }
+        }
+        Ok(Read { run, curve, marched: count })
+    }
+
+    /// Marches from each run's stable points nearest the spot speeds and
+    /// sets the result beside the branch.
+    fn spot_checks(&self, reads: &[Read]) -> Result<Vec<Spot>, String> {
+        let marches: Vec<(usize, &Read, &(CurvePoint, State))> =
+            reads.iter().enumerate().flat_map(|(k, r)| r.run.spots.iter().map(move |s| (k, r, s))).collect();
+        marches
+            .par_iter()
+            .map(|&(k, r, (point, state))| {
+                let mut m = self.models[k / 2].clone();
+                let ss = steady_state(&mut m, self.set, self.run, point.speed, Some(state))
+                    .map_err(|e| format!("spot check at {:.1} rpm: {e}", rad_per_s_to_rpm(point.speed)))?;
+                Ok(Spot {
+                    kappa: r.curve.kappa,
+                    direction: r.curve.direction,
+                    rpm: rad_per_s_to_rpm(point.speed),
+                    branch: point.rms,
+                    marched: measures(&ss).rms,
+                })
+            })
+            .collect()
+    }
+}
+
+/// Each run's folds and period doublings, in words.
+fn bifurcation_words(reads: &[Read]) -> String {
+    let list = |xs: &[f64]| xs.iter().map(|x| format!("{x:.0}")).collect::<Vec<_>>().join(", ");
+    reads
+        .iter()
+        .map(|r| {
+            let dir = if r.curve.direction == Direction::Up { "up" } else { "down" };
+            let folds = if r.run.folds.is_empty() {
+                "no fold".to_string()
+            } else {
+                format!("folds at {} rpm", list(&r.run.folds))
+            };
+            let doubling = if r.run.doublings.is_empty() {
+                String::new()
+            } else {
+                format!(", period doubling at {} rpm", list(&r.run.doublings))
+            };
+            format!("κ = {} {dir}: {folds}{doubling}", r.curve.kappa)
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// The validation's four curves (κ = 0 and `kappa`, up and down) from the
+/// continuation's branches (module documentation), with the spot checks.
+pub(super) fn sweep_run(
+    set: &GearSet,
+    run: &RunSettings,
+    plan: &ValidationPlan,
+    models: [&PlanetaryDynamics; 2],
+    kappa: u32,
+    integrator: &str,
+) -> Result<SweepRun, String> {
+    debug_assert_eq!(plan.forced, ForcedResponse::Continuation);
+    let t = Instant::now();
+    let grid = plan.speeds();
+    let (first, last) = (grid[0], grid[grid.len() - 1]);
+    let step = plan.sweep.iter().map(|s| s.2).fold(f64::INFINITY, f64::min);
+    let c = Continuing {
+        set,
+        run,
+        models,
+        kappas: [0, kappa],
+        speeds: grid.iter().copied().map(rpm_to_rad_per_s).collect(),
+        first: rpm_to_rad_per_s(first),
+        last: rpm_to_rad_per_s(last),
+        step: rpm_to_rad_per_s(step),
+        spots: SPOT_SPEEDS
+            .iter()
+            .filter(|s| (first..=last).contains(*s))
+            .copied()
+            .map(rpm_to_rad_per_s)
+            .collect(),
+    };
+    // The two states on rayon's threads.
+    let (a, b) = rayon::join(|| c.state(0), || c.state(1));
+    let reads: Vec<Read> = a?.into_iter().chain(b?).collect();
+    let seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let spots = c.spot_checks(&reads)?;
+    let spot_seconds = t.elapsed().as_secs_f64();
+    let cyclic = reads.iter().all(|r| r.run.cyclic);
+    let early: String = reads
+        .iter()
+        .filter(|r| !r.run.ended.starts_with("reached") && r.run.joined.is_none())
+        .map(|r| format!("; a run ended early: {}", r.run.ended))
+        .collect();
+    let method = format!(
+        "continuation of the periodic states {first:.0}–{last:.0} rpm at a nominal step of {step:.0} rpm, up and down, κ = 0 and κ = {kappa} (each state's down run after its up run, ending where it joins the up run's unbroken stretch, below which its curve is the up run's; the two states in parallel), on the harmonic balance condensed onto the contact coordinates ({}; H by the rule, at most {}); stability from the whole model's Floquet multipliers; each direction's curve read on the first stable stretch of its run spanning each speed of the grid ({}){early}; {} of the 4 × {} curve points, where no stable periodic state of the run spans the speed, read on marching sweeps over those stretches from the branch's state ({integrator}); spot-checked by marching from {} stable branch points ({integrator})",
+        if cyclic {
+            "the planets' cyclic symmetry held on every run, checked at every point"
+        } else {
+            "a run gave up the planets' cyclic symmetry and went on with every mesh"
+        },
+        crate::dynamics::periodic::CONDENSED_MAX_HARMONICS,
+        plan.describe(),
+        reads.iter().map(|r| r.marched).sum::<usize>(),
+        grid.len(),
+        spots.len(),
+    );
+    Ok(SweepRun {
+        folds: bifurcation_words(&reads),
+        curves: reads.into_iter().map(|r| r.curve).collect(),
+        check_curves: Vec::new(),
+        check_from: None,
+        method,
+        spots,
+        seconds,
+        spot_seconds,
+    })
+}
+
+/// The stretches of consecutive grid indices read on an unstable state
+/// (`unstable[i]`: the branch point nearest speed i), each in the order a
+/// sweep in `direction` meets them, with the branch point nearest its first speed.
+fn unstable_stretches(unstable: &[Option<usize>], direction: Direction) -> Vec<(Vec<usize>, usize)> {
+    let mut out: Vec<(Vec<usize>, usize)> = Vec::new();
+    let mut i = 0;
+    while i < unstable.len() {
+        if unstable[i].is_none() {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < unstable.len() && unstable[i].is_some() {
+            i += 1;
+        }
+        let mut indices: Vec<usize> = (start..i).collect();
+        if direction == Direction::Down {
+            indices.reverse();
+        }
+        let near = unstable[indices[0]].expect("in the stretch");
+        out.push((indices, near));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(speed: f64, rms: f64) -> CurvePoint {
+        CurvePoint { speed, rms: [rms, 2.0 * rms], separation: [0.0, 0.0] }
+    }
+
+    /// A softening fold as an up run meets it: the lower branch up to 10,
+    /// back unstable to 8, a restart at 11 onto the branch beyond.
+    fn up_run() -> Continued {
+        let speeds = [5.0, 7.0, 9.0, 10.0, 9.0, 8.0, 11.0, 12.0];
+        let rms = [1.0, 1.2, 1.5, 2.0, 3.0, 4.0, 1.1, 1.0];
+        let stable = [true, true, true, true, false, false, true, true];
+        let after_gap = [false, false, false, false, false, false, true, false];
+        Continued {
+            points: speeds.iter().zip(rms).map(|(&s, r)| point(s, r)).collect(),
+            stable: stable.to_vec(),
+            after_gap: after_gap.to_vec(),
+            ends: Vec::new(),
+            folds: vec![10.0],
+            doublings: Vec::new(),
+            ended: String::new(),
+            joined: None,
+            spots: Vec::new(),
+            cyclic: true,
+        }
+    }
+
+    #[test]
+    fn a_run_reads_its_first_stable_stretch_and_never_the_unstable_branch_or_across_a_gap() {
+        let (curve, unstable) = up_run().curve(&[5.0, 6.0, 8.5, 9.5, 10.5, 11.5], 0, Direction::Up);
+        let rms: Vec<f64> = curve.points.iter().map(|p| p.rms[0]).collect();
+        // 8.5 and 9.5 on the lower branch (not the unstable 3.5 or 3.0), 10.5 between the fold
+        // and the restart: no stretch spans it (the gap), so the nearest point (10 or 11, both
+        // stable), 11.5 on the branch after the restart.
+        let expected = [1.0, 1.1, 1.425, 1.75, f64::NAN, 1.05];
+        for (i, (r, e)) in rms.iter().zip(expected).enumerate() {
+            if i == 4 {
+                assert!(*r == 2.0 || *r == 1.1, "{r}");
+            } else {
+                assert!((r - e).abs() < 1e-12, "{i}: {r} against {e}");
+            }
+        }
+        assert!((curve.points[2].rms[1] - 2.85).abs() < 1e-12, "the ring–planet mesh interpolated alike");
+        assert!(unstable.iter().all(Option::is_none));
+        assert!(curve.points.iter().zip([5.0, 6.0, 8.5, 9.5, 10.5, 11.5]).all(|(p, s)| p.speed == s));
+    }
+
+    #[test]
+    fn a_speed_only_an_unstable_stretch_spans_is_read_there_and_counted() {
+        let mut run = up_run();
+        // The lower branch loses stability between 7 and 9 without a fold (a period doubling).
+        run.stable[2] = false;
+        let (curve, unstable) = run.curve(&[8.0, 8.5], 0, Direction::Up);
+        // 8.0: no stretch with two stable ends spans it; (7, 9) has one, (9, 8) none.
+        assert!((curve.points[0].rms[0] - 1.35).abs() < 1e-12, "{}", curve.points[0].rms[0]);
+        // Both read on the stretch (7, 9): the point nearer each speed (7 at a tie).
+        assert_eq!(unstable, [Some(1), Some(2)]);
+    }
+
+    #[test]
+    fn unstable_stretches_run_in_the_sweeps_direction_from_the_point_nearest_their_first_speed() {
+        let unstable = [None, Some(4), Some(5), None, Some(9), Some(9), Some(10), None];
+        let up = unstable_stretches(&unstable, Direction::Up);
+        assert_eq!(up, vec![(vec![1, 2], 4), (vec![4, 5, 6], 9)]);
+        let down = unstable_stretches(&unstable, Direction::Down);
+        assert_eq!(down, vec![(vec![2, 1], 5), (vec![6, 5, 4], 10)]);
+        assert!(unstable_stretches(&[None, None], Direction::Up).is_empty());
+    }
+}
