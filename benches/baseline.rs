@@ -117,6 +117,7 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut frame_rows = Vec::new();
     let mut balance_rows = Vec::new();
+    let mut condensed_rows = Vec::new();
     for rpm in [3000.0, 8000.0] {
         let omega = rpm_to_rad_per_s(rpm);
         let base = script.as_deref().and_then(|s| baseline(&python, s, rpm));
@@ -198,6 +199,7 @@ fn main() {
         }
         let once = || baseline_once(&python, script.as_deref()?, rpm).map(|(_, integration)| integration);
         balance_rows.push(balance_row(&model, omega, &grid, &r.measured.harmonics, bi, &once));
+        condensed_rows.push(condensed_row(&model, omega, &r.measured.harmonics, bi));
         println!(
             "| {rpm:.0} | {bw:.3} | {bi:.3} | {process:.3} | {cold:.4} | {in_sweep:.4} | {:.1} | {:.1} | {:.1} | {e_h:.1e} |",
             bw / process,
@@ -221,7 +223,71 @@ fn main() {
     for row in &balance_rows {
         println!("{row}");
     }
+    println!();
+    println!("the same points by the harmonic balance condensed onto the contact coordinates, cyclic symmetry (dynamics::periodic::CondensedBalance), median of {BALANCE_ROUNDS}:");
+    println!("| rpm | H | baseline integration [s] | ours point, cold [s] | with its multipliers [s] | cold-point ratio | ratio with its multipliers | E_h ours | largest |μ| |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for row in &condensed_rows {
+        println!("{row}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The condensed balance's row of one speed: the point from a cold start and
+/// the point with the whole model's Floquet multipliers (on
+/// `MULTIPLIER_INTERVALS_PER_HARMONIC` intervals per harmonic, as its
+/// continuation takes them), E_h against `reference`, and the ratios to the
+/// baseline's integration time `base`.
+fn condensed_row(
+    model: &PlanetaryDynamics,
+    omega: f64,
+    reference: &[planetwear::dynamics::spectrum::Harmonics],
+    base: f64,
+) -> String {
+    use planetwear::analysis::condensed_branch::MULTIPLIER_INTERVALS_PER_HARMONIC;
+    use planetwear::dynamics::periodic::{CondensedBalance, Symmetry};
+    let shooting_settings = ShootingSettings { samples_per_mesh_cycle: 60, ..ShootingSettings::default() };
+    let problem = PeriodicProblem::new(model.clone(), shooting_settings, omega).expect("problem");
+    let settings = HarmonicSettings::for_speed(&problem, omega);
+    let hb = HarmonicBalance::new(problem, settings).expect("balance");
+    let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
+    // One solve untimed (the first touch of the receptances' pages).
+    cb.solve(omega, None).expect("condensed point");
+    let mut orbit = None;
+    let cold = median(
+        (0..BALANCE_ROUNDS)
+            .map(|_| {
+                let start = Instant::now();
+                orbit = Some(cb.solve(omega, None).expect("condensed point").0);
+                start.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
+    let orbit = orbit.expect("ran");
+    let harmonics = cb.balance().settings().harmonics;
+    let intervals = MULTIPLIER_INTERVALS_PER_HARMONIC * harmonics;
+    let mut mu = 0.0;
+    let with = median(
+        (0..BALANCE_ROUNDS)
+            .map(|_| {
+                let start = Instant::now();
+                let (o, _) = cb.solve(omega, None).expect("condensed point");
+                mu = cb.balance().floquet_multipliers(&o, intervals).expect("multipliers")[0].modulus();
+                start.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
+    let ours: Vec<_> = cb.balance().steady_state(&orbit).expect("measure").meshes[..2]
+        .iter()
+        .map(|m| m.harmonics.clone())
+        .collect();
+    let e = harmonic_error(&ours, reference);
+    format!(
+        "| {:.0} | {harmonics} | {base:.3} | {cold:.4} | {with:.4} | {:.1} | {:.1} | {e:.1e} | {mu:.4} |",
+        omega * 30.0 / std::f64::consts::PI,
+        base / cold,
+        base / with
+    )
 }
 
 /// The harmonic-balance row of one speed: the cold point, the point with its

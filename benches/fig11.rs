@@ -22,7 +22,10 @@
 //! state's down run after its up run, ending where it joins the up run's
 //! unbroken stretch from 500 rpm (`follow_joining`: below, the down run
 //! would retrace it), the four states on rayon's threads; `-- --no-join`
-//! runs the eight runs independently to their ends.
+//! runs the eight runs independently to their ends; `-- --continuation
+//! --condensed` runs them on the harmonic balance condensed onto the contact
+//! coordinates with the planets' cyclic symmetry
+//! (`analysis::condensed_branch::CondensedBranch`).
 //! The wear model that makes the states runs first and is timed apart (the
 //! figure starts from the states, as the study's does).
 //! docs/PERFORMANCE.md records the figures.
@@ -32,12 +35,15 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use planetwear::analysis::accuracy::{harmonic_error, reference, Protocol};
+use planetwear::analysis::condensed_branch::CondensedBranch;
 use planetwear::analysis::continuation::{
     follow_branch, follow_joining, BalanceBranch, BifurcationKind, Branch, ContinuationSettings,
 };
 use planetwear::analysis::frame_sweep::{frame_sweep, FrameSweepSettings};
 use planetwear::dynamics::equations::PlanetaryDynamics;
-use planetwear::dynamics::periodic::{HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings};
+use planetwear::dynamics::periodic::{
+    CondensedBalance, HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings, Symmetry,
+};
 use planetwear::dynamics::response::{sweep_from, Direction, Sweep, Window};
 use planetwear::dynamics::solver::SecondOrderSystem;
 use planetwear::model::gear::GearSet;
@@ -71,7 +77,7 @@ fn main() {
         };
     let (set, run) = scene.validate_with_run().expect("the example is valid");
     if arg("--continuation") {
-        continuation(&set, step, arg("--no-check"), !arg("--no-join"));
+        continuation(&set, step, arg("--no-check"), !arg("--no-join"), arg("--condensed"));
         return;
     }
 
@@ -173,7 +179,7 @@ fn main() {
 /// joins that run's unbroken stretch; without, the eight runs independent),
 /// on rayon's threads; then E_h of the up runs' points nearest the check
 /// speeds against long time marching at those points' speeds.
-fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool) {
+fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool, condensed: bool) {
     let wear_start = Instant::now();
     let states = planetwear::package::pack::example_wear_states().expect("the example's wear run");
     let wear_time = wear_start.elapsed().as_secs_f64();
@@ -194,13 +200,26 @@ fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool) {
         let mut hb = HarmonicBalance::new(problem, HarmonicSettings::default()).expect("balance");
         let settings =
             ContinuationSettings::new(rpm_to_rad_per_s(a), rpm_to_rad_per_s(b), rpm_to_rad_per_s(step));
-        let mut solver = BalanceBranch::new(&mut hb);
-        let branch = match other {
-            Some(o) => follow_joining(&mut solver, &settings, o, |_| {}),
-            None => follow_branch(&mut solver, &settings, |_| {}),
-        }
-        .expect("continuation");
-        let orbits = std::mem::take(&mut solver.orbits);
+        let (branch, orbits) = if condensed {
+            let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
+            let mut solver = CondensedBranch::new(&mut cb);
+            let branch = match other {
+                Some(o) => follow_joining(&mut solver, &settings, o, |_| {}),
+                None => follow_branch(&mut solver, &settings, |_| {}),
+            }
+            .expect("continuation");
+            let orbits = std::mem::take(&mut solver.orbits);
+            hb = cb.into_balance();
+            (branch, orbits)
+        } else {
+            let mut solver = BalanceBranch::new(&mut hb);
+            let branch = match other {
+                Some(o) => follow_joining(&mut solver, &settings, o, |_| {}),
+                None => follow_branch(&mut solver, &settings, |_| {}),
+            }
+            .expect("continuation");
+            (branch, std::mem::take(&mut solver.orbits))
+        };
         let folds = branch.bifurcations.iter().filter(|b| b.kind == BifurcationKind::Fold).count();
         let unstable = branch.points.iter().filter(|p| !p.stable).count();
         eprintln!(
@@ -233,8 +252,9 @@ fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool) {
     let evaluations: u64 = runs.iter().map(|r| r.2.work.rhs_evaluations).sum();
     println!(
         "Fig. 11 as the continuation's equivalent: example-2004, {:?}, κ = {KAPPAS:?}, 500–15 000 rpm up and down, \
-         nominal step {step} rpm, harmonic balance, {} threads, {}",
+         nominal step {step} rpm, {}, {} threads, {}",
         set.fidelity(),
+        if condensed { "harmonic balance condensed onto the contact coordinates, cyclic symmetry" } else { "harmonic balance" },
         rayon::current_num_threads(),
         if join { "each down run joining its up run" } else { "the eight runs independent" }
     );
