@@ -103,24 +103,12 @@ impl BranchSolver for CondensedBranch<'_> {
 
     fn restart(&mut self, omega: f64, from: &[f64], work: &mut Work, flows: &mut usize) -> Option<Vec<f64>> {
         let unknowns = self.balance.unknowns();
-        let symmetry = self.balance.symmetry();
-        let mut marched = || -> Option<Vec<f64>> {
-            let z = self.balance.state_of(omega, from, work).ok()?;
-            let z = march(self.balance.problem_mut(), omega, &z, work, flows)?;
-            self.balance.arc_fit(omega).ok()?;
-            self.balance.solve_from_state(omega, &z, work).ok()
-        };
-        match marched() {
-            Some(x) if self.balance.symmetry() == symmetry && (x.len() == unknowns || unknowns == 0) => {
-                Some(x)
-            }
-            // The march reached no periodic state, or one that breaks the planets' symmetry:
-            // the run goes on along its own branch, from the furthest point.
-            _ => {
-                let x = self.balance.solve_on_branch(omega, symmetry, from).ok()?;
-                (x.len() == unknowns || unknowns == 0).then_some(x)
-            }
-        }
+        let z = self.balance.state_of(omega, from, work).ok()?;
+        let z = march(self.balance.problem_mut(), omega, &z, work, flows)?;
+        self.balance.arc_fit(omega).ok()?;
+        let x = self.balance.solve_from_state(omega, &z, work).ok()?;
+        // A solve that gave up the planets' symmetry changed the unknowns: the run ends there.
+        (x.len() == self.balance.unknowns() || unknowns == 0).then_some(x)
     }
 
     fn accept(

@@ -149,37 +149,6 @@ impl CondensedBalance {
         Ok(true)
     }
 
-    /// The contact coordinates of the periodic state at `omega` [rad/s] on the branch of
-    /// `symmetry` through `from` (a branch point's coordinates under that symmetry, as
-    /// Newton's guess): where a restart by marching reaches no periodic state, or one that
-    /// breaks the planets' symmetry (past a period doubling or a torus of the symmetric
-    /// branch), the run goes on along its own branch. The symmetry is restored first.
-    pub fn solve_on_branch(
-        &mut self,
-        omega: f64,
-        symmetry: Symmetry,
-        from: &[f64],
-    ) -> Result<Vec<f64>, PeriodicError> {
-        if self.symmetry != symmetry {
-            self.symmetry = symmetry;
-            self.layout = None;
-            self.linear = None;
-        }
-        self.arc_fit(omega)?;
-        self.prepare(omega)?;
-        let unknowns = self.unknowns();
-        let guess = if from.len() == unknowns { from.to_vec() } else { refit(from, unknowns, false) };
-        let (orbit, report) = self.solve(omega, Some(&guess))?;
-        if let Some(reason) = report.cyclic_refused {
-            return Err(PeriodicError::InvalidRequest {
-                name: "symmetry".into(),
-                value: format!("{symmetry:?}"),
-                reason,
-            });
-        }
-        self.coordinates_of(&orbit)
-    }
-
     /// `vectors` (each Y, λ last) brought to the balance's unknowns.
     pub fn refit_all(&self, vectors: &mut [&mut Vec<f64>]) {
         let unknowns = self.unknowns();
