@@ -158,16 +158,7 @@ impl HarmonicBalance {
         let b = newton.step(&minus);
         work.products += newton.products;
         self.jacobian = std::mem::take(&mut newton.jacobian);
-        let a = &linear.solved_derivative;
-        let (cx, cl) = constraint.split_at(n);
-        let dot = |u: &[f64], w: &[f64]| u.iter().zip(w).map(|(p, q)| p * q).sum::<f64>();
-        let dl = (v[n] - dot(cx, &b)) / (cl[0] - dot(cx, a));
-        let mut out: Vec<f64> = b.iter().zip(a).map(|(bi, ai)| bi - dl * ai).chain([dl]).collect();
-        for (a, y) in updates {
-            let along: f64 = y.iter().zip(v).map(|(p, q)| p * q).sum();
-            out.iter_mut().zip(a).for_each(|(o, ai)| *o += along * ai);
-        }
-        out
+        bordered_elimination(v, &b, &linear.solved_derivative, constraint, updates)
     }
 
     /// Newton's corrections of the bordered balance from `predicted` (x, λ) on
@@ -434,5 +425,27 @@ pub fn refit(x: &[f64], unknowns: usize, with_speed: bool) -> Vec<f64> {
     let common = coefficients.len().min(unknowns);
     out[..common].copy_from_slice(&coefficients[..common]);
     out.extend_from_slice(speed);
+    out
+}
+
+/// The bordered system's solution from its block elimination: `b` the balance's step −J⁻¹ of
+/// `v`'s first n entries, `a` J⁻¹ ∂R/∂λ, `constraint` the arclength row (λ last), then the
+/// corrector's rank-one `updates` (a, y) applied as a·(y·v).
+pub(crate) fn bordered_elimination(
+    v: &[f64],
+    b: &[f64],
+    a: &[f64],
+    constraint: &[f64],
+    updates: &[(Vec<f64>, Vec<f64>)],
+) -> Vec<f64> {
+    let n = v.len() - 1;
+    let (cx, cl) = constraint.split_at(n);
+    let dot = |u: &[f64], w: &[f64]| u.iter().zip(w).map(|(p, q)| p * q).sum::<f64>();
+    let dl = (v[n] - dot(cx, b)) / (cl[0] - dot(cx, a));
+    let mut out: Vec<f64> = b.iter().zip(a).map(|(bi, ai)| bi - dl * ai).chain([dl]).collect();
+    for (a, y) in updates {
+        let along: f64 = y.iter().zip(v).map(|(p, q)| p * q).sum();
+        out.iter_mut().zip(a).for_each(|(o, ai)| *o += along * ai);
+    }
     out
 }

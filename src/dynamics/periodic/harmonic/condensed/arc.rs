@@ -4,7 +4,7 @@
 //! by block elimination on the condensed Jacobian's Woodbury solve.
 
 use super::*;
-use crate::dynamics::periodic::harmonic::arc::{bordered_correct, Bordered};
+use crate::dynamics::periodic::harmonic::arc::{bordered_correct, bordered_elimination, Bordered};
 use crate::dynamics::periodic::harmonic::{refit, SPEED_DIFFERENCE};
 use crate::dynamics::periodic::{HarmonicSettings, PeriodicProblem};
 use crate::dynamics::response::Work;
@@ -257,15 +257,6 @@ impl Bordered for CondensedRun<'_> {
     ) -> Vec<f64> {
         let n = v.len() - 1;
         let b: Vec<f64> = linear.steps.step(&v[..n]).iter().map(|x| -x).collect();
-        let a = &linear.solved_derivative;
-        let (cx, cl) = constraint.split_at(n);
-        let dot = |u: &[f64], w: &[f64]| u.iter().zip(w).map(|(p, q)| p * q).sum::<f64>();
-        let dl = (v[n] - dot(cx, &b)) / (cl[0] - dot(cx, a));
-        let mut out: Vec<f64> = b.iter().zip(a).map(|(bi, ai)| bi - dl * ai).chain([dl]).collect();
-        for (a, y) in updates {
-            let along: f64 = y.iter().zip(v).map(|(p, q)| p * q).sum();
-            out.iter_mut().zip(a).for_each(|(o, ai)| *o += along * ai);
-        }
-        out
+        bordered_elimination(v, &b, &linear.solved_derivative, constraint, updates)
     }
 }
