@@ -589,15 +589,14 @@ struct Propagation<'o> {
 
 /// out = a b for s × s column-major matrices.
 fn multiply(s: usize, a: &[f64], b: &[f64], out: &mut [f64]) {
-    for j in 0..s {
-        let column = &mut out[j * s..][..s];
-        column.iter_mut().for_each(|o| *o = 0.0);
-        for (k, bk) in b[j * s..][..s].iter().enumerate() {
-            for (o, ak) in column.iter_mut().zip(&a[k * s..][..s]) {
-                *o += ak * bk;
-            }
-        }
-    }
+    faer::linalg::matmul::matmul(
+        faer::MatMut::from_column_major_slice_mut(out, s, s),
+        faer::Accum::Replace,
+        faer::MatRef::from_column_major_slice(a, s, s),
+        faer::MatRef::from_column_major_slice(b, s, s),
+        1.0,
+        faer::Par::Seq,
+    );
 }
 
 impl<'o> Propagation<'o> {
@@ -696,19 +695,21 @@ impl<'o> Propagation<'o> {
             x.copy_from_slice(base);
             for k in (1..=degree).rev() {
                 let f = hs / k as f64;
+                // A X: its upper rows w X's lower rows, its lower rows [G/w D] X.
                 for col in 0..s {
                     let c = &x[col * s..][..s];
-                    let (upper, below) = ax[col * s..][..s].split_at_mut(m);
                     for a in 0..m {
-                        upper[a] = w * c[m + a];
-                    }
-                    below.iter_mut().for_each(|o| *o = 0.0);
-                    for (b, cb) in c.iter().enumerate() {
-                        for (o, l) in below.iter_mut().zip(&lower[m * b..][..m]) {
-                            *o += l * cb;
-                        }
+                        ax[col * s + a] = w * c[m + a];
                     }
                 }
+                faer::linalg::matmul::matmul(
+                    faer::MatMut::from_column_major_slice_with_stride_mut(&mut ax[m..], m, s, s),
+                    faer::Accum::Replace,
+                    faer::MatRef::from_column_major_slice(lower, m, s),
+                    faer::MatRef::from_column_major_slice(x, s, s),
+                    1.0,
+                    faer::Par::Seq,
+                );
                 for ((xi, bi), ai) in x.iter_mut().zip(base).zip(ax.iter()) {
                     *xi = bi + f * ai;
                 }
