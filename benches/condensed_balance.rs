@@ -13,8 +13,14 @@
 //!    on the cyclic condensed balance against the marching sweep, in the
 //!    same run.
 //!
-//! Run: `cargo bench --bench condensed_balance` (part 1 only:
-//! `-- --points`); docs/PERFORMANCE.md records the figures with the machine.
+//! 3. `-- --held`: below about 2600 rpm the rule's H on the example exceeds
+//!    `CONDENSED_MAX_HARMONICS`; E_h of the cyclic condensed orbit against
+//!    shooting's at H = 128, 160, 192 and 256 (N per H as the rule's), and the wall time of one
+//!    solve, at 500 to 2500 rpm: the measurement behind the constant.
+//!
+//! Run: `cargo bench --bench condensed_balance` (parts 1 and 2; one part only:
+//! `-- --points`, `-- --forced`, `-- --held`); docs/PERFORMANCE.md records the
+//! figures with the machine.
 
 use std::time::Instant;
 
@@ -170,7 +176,54 @@ fn forced_response() {
     println!("  ratio: {:.2}", marching / continuation);
 }
 
+/// E_h against shooting and wall time of the cyclic condensed balance at held H (part 3).
+fn held_harmonics() {
+    let scene = Scene::example_2004();
+    let set = scene.validate().expect("valid scene");
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
+    let held = [128, 160, 192, 256];
+    println!("| rpm | the rule's H | {} |", held.map(|h| format!("H = {h}: E_h, wall [ms]")).join(" | "));
+    println!("|---|---|{}", "---|".repeat(held.len()));
+    for rpm in [500.0, 1000.0, 1500.0, 2000.0, 2500.0] {
+        let omega = rpm * RPM;
+        let mut problem =
+            PeriodicProblem::new(model.clone(), ShootingSettings::default(), omega).expect("problem");
+        let orbit = problem.solve(omega, None).expect("shooting");
+        let reference = problem.steady_state(&orbit).expect("state");
+        let rule =
+            HarmonicSettings::for_frequency(highest_frequency(problem.model(), omega), problem.period(omega));
+        let cells: Vec<String> = held
+            .iter()
+            .map(|&h| {
+                let settings =
+                    HarmonicSettings { harmonics: h, samples: rule.samples / rule.harmonics * h, ..rule };
+                let (t, state) = timed(|| {
+                    let hb = HarmonicBalance::new(problem.clone(), settings).expect("balance");
+                    let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
+                    let (orbit, _) = cb.solve(omega, None).ok()?;
+                    cb.balance().steady_state(&orbit).ok()
+                });
+                match state {
+                    Some(state) => {
+                        format!("{:.1e}, {:.0}", harmonic_error(&pick(&state), &pick(&reference)), 1e3 * t)
+                    }
+                    None => "no convergence".to_string(),
+                }
+            })
+            .collect();
+        println!("| {rpm} | {} | {} |", rule.harmonics, cells.join(" | "));
+    }
+}
+
 fn main() {
+    if std::env::args().any(|a| a == "--held") {
+        held_harmonics();
+        return;
+    }
+    if std::env::args().any(|a| a == "--forced") {
+        forced_response();
+        return;
+    }
     let only_points = std::env::args().any(|a| a == "--points");
     points();
     if !only_points {

@@ -1030,6 +1030,28 @@ impl PlanetaryDynamics {
     }
 }
 
+impl PlanetaryDynamics {
+    /// The generalized force at (`t`, `q`, `v`) without the meshes' forces: the loads, the
+    /// supports, the carrier frame's terms and the drives, the part of
+    /// [`SecondOrderSystem::force`] that is linear in the state. No mesh law is evaluated.
+    pub fn force_but_meshes(&self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
+        f.copy_from_slice(&self.f_ext);
+        for &(i, j, k, c) in &self.support_nz {
+            f[i] -= k * q[j] + c * v[j];
+        }
+        if let Some(frame) = &self.frame {
+            frame.add_force(q, v, f);
+        }
+        if let Some(d) = self.speed_drive {
+            let i = d.index;
+            f[i] += d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i]);
+        }
+        if let Some((o, b)) = self.balance {
+            f[o] += b.stiffness * (b.offset + b.speed * t - q[o]) + b.damping * (b.speed - v[o]);
+        }
+    }
+}
+
 impl SecondOrderSystem for PlanetaryDynamics {
     fn dim(&self) -> usize {
         self.mass.len()
@@ -1041,25 +1063,12 @@ impl SecondOrderSystem for PlanetaryDynamics {
 
     fn force(&mut self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
         self.evaluate_meshes(q, v, false);
-        f.copy_from_slice(&self.f_ext);
-        for &(i, j, k, c) in &self.support_nz {
-            f[i] -= k * q[j] + c * v[j];
-        }
-        if let Some(frame) = &self.frame {
-            frame.add_force(q, v, f);
-        }
+        self.force_but_meshes(t, q, v, f);
         for (link, state) in self.links.iter().zip(&self.meshes) {
             let total = state.force + state.damping_force;
             for (j, b) in &link.b_nz {
                 f[*j] -= b * total;
             }
-        }
-        if let Some(d) = self.speed_drive {
-            let i = d.index;
-            f[i] += d.stiffness * (d.offset + d.speed * t - q[i]) + d.damping * (d.speed - v[i]);
-        }
-        if let Some((o, b)) = self.balance {
-            f[o] += b.stiffness * (b.offset + b.speed * t - q[o]) + b.damping * (b.speed - v[o]);
         }
     }
 

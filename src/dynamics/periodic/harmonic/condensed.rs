@@ -47,7 +47,6 @@ use crate::dynamics::equations::{MeshCoordinates, PlanetaryDynamics};
 use crate::dynamics::periodic::series::derivative_coefficient;
 use crate::dynamics::periodic::switches::{add_back, illinois, subtract, time_terms, Switch};
 use crate::dynamics::periodic::{max_abs, PeriodicError, PeriodicProblem};
-use crate::dynamics::rigid_frame::RigidFrame;
 use crate::dynamics::solver::{SecondOrderSystem, TangentSystem};
 
 /// On the projected sums a Newton iteration that lowers the residual by less than this
@@ -57,12 +56,20 @@ const PROJECTED_CONTRACTION: f64 = 0.25;
 
 /// The most harmonics the condensed balance keeps: it holds the rule's H
 /// ([`HarmonicSettings::for_frequency`], up to [`super::MAX_RULE_HARMONICS`]) at this, with
-/// 16 samples each. Below about 2300 rpm the rule's H on the transverse–torsional example
-/// follows its 98–113 kHz planet-on-pin modes; measured against shooting's orbit with the
-/// switches projected (docs/PERIODIC.md §2), the cyclic condensed balance at H = 256 gives
-/// E_h 6.8e-5, 1.7e-5, 5.9e-6, 1.9e-6 and 1.3e-6 at 500, 750, 1250, 1750 and 2250 rpm
-/// (at H = 192: up to 1.8e-4), at a third of the cost of the rule's H at 500 rpm.
-pub const CONDENSED_MAX_HARMONICS: usize = 256;
+/// the rule's samples per harmonic. Below about 2600 rpm the rule's H on the
+/// transverse–torsional example follows its 98–113 kHz planet-on-pin modes (201 to 512).
+/// Measured against shooting's orbit (`cargo bench --bench condensed_balance -- --held`,
+/// docs/PERFORMANCE.md), the cyclic condensed balance at H = 160 gives E_h 1.0e-4, 9.2e-5,
+/// 2.2e-5, 4.5e-6 and 5.3e-6 at 500, 1000, 1500, 2000 and 2500 rpm, a tenth of the 1e-3
+/// the periodic states are held to; H = 128 gives up to 8.5e-4 and H = 256 up to 6.8e-5 at
+/// 4.5× the time of one solve.
+pub const CONDENSED_MAX_HARMONICS: usize = 160;
+
+/// Samples over one period of the mean tangents that make each computed mesh's reference
+/// spring k̄, c̄ (`reference_springs`). A reference only: A_k holds it and the residual
+/// takes it off again, so any k̄ has the same root; the mean over the balance's N samples
+/// (up to 4096) cost a tenth of a linear part's build on the example.
+const REFERENCE_SAMPLES: usize = 256;
 
 /// `settings` with H held at [`CONDENSED_MAX_HARMONICS`] (N with it).
 pub fn held(settings: HarmonicSettings) -> HarmonicSettings {
@@ -283,6 +290,9 @@ pub struct CondensedBalance {
     projected: bool,
     layout: Option<Layout>,
     linear: Option<Linear>,
+    /// The linear part built before `linear`, kept for a return to its speed (a
+    /// linearization's difference in speed, then the point again).
+    spare: Option<Linear>,
     /// The last symmetry check's orbit with every mesh (contact coordinates).
     expanded: Option<Vec<f64>>,
 }
@@ -378,7 +388,7 @@ impl CondensedBalance {
         if settings != balance.settings {
             balance.set_settings(settings).expect("fewer harmonics of valid settings are valid");
         }
-        Self { balance, symmetry, projected: true, layout: None, linear: None, expanded: None }
+        Self { balance, symmetry, projected: true, layout: None, linear: None, spare: None, expanded: None }
     }
 
     /// Whether solves project the contact switches (the default) or stop at the plain
@@ -426,9 +436,13 @@ impl CondensedBalance {
         {
             return Ok(());
         }
+        if self.spare.as_ref().is_some_and(|l| l.omega == omega && l.harmonics == h && l.samples == samples) {
+            std::mem::swap(&mut self.linear, &mut self.spare);
+            return Ok(());
+        }
         self.layout_at(omega)?;
         let linear = self.linear_part(omega)?;
-        self.linear = Some(linear);
+        self.spare = self.linear.replace(linear);
         Ok(())
     }
 
@@ -445,7 +459,8 @@ impl CondensedBalance {
         let layout = self.layout.as_ref().expect("prepared");
         let model = &mut self.balance.problem.model;
         model.set_drive_speed(omega);
-        let reference = reference_springs(model, layout, &q0, (omega, period), samples);
+        let reference =
+            reference_springs(model, layout, &q0, (omega, period), samples.min(REFERENCE_SAMPLES));
         let structure = model.low_rank_jacobian().ok_or_else(|| {
             PeriodicError::invalid("condensed balance", 0.0, "needs the model's constant tangents")
         })?;
@@ -501,30 +516,24 @@ impl CondensedBalance {
         };
         let wp: Vec<Vec<f64>> = layout.w.iter().map(|w| project_row(w, &p, n, m)).collect();
         let (mz, mf) = (layout.coordinates(), layout.computed.len());
+        let mut rows = vec![Complex::new(0.0, 0.0); mz * m];
         for k in 0..=h {
-            // Columns: every mesh's Pᵀb, then Pᵀg_k.
-            let x = linear.solve(
-                k,
-                nu,
-                linear
-                    .pb
-                    .iter()
-                    .map(|v| v.iter().map(|x| Complex::new(*x, 0.0)).collect())
-                    .chain([linear.pg[k].clone()])
-                    .collect(),
-            )?;
+            // Y = A_k⁻ᵀ (WᵀP)ᵀ: row a of WᵀP A_k⁻¹ is Y's column a, so that the receptance of
+            // mesh j on coordinate a is Y_aᵀ Pᵀb_j and the forcing's Y_aᵀ Pᵀg_k.
+            linear.contact_rows(k, nu, &wp, &mut rows)?;
             let mut r = vec![Complex::new(0.0, 0.0); mz * mf];
             for (j, (g, delay)) in layout.copies.iter().enumerate() {
                 let shift =
                     Complex::from_polar(1.0 / q_scale, -(k as f64) * 2.0 * std::f64::consts::PI * delay);
-                for (a, row) in wp.iter().enumerate() {
-                    r[a * mf + g] += dot(row, &x[j]) * shift;
+                for a in 0..mz {
+                    r[a * mf + g] += real_dot(&linear.pb[j], &rows[a * m..(a + 1) * m]) * shift;
                 }
             }
             linear.receptance.push(r);
-            let forced = &x[layout.b.len()];
-            for (a, row) in wp.iter().enumerate() {
-                put_complex(&mut linear.forcing, mz, k, a, dot(row, forced) / q_scale);
+            for a in 0..mz {
+                let forced: Complex<f64> =
+                    rows[a * m..(a + 1) * m].iter().zip(&linear.pg[k]).map(|(y, g)| y * g).sum();
+                put_complex(&mut linear.forcing, mz, k, a, forced / q_scale);
             }
         }
         Ok(linear)
@@ -537,23 +546,17 @@ impl CondensedBalance {
         let (m, n, h) = (self.balance.m, self.balance.n, self.balance.settings.harmonics);
         let samples = self.balance.settings.samples;
         let period = self.balance.problem.period(omega);
-        let layout = self.layout.as_ref().expect("prepared");
-        let model = &mut self.balance.problem.model;
+        let model = &self.balance.problem.model;
         let rigid = model.rigid_velocity_at(omega);
-        let mut frame = RigidFrame::new(model, rigid);
-        let zero = vec![0.0; n];
         let mut f = vec![0.0; n];
+        let mut q = vec![0.0; n];
         let mut g_samples = vec![vec![0.0; samples]; m];
         for j in 0..samples {
             let t = period * j as f64 / samples as f64;
-
-            frame.force(t, &zero, &zero, &mut f);
-            for (state, b) in frame.model().meshes.iter().zip(&layout.b) {
-                let total = state.force + state.damping_force;
-                for (fi, bi) in f.iter_mut().zip(b) {
-                    *fi += bi * total;
-                }
+            for (qi, r) in q.iter_mut().zip(&rigid) {
+                *qi = r * t;
             }
+            model.force_but_meshes(t, &q, &rigid, &mut f);
             for (samples_a, g) in g_samples.iter_mut().zip(project(&f)) {
                 samples_a[j] = g;
             }
@@ -913,6 +916,7 @@ impl CondensedBalance {
         self.symmetry = Symmetry::Full;
         self.layout = None;
         self.linear = None;
+        self.spare = None;
     }
 
     /// [`Self::solve`] with the symmetry the balance holds.
@@ -1170,6 +1174,7 @@ impl CondensedBalance {
         let h = self.balance.settings.harmonics;
         let cyclic_layout = self.layout.take().expect("prepared");
         let cyclic_linear = self.linear.take();
+        let cyclic_spare = self.spare.take();
         let result = (|| {
             let problem = &self.balance.problem;
             let full =
@@ -1192,7 +1197,6 @@ impl CondensedBalance {
                 }
             }
             self.layout = Some(full);
-            self.linear = None;
             self.prepare(omega)?;
             let mut evaluations = 0;
             let e = self.evaluate(omega, &xf, (false, self.projected), &mut evaluations)?;
@@ -1201,6 +1205,7 @@ impl CondensedBalance {
         })();
         self.layout = Some(cyclic_layout);
         self.linear = cyclic_linear;
+        self.spare = cyclic_spare;
         result
     }
 }
@@ -1212,6 +1217,16 @@ impl Linear {
         respond(&self.receptance, f, dims)
     }
 
+    /// A_k at harmonic `k` (ν = `nu`), transposed when `transposed`.
+    fn matrix(&self, k: usize, nu: f64, transposed: bool) -> faer::Mat<faer::c64> {
+        let m = self.mass.len().isqrt();
+        let w = k as f64 * nu;
+        faer::Mat::<faer::c64>::from_fn(m, m, |i, j| {
+            let e = if transposed { j + m * i } else { i + m * j };
+            faer::c64::new(self.stiffness[e] - w * w * self.mass[e], w * self.damping[e])
+        })
+    }
+
     /// Solves A_k X = B for the complex columns `columns` (m each).
     fn solve(
         &self,
@@ -1220,24 +1235,48 @@ impl Linear {
         columns: Vec<Vec<Complex<f64>>>,
     ) -> Result<Vec<Vec<Complex<f64>>>, PeriodicError> {
         let m = self.mass.len().isqrt();
-        let w = k as f64 * nu;
-        let a = faer::Mat::<faer::c64>::from_fn(m, m, |i, j| {
-            let e = i + m * j;
-            faer::c64::new(self.stiffness[e] - w * w * self.mass[e], w * self.damping[e])
-        });
         let b = faer::Mat::<faer::c64>::from_fn(m, columns.len(), |i, j| columns[j][i]);
-        let x = a.partial_piv_lu().solve(&b);
+        let x = self.matrix(k, nu, false).partial_piv_lu().solve(&b);
         let out: Vec<Vec<Complex<f64>>> =
             (0..columns.len()).map(|j| (0..m).map(|i| x[(i, j)]).collect()).collect();
         if out.iter().flatten().any(|z| !z.re.is_finite() || !z.im.is_finite()) {
-            return Err(PeriodicError::invalid(
-                "condensed balance",
-                k as f64,
-                "meets a singular linear part at this harmonic (a support-free coordinate)",
-            ));
+            return Err(singular(k));
         }
         Ok(out)
     }
+
+    /// Y = A_k⁻ᵀ (WᵀP)ᵀ at harmonic `k` (ν = `nu`) into `out`, column a (m values) for the
+    /// contact coordinate a of `wp` (its row of WᵀP): one LU of A_kᵀ, as many right-hand
+    /// sides as contact coordinates (fewer than the meshes and the forcing).
+    fn contact_rows(
+        &self,
+        k: usize,
+        nu: f64,
+        wp: &[Vec<f64>],
+        out: &mut [Complex<f64>],
+    ) -> Result<(), PeriodicError> {
+        let m = self.mass.len().isqrt();
+        let b = faer::Mat::<faer::c64>::from_fn(m, wp.len(), |i, j| faer::c64::new(wp[j][i], 0.0));
+        let y = self.matrix(k, nu, true).partial_piv_lu().solve(&b);
+        for (c, column) in out.chunks_mut(m).enumerate() {
+            for (i, o) in column.iter_mut().enumerate() {
+                *o = y[(i, c)];
+            }
+        }
+        if out.iter().any(|z| !z.re.is_finite() || !z.im.is_finite()) {
+            return Err(singular(k));
+        }
+        Ok(())
+    }
+}
+
+/// A linear part singular at harmonic `k`.
+fn singular(k: usize) -> PeriodicError {
+    PeriodicError::invalid(
+        "condensed balance",
+        k as f64,
+        "meets a singular linear part at this harmonic (a support-free coordinate)",
+    )
 }
 
 /// Each computed mesh's mean tangent stiffness and damping over one period at the state `q0`.
@@ -1310,7 +1349,7 @@ fn project_row(w: &[f64], p: &[f64], n: usize, m: usize) -> Vec<f64> {
     (0..m).map(|a| (0..n).map(|i| w[i] * p[i + n * a]).sum()).collect()
 }
 
-fn dot(row: &[f64], x: &[Complex<f64>]) -> Complex<f64> {
+fn real_dot(row: &[f64], x: &[Complex<f64>]) -> Complex<f64> {
     row.iter().zip(x).map(|(r, z)| z * r).sum()
 }
 
@@ -1379,6 +1418,7 @@ mod tests {
     use super::super::Newton;
     use super::tests_support::condensed;
     use super::*;
+    use crate::dynamics::rigid_frame::RigidFrame;
     use crate::scene::Fidelity;
 
     /// The model is its constant tangents plus its meshes: f(t, q, v) = g(t) − K₀q − C₀v

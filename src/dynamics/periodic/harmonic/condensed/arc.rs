@@ -146,7 +146,59 @@ impl CondensedBalance {
         };
         self.balance.set_settings(settings)?;
         self.linear = None;
+        self.spare = None;
         Ok(true)
+    }
+
+    /// Solves with `symmetry` again where a solve had given it up (a march's state that broke
+    /// the planets' symmetry), its layout built at `omega` [rad/s].
+    pub fn restore_symmetry(&mut self, symmetry: Symmetry, omega: f64) -> Result<(), PeriodicError> {
+        if self.symmetry != symmetry {
+            self.symmetry = symmetry;
+            self.layout = None;
+            self.linear = None;
+            self.spare = None;
+        }
+        self.layout_at(omega)?;
+        Ok(())
+    }
+
+    /// The coefficients `x` (no λ) brought to the balance's unknowns (its H may have changed
+    /// since they were taken: a restart's fit at its own speed).
+    pub fn fitted(&self, x: &[f64]) -> Vec<f64> {
+        let unknowns = self.unknowns();
+        if x.len() == unknowns {
+            x.to_vec()
+        } else {
+            refit(x, unknowns, false)
+        }
+    }
+
+    /// The contact coordinates of the periodic state at `omega` [rad/s] on the branch of
+    /// `symmetry` through `from` (a branch point's coordinates under that symmetry, Newton's
+    /// guess): where a restart by marching reaches no periodic state, or one that breaks
+    /// the planets' symmetry (past a period doubling or a torus of the symmetric branch),
+    /// the run goes on along its own branch. The symmetry and the rule's H at `omega` are
+    /// taken first.
+    pub fn solve_on_branch(
+        &mut self,
+        omega: f64,
+        symmetry: Symmetry,
+        from: &[f64],
+    ) -> Result<Vec<f64>, PeriodicError> {
+        self.restore_symmetry(symmetry, omega)?;
+        let guess = self.fitted(from);
+        self.arc_fit(omega)?;
+        let guess = self.fitted(&guess);
+        let (orbit, report) = self.solve(omega, Some(&guess))?;
+        if let Some(reason) = report.cyclic_refused {
+            return Err(PeriodicError::InvalidRequest {
+                name: "symmetry".into(),
+                value: format!("{symmetry:?}"),
+                reason,
+            });
+        }
+        self.coordinates_of(&orbit)
     }
 
     /// `vectors` (each Y, λ last) brought to the balance's unknowns.
