@@ -177,3 +177,59 @@ fn continuation_on_the_condensed_balance_finds_shootings_fold() {
     assert!(!a.is_empty() && !b.is_empty(), "a fold near 8235 rpm: condensed {a:?}, shooting {b:?}");
     assert!((a[0] - b[0]).abs() <= 1.0, "condensed {a:?} against shooting {b:?}");
 }
+
+/// A restart of the continuation whose march reaches a state that breaks the planets' symmetry
+/// goes on along the symmetric branch (`CondensedBalance::solve_on_branch`): from a cyclic
+/// branch point's coordinates, a balance that had given up the symmetry (here one built with
+/// every mesh) solves with the cyclic unknowns again and finds the cyclic orbit at the next
+/// speed, the one a cold cyclic solve finds there, within Newton's tolerance (the settings'
+/// 1e-7, relative to the coefficients) of each other.
+#[test]
+fn a_restart_goes_on_along_the_symmetric_branch() {
+    let mut scene = Scene::example_2004();
+    scene.dynamics.fidelity = Fidelity::Torsional;
+    let (_, _, model) = build(&scene, 4);
+    let mut cyclic = condensed(&model, 3000.0, Symmetry::Cyclic);
+    let (orbit, _) = cyclic.solve(3000.0 * RPM, None).unwrap();
+    let from = cyclic.coordinates_of(&orbit).unwrap();
+    let (next, _) = cyclic.solve(3050.0 * RPM, None).unwrap();
+    let expected = cyclic.coordinates_of(&next).unwrap();
+    let mut every = condensed(&model, 3000.0, Symmetry::Full);
+    every.solve(3000.0 * RPM, None).unwrap();
+    let x = every.solve_on_branch(3050.0 * RPM, Symmetry::Cyclic, &from).unwrap();
+    assert_eq!(every.symmetry(), Symmetry::Cyclic);
+    assert_eq!(x.len(), expected.len(), "the cyclic unknowns");
+    let size = expected.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let apart = x.iter().zip(&expected).fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+    eprintln!("{} unknowns, {apart:.3e} apart of {size:.3e}", x.len());
+    let tolerance = every.balance().settings().tolerance;
+    assert!(apart <= tolerance * size, "{apart:.3e} apart of {size:.3e} (tolerance {tolerance:e})");
+}
+
+/// A restart takes the run's coefficients at the H of the run's last fit, while an earlier
+/// try of the same restart may have fitted the balance to another speed's H: each try brings
+/// them to the balance's H first, and what it returns has the balance's unknowns (two tries
+/// at speeds whose rule gives different H, each from the coefficients at 3000 rpm).
+#[test]
+fn a_restart_takes_coefficients_of_another_h() {
+    use planetwear::analysis::condensed_branch::CondensedBranch;
+    use planetwear::analysis::continuation::BranchSolver;
+    use planetwear::dynamics::response::Work;
+    let mut scene = Scene::example_2004();
+    scene.dynamics.fidelity = Fidelity::Torsional;
+    let (_, _, model) = build(&scene, 0);
+    let mut cb = condensed(&model, 3000.0, Symmetry::Cyclic);
+    let (orbit, _) = cb.solve(3000.0 * RPM, None).unwrap();
+    let from = cb.coordinates_of(&orbit).unwrap();
+    let mut lengths = vec![from.len()];
+    let mut branch = CondensedBranch::new(&mut cb);
+    let (mut work, mut flows) = (Work::default(), 0);
+    for rpm in [1500.0, 3050.0] {
+        let x = branch.restart(rpm * RPM, &from, &mut work, &mut flows).expect("a periodic state");
+        lengths.push(x.len());
+    }
+    eprintln!("unknowns: at 3000 rpm, then after the restarts at 1500 and 3050 rpm: {lengths:?}");
+    assert_ne!(lengths[1], lengths[0], "the rule's H at 1500 rpm differs from 3000 rpm's");
+    assert_eq!(lengths[2], lengths[0], "back at the H of 3050 rpm, 3000 rpm's");
+    assert_eq!(lengths[2], cb.unknowns());
+}

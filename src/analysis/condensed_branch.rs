@@ -7,7 +7,7 @@
 
 use crate::analysis::continuation::{balance_point, march, BranchSolver};
 use crate::dynamics::periodic::{
-    CondensedArc, CondensedBalance, HarmonicOrbit, PeriodicError, PeriodicOrbit,
+    CondensedArc, CondensedBalance, HarmonicOrbit, PeriodicError, PeriodicOrbit, Symmetry,
 };
 use crate::dynamics::response::Work;
 
@@ -21,6 +21,8 @@ pub const MULTIPLIER_INTERVALS_PER_HARMONIC: usize = 2;
 /// Continuation on a [`CondensedBalance`].
 pub struct CondensedBranch<'a> {
     balance: &'a mut CondensedBalance,
+    /// The symmetry the run follows its branch with (the balance's when the run began).
+    symmetry: Symmetry,
     /// The orbits of the points accepted, in the full balance's coordinates, in the order of
     /// the branch's points (for their forces: `HarmonicBalance::steady_state`).
     pub orbits: Vec<HarmonicOrbit>,
@@ -29,7 +31,7 @@ pub struct CondensedBranch<'a> {
 impl<'a> CondensedBranch<'a> {
     /// Continuation on `balance`.
     pub fn new(balance: &'a mut CondensedBalance) -> Self {
-        Self { balance, orbits: Vec::new() }
+        Self { symmetry: balance.symmetry(), balance, orbits: Vec::new() }
     }
 
     /// The branch point at `x` and `omega` with its multipliers, its orbit kept in
@@ -101,14 +103,29 @@ impl BranchSolver for CondensedBranch<'_> {
         found
     }
 
+    /// By marching from the state at `from`, then Newton from the marched state. Where the
+    /// march reaches no periodic state, or one that breaks the planets' symmetry, the run
+    /// goes on along its own branch from `from` ([`CondensedBalance::solve_on_branch`]).
+    /// An earlier try may have left the balance at another H or without the symmetry:
+    /// both are the run's again first, and `from` is brought to the balance's H.
     fn restart(&mut self, omega: f64, from: &[f64], work: &mut Work, flows: &mut usize) -> Option<Vec<f64>> {
-        let unknowns = self.balance.unknowns();
-        let z = self.balance.state_of(omega, from, work).ok()?;
-        let z = march(self.balance.problem_mut(), omega, &z, work, flows)?;
-        self.balance.arc_fit(omega).ok()?;
-        let x = self.balance.solve_from_state(omega, &z, work).ok()?;
-        // A solve that gave up the planets' symmetry changed the unknowns: the run ends there.
-        (x.len() == self.balance.unknowns() || unknowns == 0).then_some(x)
+        self.balance.restore_symmetry(self.symmetry, omega).ok()?;
+        let from = self.balance.fitted(from);
+        let marched = (|| {
+            let z = self.balance.state_of(omega, &from, work).ok()?;
+            let z = march(self.balance.problem_mut(), omega, &z, work, flows)?;
+            self.balance.arc_fit(omega).ok()?;
+            self.balance.solve_from_state(omega, &z, work).ok()
+        })();
+        match marched {
+            Some(x) if self.balance.symmetry() == self.symmetry && x.len() == self.balance.unknowns() => {
+                Some(x)
+            }
+            _ => {
+                let x = self.balance.solve_on_branch(omega, self.symmetry, &from).ok()?;
+                (x.len() == self.balance.unknowns()).then_some(x)
+            }
+        }
     }
 
     fn accept(
