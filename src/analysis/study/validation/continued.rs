@@ -155,6 +155,19 @@ impl Continued {
         (Curve { kappa, direction, points }, unstable)
     }
 
+    /// The branch point a marching sweep over the unstable stretch of grid indices `indices`
+    /// (in the order of a sweep in `direction`) starts from: where the grid speed before the
+    /// stretch is read on a stable state, that state's point, as a sweep enters the stretch
+    /// from it; otherwise `near`, the point nearest the stretch's first speed.
+    fn march_start(&self, grid: &[f64], indices: &[usize], near: usize, direction: Direction) -> usize {
+        let first = indices[0];
+        let before = match direction {
+            Direction::Up => first.checked_sub(1),
+            Direction::Down => Some(first + 1).filter(|&j| j < grid.len()),
+        };
+        before.map(|j| self.at(grid[j])).filter(|(_, stable, _)| *stable).map_or(near, |(_, _, point)| point)
+    }
+
     /// The measures at `speed` on the first stretch spanning it whose ends
     /// are both stable; failing that, one end stable; failing that, any;
     /// with no stretch spanning it, the nearest point. Linear in speed
@@ -258,8 +271,9 @@ impl Continuing<'_> {
     /// The curve of `run` on the grid. Where the run's periodic state is
     /// unstable, a sweep leaves it for another attractor (a longer period, a
     /// torus): those speeds are read on a marching sweep over each such
-    /// stretch, in the run's direction, started from the branch's state at
-    /// its first speed. Speeds below a run's join are left to the caller.
+    /// stretch, in the run's direction, started as a sweep enters it: from the
+    /// stable state read at the grid speed before it ([`Continued::march_start`]).
+    /// Speeds below a run's join are left to the caller.
     fn read(&self, s: usize, run: Continued, direction: Direction) -> Result<Read, String> {
         let (mut curve, mut unstable) = run.curve(&self.speeds, self.kappas[s], direction);
         if let Some(joined) = run.joined {
@@ -275,7 +289,7 @@ impl Continuing<'_> {
             .map(|(indices, near)| {
                 let grid: Vec<f64> = indices.iter().map(|&i| self.speeds[i]).collect();
                 let mut m = self.models[s].clone();
-                let start = &run.ends[*near];
+                let start = &run.ends[run.march_start(&self.speeds, indices, *near, direction)];
                 sweep_from(
                     self.set,
                     self.run,
@@ -505,6 +519,30 @@ mod tests {
         assert!((curve.points[0].rms[0] - 1.35).abs() < 1e-12, "{}", curve.points[0].rms[0]);
         // Both read on the stretch (7, 9): the point nearer each speed (7 at a tie).
         assert_eq!(unstable, [Some(1), Some(2)]);
+    }
+
+    #[test]
+    fn a_march_over_an_unstable_stretch_starts_from_the_stable_state_before_it() {
+        let mut run = up_run();
+        // The lower branch loses stability between 7 and 9 without a fold (a period doubling).
+        run.stable[2] = false;
+        // Up: 5.5 is read on the stable stretch (5, 7), nearest point 0; 8.0 and 8.5 only on
+        // (7, 9), one end stable: the stretch [1, 2], whose own nearest point is 1 (7 at 8.0).
+        let grid = [5.5, 8.0, 8.5];
+        let (_, unstable) = run.curve(&grid, 0, Direction::Up);
+        assert_eq!(unstable, [None, Some(1), Some(2)]);
+        let (indices, near) = unstable_stretches(&unstable, Direction::Up).remove(0);
+        assert_eq!((indices.as_slice(), near), ([1, 2].as_slice(), 1));
+        assert_eq!(run.march_start(&grid, &indices, near, Direction::Up), 0, "from 5.5's state");
+        // A grid that begins in the stretch: nothing before it, its own nearest point.
+        assert_eq!(run.march_start(&grid[1..], &[0, 1], 1, Direction::Up), 1);
+        // Down: the sweep meets 11.5 first (the branch after the restart, stable, point 6),
+        // then the stretch [8.5, 8.0].
+        let grid = [8.0, 8.5, 11.5];
+        let (_, unstable) = run.curve(&grid, 0, Direction::Down);
+        let (indices, near) = unstable_stretches(&unstable, Direction::Down).remove(0);
+        assert_eq!(indices, [1, 0]);
+        assert_eq!(run.march_start(&grid, &indices, near, Direction::Down), 6, "from 11.5's state");
     }
 
     #[test]
