@@ -139,7 +139,8 @@ fn reading_words(v: &Validation) -> String {
              direction's curve is the first stable stretch of its run that spans each speed, so a claim about the \
              upper or the lower branch is read on that branch and no row depends on which attractor an \
              integrator's error picks. Where no stable periodic state spans a speed, a sweep leaves the branch: \
-             those speeds are read on a marching sweep over the stretch started from the branch's state. The \
+             those speeds are read on a marching sweep over the stretch, started as a sweep enters it from the \
+             stable state read at the grid speed before it. The \
              spot-check row marches from stable branch points. `planetwear validate --full` reads the same rows \
              on marching sweeps instead.\n"
         );
