@@ -6,8 +6,7 @@
 # target/ci/ and shown when they are waited for: the Python environment
 # (mostly downloads) beside the Rust checks, the FMU's build (one long
 # link-time optimization) beside the Rust tests, the fuzzing under valgrind
-# (one thread) beside pytest. On 2 cores this took the whole run from a clean
-# clone from 35 to 27 minutes (README).
+# (one thread) beside pytest. The time from a clean clone on 2 cores: README.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --tests --system
