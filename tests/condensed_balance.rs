@@ -178,6 +178,18 @@ fn continuation_on_the_condensed_balance_finds_shootings_fold() {
     assert!((a[0] - b[0]).abs() <= 1.0, "condensed {a:?} against shooting {b:?}");
 }
 
+/// The torsional example worn to state `kappa`, its cyclic condensed balance solved at
+/// 3000 rpm, and that orbit's contact coordinates.
+fn torsional_point_at_3000(kappa: usize) -> (PlanetaryDynamics, CondensedBalance, Vec<f64>) {
+    let mut scene = Scene::example_2004();
+    scene.dynamics.fidelity = Fidelity::Torsional;
+    let (_, _, model) = build(&scene, kappa);
+    let mut cyclic = condensed(&model, 3000.0, Symmetry::Cyclic);
+    let (orbit, _) = cyclic.solve(3000.0 * RPM, None).unwrap();
+    let from = cyclic.coordinates_of(&orbit).unwrap();
+    (model, cyclic, from)
+}
+
 /// A restart of the continuation whose march reaches a state that breaks the planets' symmetry
 /// goes on along the symmetric branch (`CondensedBalance::solve_on_branch`): from a cyclic
 /// branch point's coordinates, a balance that had given up the symmetry (here one built with
@@ -186,12 +198,7 @@ fn continuation_on_the_condensed_balance_finds_shootings_fold() {
 /// 1e-7, relative to the coefficients) of each other.
 #[test]
 fn a_restart_goes_on_along_the_symmetric_branch() {
-    let mut scene = Scene::example_2004();
-    scene.dynamics.fidelity = Fidelity::Torsional;
-    let (_, _, model) = build(&scene, 4);
-    let mut cyclic = condensed(&model, 3000.0, Symmetry::Cyclic);
-    let (orbit, _) = cyclic.solve(3000.0 * RPM, None).unwrap();
-    let from = cyclic.coordinates_of(&orbit).unwrap();
+    let (model, mut cyclic, from) = torsional_point_at_3000(4);
     let (next, _) = cyclic.solve(3050.0 * RPM, None).unwrap();
     let expected = cyclic.coordinates_of(&next).unwrap();
     let mut every = condensed(&model, 3000.0, Symmetry::Full);
@@ -215,12 +222,7 @@ fn a_restart_takes_coefficients_of_another_h() {
     use planetwear::analysis::condensed_branch::CondensedBranch;
     use planetwear::analysis::continuation::BranchSolver;
     use planetwear::dynamics::response::Work;
-    let mut scene = Scene::example_2004();
-    scene.dynamics.fidelity = Fidelity::Torsional;
-    let (_, _, model) = build(&scene, 0);
-    let mut cb = condensed(&model, 3000.0, Symmetry::Cyclic);
-    let (orbit, _) = cb.solve(3000.0 * RPM, None).unwrap();
-    let from = cb.coordinates_of(&orbit).unwrap();
+    let (_, mut cb, from) = torsional_point_at_3000(0);
     let mut lengths = vec![from.len()];
     let mut branch = CondensedBranch::new(&mut cb);
     let (mut work, mut flows) = (Work::default(), 0);
