@@ -428,15 +428,16 @@ impl CondensedBalance {
         Ok(self.layout.as_ref().expect("built above"))
     }
 
-    /// Builds the linear part at `omega` unless it is the one kept.
+    /// Builds the linear part at `omega` unless it is the one kept or the one before it.
     fn prepare(&mut self, omega: f64) -> Result<(), PeriodicError> {
-        let h = self.balance.settings.harmonics;
-        let samples = self.balance.settings.samples;
-        if self.linear.as_ref().is_some_and(|l| l.omega == omega && l.harmonics == h && l.samples == samples)
-        {
+        let (h, samples) = (self.balance.settings.harmonics, self.balance.settings.samples);
+        let fits = |l: &Option<Linear>| {
+            l.as_ref().is_some_and(|l| l.omega == omega && l.harmonics == h && l.samples == samples)
+        };
+        if fits(&self.linear) {
             return Ok(());
         }
-        if self.spare.as_ref().is_some_and(|l| l.omega == omega && l.harmonics == h && l.samples == samples) {
+        if fits(&self.spare) {
             std::mem::swap(&mut self.linear, &mut self.spare);
             return Ok(());
         }
