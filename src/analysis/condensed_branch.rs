@@ -106,13 +106,14 @@ impl BranchSolver for CondensedBranch<'_> {
     /// By marching from the state at `from`, then Newton from the marched state. Where the
     /// march reaches no periodic state, or one that breaks the planets' symmetry, the run
     /// goes on along its own branch from `from` ([`CondensedBalance::solve_on_branch`]).
-    /// An earlier try may have left the balance at another H or without the symmetry:
-    /// both are the run's again first, and `from` is brought to the balance's H.
+    /// An earlier try may have left the balance at another H or without the symmetry: the
+    /// run's symmetry is taken back first, and `from` is brought to the balance's H where
+    /// it is read (each time from the run's own coefficients, so no harmonic is lost to an
+    /// H in between).
     fn restart(&mut self, omega: f64, from: &[f64], work: &mut Work, flows: &mut usize) -> Option<Vec<f64>> {
         self.balance.restore_symmetry(self.symmetry, omega).ok()?;
-        let from = self.balance.fitted(from);
         let marched = (|| {
-            let z = self.balance.state_of(omega, &from, work).ok()?;
+            let z = self.balance.state_of(omega, &self.balance.fitted(from), work).ok()?;
             let z = march(self.balance.problem_mut(), omega, &z, work, flows)?;
             self.balance.arc_fit(omega).ok()?;
             self.balance.solve_from_state(omega, &z, work).ok()
@@ -122,7 +123,7 @@ impl BranchSolver for CondensedBranch<'_> {
                 Some(x)
             }
             _ => {
-                let x = self.balance.solve_on_branch(omega, self.symmetry, &from).ok()?;
+                let x = self.balance.solve_on_branch(omega, self.symmetry, from).ok()?;
                 (x.len() == self.balance.unknowns()).then_some(x)
             }
         }

@@ -852,14 +852,14 @@ impl CondensedBalance {
             Ok((_, report)) => {
                 let expanded = self.expanded.take().expect("kept by the symmetry check");
                 let broken = report.symmetry_residual;
-                self.use_every_mesh();
+                self.set_symmetry(Symmetry::Full);
                 let (orbit, mut report) = self.solve_here(omega, Some(&expanded))?;
                 report.symmetry_residual = broken;
                 report.cyclic_refused = Some("the orbit does not keep the planets' symmetry".into());
                 Ok((orbit, report))
             }
             Err(PeriodicError::InvalidRequest { name, reason, .. }) if name == "symmetry" => {
-                self.use_every_mesh();
+                self.set_symmetry(Symmetry::Full);
                 let (orbit, mut report) = self.solve_started(omega, None)?;
                 report.cyclic_refused = Some(reason);
                 Ok((orbit, report))
@@ -912,12 +912,14 @@ impl CondensedBalance {
         }
     }
 
-    /// Solves with every mesh from now on.
-    fn use_every_mesh(&mut self) {
-        self.symmetry = Symmetry::Full;
-        self.layout = None;
-        self.linear = None;
-        self.spare = None;
+    /// Solves with `symmetry` from now on: the layout and linear parts of another are dropped.
+    fn set_symmetry(&mut self, symmetry: Symmetry) {
+        if self.symmetry != symmetry {
+            self.symmetry = symmetry;
+            self.layout = None;
+            self.linear = None;
+            self.spare = None;
+        }
     }
 
     /// [`Self::solve`] with the symmetry the balance holds.

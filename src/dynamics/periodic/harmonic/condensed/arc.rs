@@ -153,12 +153,7 @@ impl CondensedBalance {
     /// Solves with `symmetry` again where a solve had given it up (a march's state that broke
     /// the planets' symmetry), its layout built at `omega` [rad/s].
     pub fn restore_symmetry(&mut self, symmetry: Symmetry, omega: f64) -> Result<(), PeriodicError> {
-        if self.symmetry != symmetry {
-            self.symmetry = symmetry;
-            self.layout = None;
-            self.linear = None;
-            self.spare = None;
-        }
+        self.set_symmetry(symmetry);
         self.layout_at(omega)?;
         Ok(())
     }
@@ -187,10 +182,8 @@ impl CondensedBalance {
         from: &[f64],
     ) -> Result<Vec<f64>, PeriodicError> {
         self.restore_symmetry(symmetry, omega)?;
-        let guess = self.fitted(from);
         self.arc_fit(omega)?;
-        let guess = self.fitted(&guess);
-        let (orbit, report) = self.solve(omega, Some(&guess))?;
+        let (orbit, report) = self.solve(omega, Some(&self.fitted(from)))?;
         if let Some(reason) = report.cyclic_refused {
             return Err(PeriodicError::InvalidRequest {
                 name: "symmetry".into(),
