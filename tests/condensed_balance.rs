@@ -235,3 +235,34 @@ fn a_restart_takes_coefficients_of_another_h() {
     assert_eq!(lengths[2], lengths[0], "back at the H of 3050 rpm, 3000 rpm's");
     assert_eq!(lengths[2], cb.unknowns());
 }
+
+/// Off the folds each continuation step is corrected at its predicted speed (the speed's row
+/// instead of the arclength's, `analysis::continuation`): on the example's transverse–torsional
+/// branch from 6000 to 7000 rpm, clear of folds, every step (one unit of arclength there)
+/// changes the speed by exactly the tangent's share of it at the point before (to 1e-9 of a
+/// nominal step; the pseudo-arclength corrector moves the speed off the prediction), and
+/// every point is a periodic state of the balance there.
+#[test]
+fn off_the_folds_the_points_lie_at_the_predicted_speeds() {
+    use planetwear::analysis::condensed_branch::CondensedBranch;
+    use planetwear::analysis::continuation::{follow_branch, ContinuationSettings};
+    let (_, _, model) = build(&Scene::example_2004(), 0);
+    let step = 50.0 * RPM;
+    let settings = ContinuationSettings::new(6000.0 * RPM, 7000.0 * RPM, step);
+    let problem = PeriodicProblem::new(model, ShootingSettings::default(), 6000.0 * RPM).unwrap();
+    let hb = HarmonicBalance::new(problem, HarmonicSettings::default()).unwrap();
+    let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
+    let branch = follow_branch(&mut CondensedBranch::new(&mut cb), &settings, |_| {}).unwrap();
+    assert!(branch.bifurcations.is_empty() && branch.gaps.is_empty(), "{:?}", branch.bifurcations);
+    let points = &branch.points;
+    assert!(points.len() >= 20, "{} points", points.len());
+    // The last step lands on the last speed instead.
+    for pair in points[..points.len() - 1].windows(2) {
+        let (a, b) = (&pair[0], &pair[1]);
+        let off = (b.orbit.speed - a.orbit.speed - a.speed_slope).abs() / step;
+        assert!(off <= 1e-9, "{} rpm: {off:.2e} of a step off the prediction", b.orbit.speed / RPM);
+    }
+    for p in points {
+        assert!(p.orbit.residual <= 1e-6, "{} rpm: residual {}", p.orbit.speed / RPM, p.orbit.residual);
+    }
+}

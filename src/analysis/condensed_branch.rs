@@ -142,6 +142,11 @@ impl BranchSolver for CondensedBranch<'_> {
         Ok((orbit, linear))
     }
 
+    /// The linear part is built once per speed: a step's corrections share it.
+    fn fixed_speed_steps(&self) -> bool {
+        true
+    }
+
     /// The rule's harmonics at the lower speed, as the full balance's continuation.
     fn fit(&mut self, (low, _): (f64, f64), vectors: &mut [&mut Vec<f64>]) -> Result<bool, PeriodicError> {
         let changed = self.balance.arc_fit(low)?;

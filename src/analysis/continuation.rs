@@ -453,6 +453,15 @@ pub trait BranchSolver {
         counts: (&mut Work, &mut usize),
     ) -> Result<(PeriodicOrbit, Self::Linear), PeriodicError>;
 
+    /// Whether steps clear of folds are corrected at their predicted speed
+    /// ([`FIXED_SPEED_SLOPE`]): for a solver whose every new speed costs a
+    /// build (the condensed balance's linear part), so that a step's
+    /// corrections share one. Shooting and the full balance keep the
+    /// pseudo-arclength corrector everywhere.
+    fn fixed_speed_steps(&self) -> bool {
+        false
+    }
+
     /// Brings `vectors` (each Y, λ last) to the unknowns the solver takes
     /// for a step whose points lie between the speeds `speeds` = (low, high)
     /// [rad/s]; whether they changed (the last linearization then no longer
@@ -740,11 +749,18 @@ pub fn follow_branch<S: BranchSolver>(
 /// speed.
 pub const JOIN_TOLERANCE: f64 = 1e-4;
 
-/// A step is aimed at a stable point of the other run ([`follow_joining`])
-/// only where the branch's tangent changes the speed at least this much
-/// per unit of arclength (clear of folds, where a step at fixed speed
-/// cannot be corrected) and the aimed step is at least half the planned one.
-const JOIN_SLOPE: f64 = 0.5;
+/// For a solver that asks for it ([`BranchSolver::fixed_speed_steps`]), a
+/// step is corrected at its predicted speed (the arclength row replaced by
+/// the speed's) where the branch's tangent changes the speed at least this
+/// much per unit of arclength: clear of folds, where a step at fixed speed
+/// cannot be corrected. Elsewhere the corrections move along the
+/// pseudo-arclength plane. At a fixed speed every correction, and the
+/// point's linearization, take the linear part of one speed: the condensed
+/// balance builds it once for them instead of once per correction. A step
+/// is aimed at a stable point of the other run ([`follow_joining`]) only
+/// where the slope is this steep too, and the aimed step is at least half
+/// the planned one.
+pub const FIXED_SPEED_SLOPE: f64 = 0.5;
 
 /// ... and only from a point whose state lies within this share of the
 /// other run's, interpolated between its two points that bracket the speed
@@ -887,7 +903,7 @@ fn follow<S: BranchSolver>(
         }
         // Aimed at the other run's stable point furthest within the step.
         let landing =
-            other.filter(|_| !last && !retracing && t[m].abs() >= JOIN_SLOPE && near).and_then(|o| {
+            other.filter(|_| !last && !retracing && t[m].abs() >= FIXED_SPEED_SLOPE && near).and_then(|o| {
                 let (from, planned) = (y[m], h * t[m]);
                 unbroken(o)
                     .iter()
@@ -901,13 +917,14 @@ fn follow<S: BranchSolver>(
             h *= share;
         }
         let predicted: Vec<f64> = y.iter().zip(&t).map(|(a, b)| a + h * b).collect();
-        let constraint: Vec<f64> = if last || landing.is_some() {
+        let speed_row = || {
             let mut c = vec![0.0; m + 1];
             c[m] = 1.0;
             c
-        } else {
-            t.clone()
         };
+        let fixed =
+            solver.fixed_speed_steps() && !last && landing.is_none() && t[m].abs() >= FIXED_SPEED_SLOPE;
+        let constraint: Vec<f64> = if last || landing.is_some() || fixed { speed_row() } else { t.clone() };
         let mut work = Work::default();
         let mut step_flows = 0;
         let limits = (unit, settings.max_corrections);
@@ -917,6 +934,11 @@ fn follow<S: BranchSolver>(
         } else {
             solver.correct(&lin, refresh, &constraint, &predicted, limits, (&mut work, &mut step_flows))
         };
+        // A step at fixed speed beyond a fold the tangent did not foresee finds no point
+        // there: the same step along the pseudo-arclength plane.
+        if accepted.is_none() && fixed {
+            accepted = solver.correct(&lin, true, &t, &predicted, limits, (&mut work, &mut step_flows));
+        }
         if accepted.is_none() && !retracing {
             ds *= 0.5;
             refresh = true;

@@ -39,6 +39,19 @@ impl CondensedBalance {
         unit: f64,
         evaluations: &mut u64,
     ) -> Result<CondensedArc, PeriodicError> {
+        self.linearize(omega, x, (unit, true), evaluations)
+    }
+
+    /// [`Self::arc_linearize`], with ∂R/∂λ only when `derivative`: a correction at fixed
+    /// speed eliminates δλ = 0 and never reads it (without, a = 0 and the linear part at
+    /// the speed plus the difference is not built).
+    fn linearize(
+        &mut self,
+        omega: f64,
+        x: &[f64],
+        (unit, derivative): (f64, bool),
+        evaluations: &mut u64,
+    ) -> Result<CondensedArc, PeriodicError> {
         self.balance.samples = self.balance.settings.samples;
         self.prepare(omega)?;
         if x.len() != self.unknowns() {
@@ -52,6 +65,11 @@ impl CondensedBalance {
         let mut at = self.evaluate(omega, x, (true, true), evaluations)?;
         let conv = at.convolution.take().expect("asked for");
         let steps = Steps::new(self.linear.as_ref().expect("prepared"), conv, dims, DenseLu::default());
+        if !derivative {
+            let solved_derivative = vec![0.0; at.residual.len()];
+            let harmonics = self.balance.settings.harmonics;
+            return Ok(CondensedArc { harmonics, residual: at.residual, solved_derivative, steps });
+        }
         let d_omega = SPEED_DIFFERENCE * omega.abs().max(unit);
         self.prepare(omega + d_omega)?;
         let ahead = self.evaluate(omega + d_omega, x, (false, true), evaluations)?;
@@ -100,13 +118,16 @@ impl CondensedBalance {
             return None;
         }
         let mut own = None;
+        // At fixed speed (the speed's row) the corrections need no ∂R/∂λ.
+        let derivative = constraint[..n].iter().any(|c| *c != 0.0);
         // A linearization at other harmonics (the rule's H changed with the speed) is not
         // this balance's: a fresh one at the predicted point.
         if fresh || linear.harmonics != self.balance.settings.harmonics {
-            own = Some(self.arc_linearize(predicted[n] * unit, &predicted[..n], unit, evaluations).ok()?);
+            let at = (unit, derivative);
+            own = Some(self.linearize(predicted[n] * unit, &predicted[..n], at, evaluations).ok()?);
         }
         let tolerance = self.balance.settings.tolerance;
-        let mut run = CondensedRun { balance: self, unit, evaluations };
+        let mut run = CondensedRun { balance: self, unit, derivative, evaluations };
         bordered_correct(&mut run, linear, own, constraint, predicted, (unit, max_corrections), tolerance)
     }
 
@@ -268,10 +289,13 @@ impl CondensedBalance {
     }
 }
 
-/// The condensed balance in a corrector's run: its speed unit and evaluations.
+/// The condensed balance in a corrector's run: its speed unit, whether it needs ∂R/∂λ, and
+/// its evaluations.
 struct CondensedRun<'a> {
     balance: &'a mut CondensedBalance,
     unit: f64,
+    /// Whether its linearizations take ∂R/∂λ (not at fixed speed).
+    derivative: bool,
     evaluations: &'a mut u64,
 }
 
@@ -284,7 +308,7 @@ impl Bordered for CondensedRun<'_> {
     }
 
     fn linearize_at(&mut self, omega: f64, x: &[f64]) -> Option<CondensedArc> {
-        self.balance.arc_linearize(omega, x, self.unit, self.evaluations).ok()
+        self.balance.linearize(omega, x, (self.unit, self.derivative), self.evaluations).ok()
     }
 
     fn residual_of(linear: &CondensedArc) -> &[f64] {
