@@ -500,7 +500,7 @@ impl CondensedBalance {
                 }
             }
         }
-        let pg = self.forcing(omega, &project);
+        let pg = self.forcing(omega, &p);
         let layout = self.layout.as_ref().expect("prepared");
         let mut linear = Linear {
             omega,
@@ -541,9 +541,10 @@ impl CondensedBalance {
     }
 
     /// Pᵀg_k per harmonic (complex amplitudes, m each): g(t) the force at the rigid motion
-    /// itself with the meshes' forces added back, sampled at the settings' N and analysed;
-    /// `project` gives Pᵀv.
-    fn forcing(&mut self, omega: f64, project: &dyn Fn(&[f64]) -> Vec<f64>) -> Vec<Vec<Complex<f64>>> {
+    /// itself with the meshes' forces added back, sampled at the settings' N; each coordinate's
+    /// samples analysed (a constant one read off, one that is zero or that `p` does not
+    /// project skipped) and the coefficients projected by `p` (n × m, column-major).
+    fn forcing(&mut self, omega: f64, p: &[f64]) -> Vec<Vec<Complex<f64>>> {
         let (m, n, h) = (self.balance.m, self.balance.n, self.balance.settings.harmonics);
         let samples = self.balance.settings.samples;
         let period = self.balance.problem.period(omega);
@@ -551,25 +552,41 @@ impl CondensedBalance {
         let rigid = model.rigid_velocity_at(omega);
         let mut f = vec![0.0; n];
         let mut q = vec![0.0; n];
-        let mut g_samples = vec![vec![0.0; samples]; m];
+        let mut g_samples = vec![vec![0.0; samples]; n];
         for j in 0..samples {
             let t = period * j as f64 / samples as f64;
             for (qi, r) in q.iter_mut().zip(&rigid) {
                 *qi = r * t;
             }
             model.force_but_meshes(t, &q, &rigid, &mut f);
-            for (samples_a, g) in g_samples.iter_mut().zip(project(&f)) {
-                samples_a[j] = g;
+            for (samples_i, g) in g_samples.iter_mut().zip(&f) {
+                samples_i[j] = *g;
             }
         }
         let mut pg = vec![vec![Complex::new(0.0, 0.0); m]; h + 1];
         let mut buffer = vec![Complex::new(0.0, 0.0); samples];
         let mut coefficients = vec![0.0; 2 * h + 1];
-        for (a, g) in g_samples.iter().enumerate() {
-            self.balance.analyse(g, &mut buffer, &mut coefficients);
-            pg[0][a] = Complex::new(coefficients[0], 0.0);
-            for k in 1..=h {
-                pg[k][a] = Complex::new(coefficients[2 * k - 1], -coefficients[2 * k]);
+        for (i, g) in g_samples.iter().enumerate() {
+            let column: Vec<(usize, f64)> =
+                (0..m).map(|a| (a, p[i + n * a])).filter(|(_, v)| *v != 0.0).collect();
+            if column.is_empty() || g.iter().all(|v| *v == 0.0) {
+                continue;
+            }
+            if g.iter().all(|v| *v == g[0]) {
+                coefficients.fill(0.0);
+                coefficients[0] = g[0];
+            } else {
+                self.balance.analyse(g, &mut buffer, &mut coefficients);
+            }
+            for (k, pg_k) in pg.iter_mut().enumerate() {
+                let z = if k == 0 {
+                    Complex::new(coefficients[0], 0.0)
+                } else {
+                    Complex::new(coefficients[2 * k - 1], -coefficients[2 * k])
+                };
+                for &(a, v) in &column {
+                    pg_k[a] += z * v;
+                }
             }
         }
         pg
