@@ -479,3 +479,42 @@ fn the_set_up_cache_returns_the_computed_tables() {
         assert_eq!(again, MeshSeparation::new(&set, mesh, &flanks, step));
     }
 }
+
+/// A mesh evaluated with its event values (`mesh_at_with_events`, what the condensed balance
+/// samples where it seeks the contact switches) is the mesh alone (`mesh_at`) and its events
+/// (`mesh_events_at`): the same events, and the same law to round-off (1e-12 of each
+/// value; the two read the same tables in another order), in contact, in back-flank
+/// contact and out of it, for every mesh of the example.
+#[test]
+fn a_mesh_with_its_events_is_the_mesh_and_its_events() {
+    let (_, _, model) = build(&Scene::example_2004());
+    let mut checked = 0;
+    for i in 0..model.mesh_count() {
+        let count = model.mesh_event_count(i);
+        let (mut alone, mut with) = (vec![0.0; count], vec![0.0; count]);
+        for j in 0..97 {
+            let s = 0.04 * j as f64 / 97.0 - 0.01;
+            for delta in [-60e-6, -5e-6, 0.0, 2e-6, 12e-6, 45e-6] {
+                let rate = 0.3 * delta / 1e-5;
+                let (a, ca) = model.mesh_at(i, s, delta, rate);
+                model.mesh_events_at(i, s, delta, &mut alone);
+                let (b, cb) = model.mesh_at_with_events(i, (s, delta, rate), &mut with);
+                let pairs = [
+                    (a.force, b.force),
+                    (a.stiffness, b.stiffness),
+                    (a.position_derivative, b.position_derivative),
+                    (a.damping_force, b.damping_force),
+                    (a.peak_pair_force, b.peak_pair_force),
+                    (ca, cb),
+                ];
+                for (x, y) in pairs {
+                    let close = (x - y).abs() <= 1e-12 * x.abs().max(y.abs()) + 1e-9;
+                    assert!(close, "mesh {i} at s = {s}, δ = {delta}: {x} against {y}");
+                }
+                assert_eq!(alone, with, "mesh {i}'s events at s = {s}, δ = {delta}");
+                checked += usize::from(a.force != 0.0);
+            }
+        }
+    }
+    assert!(checked > 100, "the samples reach contact ({checked} in contact)");
+}

@@ -992,6 +992,37 @@ impl PlanetaryDynamics {
     pub fn mesh_at(&self, i: usize, s: f64, delta: f64, rate: f64) -> (MeshState, f64) {
         let link = &self.links[i];
         let law = self.law_at(link.kind, s, delta);
+        self.state_and_damping(link, law, (s, delta, rate))
+    }
+
+    /// [`Self::mesh_at`] with mesh `i`'s event values written into `events`
+    /// ([`Self::mesh_events_at`], [`Self::mesh_event_count`] of them): the
+    /// tabulated law evaluated once for both.
+    pub fn mesh_at_with_events(
+        &self,
+        i: usize,
+        (s, delta, rate): (f64, f64, f64),
+        events: &mut [f64],
+    ) -> (MeshState, f64) {
+        let link = &self.links[i];
+        let law = match &self.deformable {
+            Some(d) => {
+                events.copy_from_slice(&d.mesh(link.kind).events(s, delta));
+                self.law_at(link.kind, s, delta)
+            }
+            None => self.model(link.kind).force_with_derivatives(s, delta, events),
+        };
+        self.state_and_damping(link, law, (s, delta, rate))
+    }
+
+    /// The state of `link` under `law` at (position, approach, rate), and its damping
+    /// coefficient (0 out of contact).
+    fn state_and_damping(
+        &self,
+        link: &Link,
+        law: MeshLaw,
+        (s, delta, rate): (f64, f64, f64),
+    ) -> (MeshState, f64) {
         let damping = if law.approach_stiffness > 0.0 {
             link.damping_at(self.mesh_stiffness_damping, law.approach_stiffness)
         } else {

@@ -626,16 +626,25 @@ impl CondensedBalance {
         let mut switch_terms = Vec::new();
         let mut samples = vec![0.0; ns];
         let (mut kt, mut ct, mut gt) = (vec![0.0; ns], vec![0.0; ns], vec![0.0; ns]);
+        let mut events = Vec::new();
         for g in 0..mf {
             let i = layout.computed[g];
             let (k_ref, c_ref) = linear.reference[g];
             let sigma = &value[layout.position_column[g]];
+            // The event values at the samples, with the law, where the switches are sought.
+            let count = if switches { model.mesh_event_count(i) } else { 0 };
+            events.resize(count * (ns + 1), 0.0);
             for j in 0..ns {
                 let t = period * j as f64 / ns as f64;
                 let delta = q_scale * value[g][j];
                 let s = layout.s0[g] + layout.rate[g] * omega * t + q_scale * sigma[j];
                 let approach_rate = q_scale * rate[g][j];
-                let (state, c) = model.mesh_at(i, s, delta, approach_rate);
+                let (state, c) = if switches {
+                    let at = (s, delta, approach_rate);
+                    model.mesh_at_with_events(i, at, &mut events[j * count..(j + 1) * count])
+                } else {
+                    model.mesh_at(i, s, delta, approach_rate)
+                };
                 let total = state.force + state.damping_force - k_ref * delta - c_ref * approach_rate;
                 if !total.is_finite() {
                     return Err(PeriodicError::invalid(
@@ -651,7 +660,7 @@ impl CondensedBalance {
             }
             *evaluations += ns as u64;
             let found = if switches {
-                self.mesh_switches(g, x, (&value[g], sigma), (omega, period), jacobian, evaluations)?
+                self.mesh_switches(g, x, &mut events, (omega, period), jacobian, evaluations)?
             } else {
                 Vec::new()
             };
@@ -704,7 +713,9 @@ impl CondensedBalance {
         Ok(Evaluation { residual, forces, convolution })
     }
 
-    /// Computed mesh `g`'s contact switches on the series `x` of period `period` \[s\]: each
+    /// Computed mesh `g`'s contact switches on the series `x` of period `period` \[s\], from
+    /// its event values at the N samples (`values`, sample-major, N + 1 rows: the last is
+    /// filled here, at t = T): each
     /// sign change of its event values between two samples (and between the last sample and
     /// t = T, where the pairs' slots have moved on by one base pitch) located by the Illinois
     /// method to 1e-6 of the sample interval, and its force's jump and slope jump measured
@@ -714,7 +725,7 @@ impl CondensedBalance {
         &self,
         g: usize,
         x: &[f64],
-        (approach, position): (&[f64], &[f64]),
+        values: &mut [f64],
         (omega, period): (f64, f64),
         gradients: bool,
         evaluations: &mut u64,
@@ -744,17 +755,12 @@ impl CondensedBalance {
             state.force + state.damping_force - k_ref * delta - c_ref * rate
         };
         let dt = period / ns as f64;
-        let mut values = vec![0.0; count * (ns + 1)];
         let mut scratch = vec![0.0; count];
-        // At the samples from the samples of the series; at t = T from the series.
-        for j in 0..ns {
-            let s = layout.s0[g] + layout.rate[g] * omega * (j as f64 * dt) + q_scale * position[j];
-            model.mesh_events_at(i, s, q_scale * approach[j], &mut scratch);
-            values[j * count..(j + 1) * count].copy_from_slice(&scratch);
-        }
+        debug_assert_eq!(values.len(), count * (ns + 1));
+        // At t = T from the series.
         event(period, 0, &mut scratch);
         values[ns * count..].copy_from_slice(&scratch);
-        *evaluations += ns as u64 + 1;
+        *evaluations += 1;
         let mut located = Vec::new();
         for j in 0..ns {
             for e in 0..count {
