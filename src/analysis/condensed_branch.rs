@@ -105,7 +105,9 @@ impl BranchSolver for CondensedBranch<'_> {
 
     /// By marching from the state at `from`, then Newton from the marched state. Where the
     /// march reaches no periodic state, or one that breaks the planets' symmetry, the run
-    /// goes on along its own branch from `from` ([`CondensedBalance::solve_on_branch`]).
+    /// goes on along its own branch from `from` ([`CondensedBalance::solve_on_branch`]), and
+    /// where that branch has turned back, from the balance's cold start
+    /// ([`CondensedBalance::solve_cold`]).
     /// An earlier try may have left the balance at another H or without the symmetry: the
     /// run's symmetry is taken back first, and `from` is brought to the balance's H where
     /// it is read (each time from the run's own coefficients, so no harmonic is lost to an
@@ -123,7 +125,10 @@ impl BranchSolver for CondensedBranch<'_> {
                 Some(x)
             }
             _ => {
-                let x = self.balance.solve_on_branch(omega, self.symmetry, from).ok()?;
+                let x = match self.balance.solve_on_branch(omega, self.symmetry, from) {
+                    Ok(x) => x,
+                    Err(_) => self.balance.solve_cold(omega, self.symmetry).ok()?,
+                };
                 (x.len() == self.balance.unknowns()).then_some(x)
             }
         }

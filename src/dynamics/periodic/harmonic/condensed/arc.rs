@@ -202,9 +202,27 @@ impl CondensedBalance {
         symmetry: Symmetry,
         from: &[f64],
     ) -> Result<Vec<f64>, PeriodicError> {
+        self.solve_with(omega, symmetry, Some(from))
+    }
+
+    /// The contact coordinates of the periodic state at `omega` [rad/s] under `symmetry` from
+    /// the balance's cold start (the static deflection, as a run's first point): a restart's
+    /// last resort, where neither a march nor the run's own branch gives a state there (the
+    /// branch has turned back at a fold behind it).
+    pub fn solve_cold(&mut self, omega: f64, symmetry: Symmetry) -> Result<Vec<f64>, PeriodicError> {
+        self.solve_with(omega, symmetry, None)
+    }
+
+    fn solve_with(
+        &mut self,
+        omega: f64,
+        symmetry: Symmetry,
+        from: Option<&[f64]>,
+    ) -> Result<Vec<f64>, PeriodicError> {
         self.restore_symmetry(symmetry, omega)?;
         self.arc_fit(omega)?;
-        let (orbit, report) = self.solve(omega, Some(&self.fitted(from)))?;
+        let guess = from.map(|from| self.fitted(from));
+        let (orbit, report) = self.solve(omega, guess.as_deref())?;
         if let Some(reason) = report.cyclic_refused {
             return Err(PeriodicError::InvalidRequest {
                 name: "symmetry".into(),
