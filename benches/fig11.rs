@@ -25,7 +25,8 @@
 //! runs the eight runs independently to their ends; `-- --continuation
 //! --condensed` runs them on the harmonic balance condensed onto the contact
 //! coordinates with the planets' cyclic symmetry
-//! (`analysis::condensed_branch::CondensedBranch`).
+//! (`analysis::condensed_branch::CondensedBranch`), and with `--broken-symmetry`
+//! a restart that reaches a state breaking the symmetry goes on with every mesh.
 //! The wear model that makes the states runs first and is timed apart (the
 //! figure starts from the states, as the study's does).
 //! docs/PERFORMANCE.md records the figures.
@@ -77,7 +78,13 @@ fn main() {
         };
     let (set, run) = scene.validate_with_run().expect("the example is valid");
     if arg("--continuation") {
-        continuation(&set, step, arg("--no-check"), !arg("--no-join"), arg("--condensed"));
+        continuation(
+            &set,
+            step,
+            arg("--no-check"),
+            !arg("--no-join"),
+            (arg("--condensed"), arg("--broken-symmetry")),
+        );
         return;
     }
 
@@ -179,7 +186,7 @@ fn main() {
 /// joins that run's unbroken stretch; without, the eight runs independent),
 /// on rayon's threads; then E_h of the up runs' points nearest the check
 /// speeds against long time marching at those points' speeds.
-fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool, condensed: bool) {
+fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool, (condensed, broken): (bool, bool)) {
     let wear_start = Instant::now();
     let states = planetwear::package::pack::example_wear_states().expect("the example's wear run");
     let wear_time = wear_start.elapsed().as_secs_f64();
@@ -203,6 +210,7 @@ fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool, condensed:
         let (branch, orbits) = if condensed {
             let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
             let mut solver = CondensedBranch::new(&mut cb);
+            solver.follow_broken_symmetry(broken);
             let branch = match other {
                 Some(o) => follow_joining(&mut solver, &settings, o, |_| {}),
                 None => follow_branch(&mut solver, &settings, |_| {}),
@@ -254,7 +262,11 @@ fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool, condensed:
         "Fig. 11 as the continuation's equivalent: example-2004, {:?}, κ = {KAPPAS:?}, 500–15 000 rpm up and down, \
          nominal step {step} rpm, {}, {} threads, {}",
         set.fidelity(),
-        if condensed { "harmonic balance condensed onto the contact coordinates, cyclic symmetry" } else { "harmonic balance" },
+        match (condensed, broken) {
+            (true, true) => "harmonic balance condensed onto the contact coordinates, cyclic symmetry, symmetry-broken branches with every mesh",
+            (true, false) => "harmonic balance condensed onto the contact coordinates, cyclic symmetry",
+            _ => "harmonic balance",
+        },
         rayon::current_num_threads(),
         if join { "each down run joining its up run" } else { "the eight runs independent" }
     );

@@ -270,6 +270,12 @@ struct SweepArgs {
     /// (jumps.md, and "jumps" in sweep.json).
     #[arg(long)]
     against_march: bool,
+    /// Continuation with --solver condensed only: where a restart's march reaches a state
+    /// that breaks the planets' symmetry, go on with every mesh along that symmetry-broken
+    /// branch (about four times the unknowns) instead of along the symmetric branch, unstable
+    /// there (docs/PERIODIC.md §3).
+    #[arg(long)]
+    broken_symmetry: bool,
 }
 
 /// Work-precision study of the integrators: E_h of the mesh-force harmonics against CPU time

@@ -18,11 +18,28 @@ use crate::dynamics::response::Work;
 /// 0.18 to 0.27 of the time.
 pub const MULTIPLIER_INTERVALS_PER_HARMONIC: usize = 2;
 
+/// A restart's march whose period lies further than this (relative to its largest
+/// coefficient, [`CondensedBalance::asymmetry`]) from the planets' symmetry is solved with
+/// every mesh: well above what a march that settles on a symmetric orbit leaves (it stops
+/// at a change of 1e-3 of the state over a period), well below the broken states of the
+/// example (one planet's sun–planet F^(rms) three times the others' near 11 500 rpm).
+pub const MARCHED_ASYMMETRY: f64 = 1e-2;
+
+/// ... and the run goes on with every mesh where the orbit Newton finds from it breaks the
+/// symmetry by more than this (Newton's tolerance is 1e-7 of the coefficients).
+pub const BROKEN_SYMMETRY: f64 = 1e-4;
+
 /// Continuation on a [`CondensedBalance`].
 pub struct CondensedBranch<'a> {
     balance: &'a mut CondensedBalance,
     /// The symmetry the run follows its branch with (the balance's when the run began).
     symmetry: Symmetry,
+    /// The symmetry of the run's points since its last restart: [`Symmetry::Full`] after a
+    /// restart that found a state breaking the planets' symmetry.
+    points: Symmetry,
+    /// Whether a restart whose march breaks the planets' symmetry goes on with every mesh
+    /// ([`Self::follow_broken_symmetry`]).
+    broken_symmetry: bool,
     /// The orbits of the points accepted, in the full balance's coordinates, in the order of
     /// the branch's points (for their forces: `HarmonicBalance::steady_state`).
     pub orbits: Vec<HarmonicOrbit>,
@@ -31,7 +48,16 @@ pub struct CondensedBranch<'a> {
 impl<'a> CondensedBranch<'a> {
     /// Continuation on `balance`.
     pub fn new(balance: &'a mut CondensedBalance) -> Self {
-        Self { symmetry: balance.symmetry(), balance, orbits: Vec::new() }
+        let symmetry = balance.symmetry();
+        Self { symmetry, points: symmetry, broken_symmetry: false, balance, orbits: Vec::new() }
+    }
+
+    /// Whether a restart whose march reaches a state that breaks the planets' symmetry goes
+    /// on with every mesh from it ([`Symmetry::Full`]: the symmetry-broken branch, at four
+    /// times the unknowns, until the next restart) instead of along the run's symmetric
+    /// branch, unstable there. Off by default (docs/PERIODIC.md §3).
+    pub fn follow_broken_symmetry(&mut self, follow: bool) {
+        self.broken_symmetry = follow;
     }
 
     /// The branch point at `x` and `omega` with its multipliers, its orbit kept in
@@ -51,6 +77,64 @@ impl<'a> CondensedBranch<'a> {
         let point = balance_point(full, &orbit, intervals, (corrections, residual), (work, flows))?;
         self.orbits.push(orbit);
         Ok(point)
+    }
+}
+
+impl CondensedBranch<'_> {
+    /// [`BranchSolver::restart`] once `from` is in the run's symmetry and `z` is its state.
+    fn restarted(
+        &mut self,
+        omega: f64,
+        from: &[f64],
+        z: &[f64],
+        (work, flows): (&mut Work, &mut usize),
+    ) -> Option<Vec<f64>> {
+        let marched = march(self.balance.problem_mut(), omega, z, work, flows);
+        if let Some(z) = &marched {
+            if self.broken_symmetry {
+                if let Some(x) = self.broken(omega, z, work) {
+                    return Some(x);
+                }
+            }
+            let solved = (|| {
+                self.balance.arc_fit(omega).ok()?;
+                self.balance.solve_from_state(omega, z, work).ok()
+            })();
+            if let Some(x) = solved {
+                if self.balance.symmetry() == self.symmetry && x.len() == self.balance.unknowns() {
+                    return Some(x);
+                }
+            }
+        }
+        let x = match self.balance.solve_on_branch(omega, self.symmetry, from) {
+            Ok(x) => x,
+            Err(_) => self.balance.solve_cold(omega, self.symmetry).ok()?,
+        };
+        (x.len() == self.balance.unknowns()).then_some(x)
+    }
+
+    /// The orbit with every mesh from the marched state `z` at `omega` [rad/s], where the
+    /// march and that orbit break the planets' symmetry; the balance then holds every mesh.
+    /// `None` (the balance back at the run's symmetry) otherwise.
+    fn broken(&mut self, omega: f64, z: &[f64], work: &mut Work) -> Option<Vec<f64>> {
+        if self.symmetry == Symmetry::Full {
+            return None;
+        }
+        let found = (|| {
+            self.balance.restore_symmetry(Symmetry::Full, omega).ok()?;
+            self.balance.arc_fit(omega).ok()?;
+            let marched = self.balance.marched_asymmetry(omega, z, work).ok()?;
+            if marched <= MARCHED_ASYMMETRY {
+                return None;
+            }
+            let x = self.balance.solve_from_state(omega, z, work).ok()?;
+            let solved = self.balance.asymmetry(omega, &x).ok()?;
+            (solved > BROKEN_SYMMETRY && x.len() == self.balance.unknowns()).then_some(x)
+        })();
+        if found.is_none() {
+            self.balance.restore_symmetry(self.symmetry, omega).ok()?;
+        }
+        found
     }
 }
 
@@ -104,36 +188,39 @@ impl BranchSolver for CondensedBranch<'_> {
     }
 
     /// By marching from the state at `from`, then Newton from the marched state. Where the
-    /// march reaches no periodic state, or one that breaks the planets' symmetry, the run
+    /// run follows broken symmetry ([`Self::follow_broken_symmetry`]) and the march reaches
+    /// a state that breaks the planets' symmetry (its period more than
+    /// [`MARCHED_ASYMMETRY`] from it), Newton with every mesh from it: where that orbit
+    /// breaks the symmetry too (by more than [`BROKEN_SYMMETRY`]), the run goes on with
+    /// every mesh from there (the balance holds [`Symmetry::Full`] until the next restart).
+    /// Otherwise with the run's symmetry; where the march reaches no periodic state, the run
     /// goes on along its own branch from `from` ([`CondensedBalance::solve_on_branch`]), and
     /// where that branch has turned back, from the balance's cold start
-    /// ([`CondensedBalance::solve_cold`]).
-    /// An earlier try may have left the balance at another H or without the symmetry: the
-    /// run's symmetry is taken back first, and `from` is brought to the balance's H where
-    /// it is read (each time from the run's own coefficients, so no harmonic is lost to an
-    /// H in between).
+    /// ([`CondensedBalance::solve_cold`]). `from` is read in the layout of the run's last
+    /// points (every mesh after a symmetry-broken restart) and brought to the balance's H.
     fn restart(&mut self, omega: f64, from: &[f64], work: &mut Work, flows: &mut usize) -> Option<Vec<f64>> {
+        // `from` in the layout it was taken in: the state to march from, and where the run
+        // went on with every mesh, its coordinates under the run's symmetry.
+        self.balance.restore_symmetry(self.points, omega).ok()?;
+        let z = self.balance.state_of(omega, &self.balance.fitted(from), work).ok()?;
+        let converted;
+        let from = if self.points == self.symmetry {
+            from
+        } else {
+            let mut evaluations = 0;
+            let orbit = self.balance.orbit_at(omega, &self.balance.fitted(from), 0, &mut evaluations).ok()?;
+            work.rhs_evaluations += evaluations;
+            self.balance.restore_symmetry(self.symmetry, omega).ok()?;
+            converted = self.balance.coordinates_of(&orbit).ok()?;
+            &converted[..]
+        };
         self.balance.restore_symmetry(self.symmetry, omega).ok()?;
-        let marched = (|| {
-            let z = self.balance.state_of(omega, &self.balance.fitted(from), work).ok()?;
-            let z = march(self.balance.problem_mut(), omega, &z, work, flows)?;
-            self.balance.arc_fit(omega).ok()?;
-            self.balance.solve_from_state(omega, &z, work).ok()
-        })();
-        match marched {
-            Some(x) if self.balance.symmetry() == self.symmetry && x.len() == self.balance.unknowns() => {
-                Some(x)
-            }
-            _ => {
-                let x = match self.balance.solve_on_branch(omega, self.symmetry, from) {
-                    Ok(x) => x,
-                    Err(_) => self.balance.solve_cold(omega, self.symmetry).ok()?,
-                };
-                (x.len() == self.balance.unknowns()).then_some(x)
-            }
+        let found = self.restarted(omega, from, &z, (work, flows));
+        if found.is_some() {
+            self.points = self.balance.symmetry();
         }
+        found
     }
-
     fn accept(
         &mut self,
         (x, omega, unit): (&[f64], f64, f64),

@@ -50,6 +50,7 @@ pub(crate) fn sweep_continuation(
         against_march,
         solver,
         join,
+        broken_symmetry,
         ..
     }: SweepArgs,
 ) -> Result<()> {
@@ -59,6 +60,9 @@ pub(crate) fn sweep_continuation(
         Some("condensed") => "condensed",
         Some(other) => bail!("--solver {other}: allowed are shooting, harmonic-balance, condensed"),
     };
+    if broken_symmetry && solver_name != "condensed" {
+        bail!("--broken-symmetry applies to --solver condensed only (its restarts can leave the planets' symmetry)");
+    }
     let balance = solver_name != "shooting";
     let (set, run_settings) = validated_with_run(&load_scene(&scene)?)?;
     // The grid of the marching sweep: the same rules for the same flags (and
@@ -118,6 +122,7 @@ pub(crate) fn sweep_continuation(
             let hb = HarmonicBalance::new(problem, HarmonicSettings::default())?;
             let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
             let mut solver = CondensedBranch::new(&mut cb);
+            solver.follow_broken_symmetry(broken_symmetry);
             let branch = match other {
                 Some(o) => follow_joining(&mut solver, &settings, o, progress)?,
                 None => follow_branch(&mut solver, &settings, progress)?,

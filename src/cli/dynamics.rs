@@ -309,6 +309,7 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         "march" if args.against_march => bail!("--against-march applies to --method continuation only"),
         "march" if args.solver.is_some() => bail!("--solver applies to --method continuation only"),
         "march" if args.join => bail!("--join applies to --method continuation only"),
+        "march" if args.broken_symmetry => bail!("--broken-symmetry applies to --method continuation only"),
         "march" => {}
         "continuation" => return sweep_continuation(args),
         other => bail!("--method {other}: allowed are march, continuation"),

@@ -1204,6 +1204,45 @@ impl CondensedBalance {
         y
     }
 
+    /// How far the coordinates `x` of an orbit with every mesh (the balance holds
+    /// [`Symmetry::Full`]) lie from the planets' symmetry: the largest difference between a
+    /// mesh's approach and the approach of the mesh it copies under cyclic symmetry, delayed
+    /// by its phase, over every harmonic, relative to the largest coefficient. 0 for an orbit
+    /// that keeps the symmetry; an error where the planets are not equally spaced copies.
+    pub fn asymmetry(&mut self, omega: f64, x: &[f64]) -> Result<f64, PeriodicError> {
+        if self.symmetry != Symmetry::Full {
+            return Err(PeriodicError::invalid(
+                "symmetry",
+                0.0,
+                "the asymmetry is measured on an orbit with every mesh (Symmetry::Full)",
+            ));
+        }
+        self.layout_at(omega)?;
+        let h = self.balance.settings.harmonics;
+        let problem = &self.balance.problem;
+        let cyclic =
+            Layout::new(&problem.model, Symmetry::Cyclic, omega, problem.period(omega), problem.cycles())?;
+        let fz = self.layout.as_ref().expect("built above").coordinates();
+        if x.len() != fz * (2 * h + 1) {
+            return Err(PeriodicError::invalid(
+                "condensed harmonic-balance coefficients",
+                x.len() as f64,
+                "must hold every mesh's contact coordinates × (2H + 1) values",
+            ));
+        }
+        let mut worst: f64 = 0.0;
+        // In the full layout mesh i's approach is coordinate i.
+        for (j, (g, delay)) in cyclic.copies.iter().enumerate() {
+            let source = cyclic.computed[*g];
+            for k in 0..=h {
+                let shift = Complex::from_polar(1.0, -(k as f64) * 2.0 * std::f64::consts::PI * delay);
+                worst =
+                    worst.max((amplitude_of(x, fz, k, j) - amplitude_of(x, fz, k, source) * shift).norm());
+            }
+        }
+        Ok(worst / max_abs(x).max(f64::MIN_POSITIVE))
+    }
+
     /// Under cyclic symmetry: the largest residual coefficient of every mesh at the orbit
     /// whose planet-1 coordinates are `x`, the others delayed copies.
     fn symmetry_check(&mut self, omega: f64, x: &[f64]) -> Result<f64, PeriodicError> {

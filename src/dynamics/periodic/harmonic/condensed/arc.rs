@@ -274,6 +274,23 @@ impl CondensedBalance {
         }
     }
 
+    /// [`Self::asymmetry`] of the period the relative state `z` (a march's) runs through at
+    /// `omega` [rad/s], sampled at the settings' N and analysed (with every mesh; no Newton):
+    /// whether a march reached a state that breaks the planets' symmetry.
+    pub fn marched_asymmetry(
+        &mut self,
+        omega: f64,
+        z: &[f64],
+        work: &mut Work,
+    ) -> Result<f64, PeriodicError> {
+        let samples = self.balance.settings.samples;
+        let coordinates = self.balance.problem.sampled_flow(omega, z, samples, work)?;
+        let y = self.balance.analyse_samples(&coordinates);
+        let marched = self.series(omega, y);
+        let x = self.coordinates_of(&marched)?;
+        self.asymmetry(omega, &x)
+    }
+
     fn solve_from_state_once(
         &mut self,
         omega: f64,
