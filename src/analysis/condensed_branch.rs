@@ -214,13 +214,14 @@ impl BranchSolver for CondensedBranch<'_> {
             converted = self.balance.coordinates_of(&orbit).ok()?;
             &converted[..]
         };
-        self.balance.restore_symmetry(self.symmetry, omega).ok()?;
+        // The balance holds the run's symmetry now (taken above, or back in the conversion).
         let found = self.restarted(omega, from, &z, (work, flows));
         if found.is_some() {
             self.points = self.balance.symmetry();
         }
         found
     }
+
     fn accept(
         &mut self,
         (x, omega, unit): (&[f64], f64, f64),
