@@ -283,15 +283,13 @@ impl CondensedBalance {
         z: &[f64],
         work: &mut Work,
     ) -> Result<f64, PeriodicError> {
-        let samples = self.balance.settings.samples;
-        let coordinates = self.balance.problem.sampled_flow(omega, z, samples, work)?;
-        let y = self.balance.analyse_samples(&coordinates);
-        let marched = self.series(omega, y);
-        let x = self.coordinates_of(&marched)?;
+        let x = self.marched_coordinates(omega, z, work)?;
         self.asymmetry(omega, &x)
     }
 
-    fn solve_from_state_once(
+    /// The contact coordinates of the period the relative state `z` runs through at `omega`
+    /// [rad/s], sampled at the settings' N and analysed (no Newton); the flow into `work`.
+    fn marched_coordinates(
         &mut self,
         omega: f64,
         z: &[f64],
@@ -301,7 +299,16 @@ impl CondensedBalance {
         let coordinates = self.balance.problem.sampled_flow(omega, z, samples, work)?;
         let y = self.balance.analyse_samples(&coordinates);
         let marched = self.series(omega, y);
-        let guess = self.coordinates_of(&marched)?;
+        self.coordinates_of(&marched)
+    }
+
+    fn solve_from_state_once(
+        &mut self,
+        omega: f64,
+        z: &[f64],
+        work: &mut Work,
+    ) -> Result<Vec<f64>, PeriodicError> {
+        let guess = self.marched_coordinates(omega, z, work)?;
         let (solved, report) = self.solve(omega, Some(&guess))?;
         work.rhs_evaluations += report.law_evaluations;
         work.newton_iterations += report.iterations as u64;
