@@ -480,7 +480,9 @@ struct FmuPackArgs {
     /// Output file.
     #[arg(long, default_value = "fmu/planetwear.fmu")]
     out: PathBuf,
-    /// The shared library; default: libplanetwear.so beside this executable.
+    /// The shared library. Default: the portable one where `bash scripts/fmu.sh` built it
+    /// (target/x86_64-unknown-linux-gnu/fmu/libplanetwear.so, glibc 2.17 or newer), otherwise
+    /// libplanetwear.so beside this executable, with a warning naming the glibc it needs.
     #[arg(long)]
     library: Option<PathBuf>,
     /// Make this scene (a built-in name or a scene file) the FMU's default set:

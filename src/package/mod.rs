@@ -6,8 +6,10 @@
 //! May import: every stage up to [`crate::analysis`], and [`crate::fmi`]
 //! (the variable table).
 //!
+//! - [`elf`]: the glibc version a shared library needs.
 //! - [`pack`]: the archive.
 //! - [`regression`]: the regression cases, their protocol and references.
 
+pub mod elf;
 pub mod pack;
 pub mod regression;
