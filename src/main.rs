@@ -165,6 +165,19 @@ struct SimulateArgs {
     /// Communication step [s].
     #[arg(long)]
     step: f64,
+    /// Write the run's load duty to this JSON file (atomically): for each mesh, the input
+    /// revolutions in each bin of load torque × input speed, with the gear set (docs/DUTY.md).
+    #[arg(long, value_name = "FILE")]
+    duty_cycle: Option<PathBuf>,
+    /// With --duty-cycle: the load-torque bin edges [N·m], comma-separated, increasing (a mesh's
+    /// mean force over a step as the input torque it balances). Default: 0 to twice the scene's
+    /// input torque in 11 bins (the scene's torque mid-bin).
+    #[arg(long, value_delimiter = ',', value_name = "N·m,…", requires = "duty_cycle")]
+    duty_torque_edges: Vec<f64>,
+    /// With --duty-cycle: the input-speed bin edges [rpm], comma-separated, increasing.
+    /// Default: 0 to twice the scene's input speed in 11 bins.
+    #[arg(long, value_delimiter = ',', value_name = "RPM,…", requires = "duty_cycle")]
+    duty_speed_edges: Vec<f64>,
 }
 
 /// Steady-state dynamic response at one input speed.
@@ -621,6 +634,7 @@ fn check_outputs(command: &Command) -> Result<()> {
     };
     match command {
         Command::Run(a) => a.plots.iter().try_for_each(|p| dir("--plots", p)),
+        Command::Simulate(a) => a.duty_cycle.iter().try_for_each(|p| file("--duty-cycle", p)),
         Command::Sweep(a) => dir("--out", &a.out),
         Command::Ltca(a) => {
             a.out.iter().try_for_each(|p| file("--out", p))?;
@@ -644,7 +658,6 @@ fn check_outputs(command: &Command) -> Result<()> {
             a.out.iter().try_for_each(|p| file("--out", p))
         }
         Command::Scene { .. }
-        | Command::Simulate(_)
         | Command::Modes(_)
         | Command::Wear { action: WearAction::Compare(_) } => Ok(()),
     }

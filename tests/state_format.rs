@@ -27,6 +27,7 @@ fn snapshot(values: Vec<f64>, n: usize) -> Snapshot {
         window_ring: take(5),
         window_last: take(6).into_iter().take(3).collect(),
         drive: take(7).into_iter().take(2).collect(),
+        duty: take(8),
     }
 }
 
@@ -46,6 +47,7 @@ proptest! {
         prop_assert_eq!(bits(&back.window_ring), bits(&s.window_ring));
         prop_assert_eq!(bits(&back.window_last), bits(&s.window_last));
         prop_assert_eq!(bits(&back.drive), bits(&s.drive));
+        prop_assert_eq!(bits(&back.duty), bits(&s.duty));
     }
 
     #[test]
@@ -114,4 +116,27 @@ fn a_simulation_continues_bit_identically_from_a_state_file() {
         other.mesh_force(1, MeshKind::SunPlanet).to_bits(),
         sim.mesh_force(1, MeshKind::SunPlanet).to_bits()
     );
+}
+
+/// A state of format version 1 (before the load duty's counts) is still read, with no counts:
+/// the version 2 layout of a state without a duty, less its eighth length.
+#[test]
+fn a_version_1_state_is_read_without_a_duty() {
+    let mut s = snapshot(vec![1.0, 2.0, 3.0], 5);
+    s.duty.clear();
+    let v2 = encode(&s, FP);
+    let header = 8 + 4 + 4 + FP.len() + 8;
+    let mut v1 = v2[..8].to_vec();
+    v1.extend_from_slice(&1u32.to_le_bytes());
+    v1.extend_from_slice(&v2[12..header + 4 * 7]);
+    v1.extend_from_slice(&v2[header + 4 * 8..v2.len() - 8]);
+    let sum = planetwear::files::hash::fnv1a64(&v1);
+    v1.extend_from_slice(&sum.to_le_bytes());
+    let back = decode(&v1, FP).unwrap();
+    assert_eq!(bits(&back.q), bits(&s.q));
+    assert_eq!(bits(&back.drive), bits(&s.drive));
+    assert!(back.duty.is_empty());
+    let mut v3 = v2.clone();
+    v3[8..12].copy_from_slice(&3u32.to_le_bytes());
+    assert_eq!(decode(&v3, FP).unwrap_err(), StateFormatError::Version { found: 3 });
 }

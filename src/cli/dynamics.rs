@@ -7,9 +7,22 @@ use planetwear::analysis::plausibility;
 use planetwear::model::gear::Damping;
 
 pub(crate) fn simulate_command(
-    SimulateArgs { scene, wear_state, accept_state_difference, stop, step }: SimulateArgs,
+    SimulateArgs {
+        scene,
+        wear_state,
+        accept_state_difference,
+        stop,
+        step,
+        duty_cycle,
+        duty_torque_edges,
+        duty_speed_edges,
+    }: SimulateArgs,
 ) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
+    let bins = match &duty_cycle {
+        Some(_) => Some(duty_bins(&set, &run, duty_torque_edges, duty_speed_edges)?),
+        None => None,
+    };
     if !(step.is_finite() && step > 0.0 && stop.is_finite() && stop > 0.0) {
         bail!("--stop and --step must be finite and positive (got {stop} and {step})");
     }
@@ -26,6 +39,9 @@ pub(crate) fn simulate_command(
     )?;
     let mut sim =
         planetwear::dynamics::simulation::Simulation::new(&set, &run, model, 0.0, run.input_speed())?;
+    if let Some(bins) = bins {
+        sim.record_duty(bins);
+    }
     let n = (stop / step).round() as u64;
     use planetwear::model::gear::MeshKind;
     for k in 0..n {
@@ -63,8 +79,64 @@ pub(crate) fn simulate_command(
         }
         outln!("{row}")?;
     }
+    if let (Some(path), Some(duty)) = (duty_cycle, sim.duty()) {
+        let cycle = planetwear::wear::duty::DutyCycle::new(&set, "simulate", duty.clone());
+        planetwear::wear::duty::write_duty_cycle(&path, &cycle)?;
+    }
     Ok(())
 }
+
+/// Bins of `--duty-torque-edges` [N·m] and `--duty-speed-edges` [rpm]; either left out: 0 to
+/// twice the scene's input torque or speed in [`DEFAULT_DUTY_BINS`] bins.
+fn duty_bins(
+    set: &planetwear::model::gear::GearSet,
+    run: &planetwear::model::run::RunSettings,
+    torque: Vec<f64>,
+    speed_rpm: Vec<f64>,
+) -> Result<planetwear::dynamics::duty::DutyBins> {
+    use planetwear::dynamics::duty::{check_edges, DutyBins, DutyError};
+    // The speed edges checked as given, so that a refusal quotes them in rpm.
+    if !speed_rpm.is_empty() {
+        check_edges("speed_edges", &speed_rpm).map_err(|e| match e {
+            DutyError::Edges { value, allowed, .. } => anyhow::anyhow!("--duty-speed-edges {value} rpm: {allowed}"),
+            other => other.into(),
+        })?;
+    }
+    let even = |top: f64, what: &str, flag: &str| -> Result<Vec<f64>> {
+        if top.is_nan() || top <= 0.0 {
+            bail!("the scene's input {what} is 0, so the default bins are empty: give {flag}");
+        }
+        Ok((0..=DEFAULT_DUTY_BINS).map(|k| 2.0 * top * k as f64 / DEFAULT_DUTY_BINS as f64).collect())
+    };
+    let given = (torque.clone(), speed_rpm.clone());
+    let torque = if torque.is_empty() {
+        even(set.input_torque().abs(), "torque", "--duty-torque-edges")?
+    } else {
+        torque
+    };
+    let speed = if speed_rpm.is_empty() {
+        even(run.input_speed().abs(), "speed", "--duty-speed-edges")?
+    } else {
+        speed_rpm.iter().map(|&r| planetwear::scene::units::rpm_to_rad_per_s(r)).collect()
+    };
+    let bins = DutyBins::new(torque, speed).map_err(|e| match e {
+        DutyError::Edges { name, value, allowed } => {
+            let (flag, list) = if name == "torque_edges" {
+                ("--duty-torque-edges", &given.0)
+            } else {
+                ("--duty-speed-edges", &given.1)
+            };
+            let value = if list.is_empty() { format!("(the default, {value})") } else { format!("{list:?}") };
+            anyhow::anyhow!("{flag} {value}: {allowed}")
+        }
+        other => other.into(),
+    })?;
+    Ok(bins)
+}
+
+/// Bins of each axis of a duty cycle when its edges are not given: odd, so that the scene's
+/// torque and speed lie in the middle of a bin, not on an edge.
+const DEFAULT_DUTY_BINS: usize = 11;
 
 /// Most communication points `simulate` runs and prints.
 const MAX_COMMUNICATION_POINTS: f64 = 1e7;

@@ -10,6 +10,7 @@
 //! May import: [`crate::files`], [`crate::scene`], [`crate::model`],
 //! [`crate::geometry`], [`crate::contact`].
 //!
+//! - [`duty`]: the load duty a run produced (revolutions per torque × speed bin, per mesh).
 //! - [`equations`]: the equations of motion of the planetary set.
 //! - [`solver`]: generalized-α and RK45 integrators behind one trait.
 //! - [`simulation`]: the time-domain run from given initial conditions.
@@ -18,6 +19,7 @@
 //! - [`spectrum`]: mesh-force harmonics and separation share.
 //! - [`state_format`]: the serialized simulation state (FMU states).
 
+pub mod duty;
 pub mod equations;
 pub mod periodic;
 pub mod response;

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use std::collections::VecDeque;
 
+use crate::dynamics::duty::{input_torque_per_mesh_force, DutyBins, LoadDuty};
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{static_state, Stepper};
 use crate::dynamics::solver::{RelativeOrigin, Rk45, Rk45Settings, SecondOrderSystem, SolverError};
@@ -100,6 +101,8 @@ pub struct Snapshot {
     pub window_last: Vec<f64>,
     /// The speed drive's source state (empty for the torque drive).
     pub drive: Vec<f64>,
+    /// The load duty's counts ([`LoadDuty::counts`]; empty when no duty is recorded).
+    pub duty: Vec<f64>,
 }
 
 /// Order-tracked samples of planet 1's two mesh forces over the last mesh
@@ -201,24 +204,45 @@ pub struct StepExtremes {
     /// Per mesh, planet-major: planet 1's sun–planet mesh, its ring–planet
     /// mesh, planet 2's, …
     meshes: Vec<MeshExtremes>,
+    /// Per mesh: the sum of the forces at the internal points after the step's start \[N\].
+    sums: Vec<f64>,
+    /// The internal points summed.
+    samples: usize,
 }
 
 impl StepExtremes {
     /// The extremes of a single state's mesh forces (planet-major: sun, ring).
     fn at(meshes: &[crate::dynamics::equations::MeshState]) -> Self {
-        Self { meshes: meshes.iter().map(MeshExtremes::at).collect() }
+        let mut e = Self { meshes: Vec::new(), sums: Vec::new(), samples: 0 };
+        e.reset(meshes);
+        e
     }
 
     /// Starts again from a single state, keeping the allocation.
     fn reset(&mut self, meshes: &[crate::dynamics::equations::MeshState]) {
         self.meshes.clear();
         self.meshes.extend(meshes.iter().map(MeshExtremes::at));
+        self.sums.clear();
+        self.sums.resize(meshes.len(), 0.0);
+        self.samples = 0;
     }
 
     fn observe(&mut self, meshes: &[crate::dynamics::equations::MeshState]) {
-        for (e, m) in self.meshes.iter_mut().zip(meshes) {
+        for ((e, s), m) in self.meshes.iter_mut().zip(&mut self.sums).zip(meshes) {
             e.observe(m);
+            *s += m.force;
         }
+        self.samples += 1;
+    }
+
+    /// The mean force of planet `p`'s (0-based) mesh of kind `kind` over the step \[N\]: the
+    /// mean of its values at the step's internal points after its start (equally spaced, so
+    /// the time average to the grid's resolution); before a step, the force at the start.
+    /// `None` beyond the number of planets.
+    pub fn mean(&self, p: usize, kind: MeshKind) -> Option<f64> {
+        let m = 2 * p + usize::from(kind == MeshKind::RingPlanet);
+        let extremes = self.meshes.get(m)?;
+        Some(if self.samples == 0 { extremes.min } else { self.sums[m] / self.samples as f64 })
     }
 
     /// The extremes of planet `p`'s (0-based) mesh of kind `kind`; `None`
@@ -275,6 +299,9 @@ pub struct Simulation {
     speed_reference: f64,
     window: Window,
     extremes: StepExtremes,
+    /// The load duty recorded at each communication step, when asked for
+    /// ([`Simulation::record_duty`]).
+    duty: Option<LoadDuty>,
 }
 
 const TIME_TOLERANCE: f64 = 1e-9;
@@ -384,6 +411,7 @@ impl Simulation {
         let extremes = StepExtremes::at(&model.meshes);
         Ok(Self {
             extremes,
+            duty: None,
             model,
             stepper,
             set: set.clone(),
@@ -592,6 +620,7 @@ impl Simulation {
                 * self.model.mesh_frequency_per_input_speed);
         // The extremes start from the state at t (the last accepted one).
         self.extremes.reset(&self.model.meshes);
+        let input_angle = self.angle(self.set.input());
         self.anchor_origin().map_err(|source| SimulationError::Integration { t, source })?;
         let work_start = match &self.stepper {
             Stepper::Rk(r) => r.stats().rhs_evaluations,
@@ -661,7 +690,37 @@ impl Simulation {
         self.time = end;
         // The outputs read the accepted state at the communication point.
         self.refresh(&mut f);
-        Ok(())
+        self.record_step(input_angle, h)
+    }
+
+    /// Records the load duty of the step of `h` \[s\] just taken from the input angle
+    /// `input_angle` \[rad\] at its start ([`crate::dynamics::duty`]): each mesh's mean force
+    /// over the step as the input torque it balances, the input's mean speed and the
+    /// revolutions it turned.
+    fn record_step(&mut self, input_angle: f64, h: f64) -> Result<(), SimulationError> {
+        if self.duty.is_none() {
+            return Ok(());
+        }
+        let per_newton = input_torque_per_mesh_force(&self.set);
+        let turned = self.angle(self.set.input()) - input_angle;
+        let (time, extremes) = (self.time, &self.extremes);
+        let Some(duty) = &mut self.duty else { return Ok(()) };
+        let torques: Vec<f64> = (0..duty.planets())
+            .flat_map(|p| MeshKind::ALL.map(|kind| extremes.mean(p, kind).unwrap_or(f64::NAN) * per_newton))
+            .collect();
+        duty.record(&torques, turned / h, turned.abs() / std::f64::consts::TAU, h).map_err(|e| {
+            SimulationError::InvalidInput { name: "load duty".into(), value: format!("t = {time} s"), reason: e.to_string() }
+        })
+    }
+
+    /// Records the load duty on `bins` from the next communication step on (from zero).
+    pub fn record_duty(&mut self, bins: DutyBins) {
+        self.duty = Some(LoadDuty::new(bins, self.set.planet_angles().len()));
+    }
+
+    /// The load duty recorded since [`Self::record_duty`] (`None` when not asked for).
+    pub fn duty(&self) -> Option<&LoadDuty> {
+        self.duty.as_ref()
     }
 
     /// Anchors the adaptive method's error weight at the accepted state:
@@ -868,6 +927,7 @@ impl Simulation {
             window_ring: self.window.ring.iter().copied().collect(),
             window_last: self.window.last.map_or(Vec::new(), |(a, b, c)| vec![a, b, c]),
             drive: self.model.drive_state(),
+            duty: self.duty.as_ref().map_or_else(Vec::new, LoadDuty::counts),
         }
     }
 
@@ -902,6 +962,16 @@ impl Simulation {
                     reason: "every number of a state must be finite".into(),
                 });
             }
+        }
+        if let Some(duty) = &mut self.duty {
+            // Checked (length, finite, non-negative) before it changes anything else.
+            let mut restored = duty.clone();
+            restored.set_counts(&s.duty).map_err(|e| SimulationError::InvalidInput {
+                name: "snapshot".into(),
+                value: format!("load duty of {} counts", s.duty.len()),
+                reason: format!("{e}: the state was saved with other duty bins"),
+            })?;
+            *duty = restored;
         }
         self.set_torques(s.torques[0], s.torques[1], s.torques[2])?;
         self.speed_reference = s.speed_reference;

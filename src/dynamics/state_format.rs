@@ -6,12 +6,12 @@
 //! | bytes | content |
 //! |---|---|
 //! | 8 | magic `PWSTATE\0` |
-//! | 4 | format version (u32, currently 1) |
+//! | 4 | format version (u32, currently 2; version 1, without the load duty, is read too) |
 //! | 4 | length L of the interface fingerprint (u32) |
 //! | L | fingerprint: the FMU GUID and the gear set it belongs to |
 //! | 8 | time (f64) |
-//! | 4·7 | lengths of q, v, the integrator state, the two harmonic-window sample arrays, the window's last point and the speed drive's state (u32) |
-//! | 8·n | those seven arrays (f64) |
+//! | 4·8 | lengths of q, v, the integrator state, the two harmonic-window sample arrays, the window's last point, the speed drive's state and the load duty's counts (u32) |
+//! | 8·n | those eight arrays (f64) |
 //! | 8·4 | torques on sun, ring, carrier, speed reference (f64) |
 //! | 8 | FNV-1a 64 checksum of everything before it |
 //!
@@ -23,7 +23,9 @@ use crate::dynamics::simulation::Snapshot;
 
 const MAGIC: &[u8; 8] = b"PWSTATE\0";
 /// Current format version.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
+/// The version before the load duty's counts were kept, still read (with no counts).
+pub const VERSION_WITHOUT_DUTY: u32 = 1;
 
 /// Why a serialized state was refused.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -74,6 +76,7 @@ pub fn encode(snapshot: &Snapshot, fingerprint: &str) -> Vec<u8> {
         &snapshot.window_ring,
         &snapshot.window_last,
         &snapshot.drive,
+        &snapshot.duty,
     ];
     for v in arrays {
         out.extend_from_slice(&(v.len() as u32).to_le_bytes());
@@ -123,15 +126,17 @@ pub fn decode(data: &[u8], fingerprint: &str) -> Result<Snapshot, StateFormatErr
     let short = |expected: usize| StateFormatError::Length { found: data.len(), expected };
     let mut r = Reader { data, at: 8 };
     let version = r.u32().ok_or(short(16))?;
-    if version != VERSION {
-        return Err(StateFormatError::Version { found: version });
-    }
+    let arrays = match version {
+        VERSION => 8,
+        VERSION_WITHOUT_DUTY => 7,
+        _ => return Err(StateFormatError::Version { found: version }),
+    };
     let flen = r.u32().ok_or(short(16))? as usize;
     let found = r.take(flen).ok_or(short(16 + flen))?;
     let found = String::from_utf8_lossy(found).into_owned();
     let time = r.f64();
-    let lens: Vec<Option<u32>> = (0..7).map(|_| r.u32()).collect();
-    let header = 16 + flen + 8 + 28;
+    let lens: Vec<Option<u32>> = (0..arrays).map(|_| r.u32()).collect();
+    let header = 16 + flen + 8 + 4 * arrays;
     let (Some(time), Some(lens)) = (time, lens.into_iter().collect::<Option<Vec<u32>>>()) else {
         return Err(short(header + 8));
     };
@@ -161,6 +166,7 @@ pub fn decode(data: &[u8], fingerprint: &str) -> Result<Snapshot, StateFormatErr
     let window_ring = read(lens[4]);
     let window_last = read(lens[5]);
     let drive = read(lens[6]);
+    let duty = lens.get(7).map_or_else(Vec::new, |n| read(*n));
     let rest = read(4);
     Ok(Snapshot {
         time,
@@ -173,5 +179,6 @@ pub fn decode(data: &[u8], fingerprint: &str) -> Result<Snapshot, StateFormatErr
         window_ring,
         window_last,
         drive,
+        duty,
     })
 }

@@ -128,6 +128,9 @@ pub const MAX_RECORD_BYTES: u64 = 16 << 20;
 /// Largest shared library `fmu pack` puts into the archive \[bytes\] (the
 /// release library is about 37 MB, the stripped one 2.5 MB).
 pub const MAX_LIBRARY_BYTES: u64 = 512 << 20;
+/// Largest duty-cycle file \[bytes\] (JSON: at most 10 000 bins per mesh; the example's
+/// four planets at that size write about 5 MB).
+pub const MAX_DUTY_CYCLE_BYTES: u64 = 32 << 20;
 /// Largest campaign file \[bytes\] (TOML). The Rust code reads no campaign
 /// file; the Python package's reader (`planetwear_fmu.files`) holds the same
 /// figure, and a test checks that the two agree.
@@ -150,6 +153,8 @@ pub enum InputKind {
     Record,
     /// The FMU's shared library, read by `fmu pack`.
     Library,
+    /// A duty-cycle file (JSON: a run's load duty).
+    DutyCycle,
 }
 
 impl InputKind {
@@ -162,6 +167,7 @@ impl InputKind {
             Self::Campaign => MAX_CAMPAIGN_BYTES,
             Self::Record => MAX_RECORD_BYTES,
             Self::Library => MAX_LIBRARY_BYTES,
+            Self::DutyCycle => MAX_DUTY_CYCLE_BYTES,
         }
     }
 
@@ -174,6 +180,7 @@ impl InputKind {
             Self::Campaign => "campaign file",
             Self::Record => "record of an earlier run",
             Self::Library => "shared library",
+            Self::DutyCycle => "duty-cycle file",
         }
     }
 

@@ -11,6 +11,7 @@
 //! - [`flank`]: the six physical flanks, tooth cycles, roll angles of a
 //!   contact point, the active profile.
 //! - [`state`]: the worn-profile state, its fingerprint and file format.
+//! - [`duty`]: the duty-cycle file (a run's load duty and its gear set).
 //! - [`archard`]: the wear law: settings, Hertzian bands, sliding, the wear
 //!   of one cycle, errors.
 //! - [`dynamic`]: tooth-pair loads recorded from a dynamic steady state.
@@ -19,6 +20,7 @@
 
 pub mod archard;
 pub mod compare;
+pub mod duty;
 pub mod dynamic;
 pub mod flank;
 pub mod state;

@@ -834,49 +834,107 @@ impl WornState {
 
     /// Reads a JSON document with every check but the gear set's.
     pub fn from_json_any_set(text: &str) -> Result<Self, WornStateError> {
-        let doc: Value = serde_json::from_str(text).map_err(|e| {
-            let (line, column) = (e.line(), e.column());
-            if e.is_eof() {
-                WornStateError::Truncated { line, column }
-            } else if e.to_string().contains("number out of range") {
-                WornStateError::NonFinite { field: format!("the number at line {line}, column {column}") }
-            } else {
-                WornStateError::NotJson { line, column, reason: e.to_string() }
+        let content = open_document(text, FORMAT, VERSION).map_err(|e| match e {
+            DocumentError::NotJson { line, column, reason } => WornStateError::NotJson { line, column, reason },
+            DocumentError::Truncated { line, column } => WornStateError::Truncated { line, column },
+            DocumentError::Format { found } => WornStateError::Format { found, expected: FORMAT },
+            DocumentError::Version { found } => WornStateError::Version { found, supported: VERSION },
+            DocumentError::NoContent => {
+                WornStateError::Malformed { reason: "the document has no \"content\"".into() }
             }
+            DocumentError::Checksum { stored, computed } => WornStateError::Checksum { stored, computed },
+            DocumentError::NonFinite { field } => WornStateError::NonFinite { field },
         })?;
-        let format = match doc.get("format") {
-            Some(Value::String(s)) if s == FORMAT => s.clone(),
-            Some(Value::String(s)) => format!("\"{s}\""),
-            Some(other) => other.to_string(),
-            None => "absent".into(),
-        };
-        if format != FORMAT {
-            return Err(WornStateError::Format { found: format, expected: FORMAT });
-        }
-        match doc.get("version") {
-            Some(Value::Number(n)) if n.as_u64() == Some(VERSION) => {}
-            Some(v) => return Err(WornStateError::Version { found: v.to_string(), supported: VERSION }),
-            None => return Err(WornStateError::Version { found: "absent".into(), supported: VERSION }),
-        }
-        let content = doc
-            .get("content")
-            .ok_or_else(|| WornStateError::Malformed { reason: "the document has no \"content\"".into() })?;
-        let stored = match doc.get("checksum") {
-            Some(Value::String(s)) => s.clone(),
-            _ => String::from("absent"),
-        };
-        let computed = content_checksum(content);
-        if stored != computed {
-            return Err(WornStateError::Checksum { stored, computed });
-        }
-        if let Some(field) = first_null(content, String::new()) {
-            return Err(WornStateError::NonFinite { field });
-        }
-        let state: WornState = serde_json::from_value(content.clone())
+        let state: WornState = serde_json::from_value(content)
             .map_err(|e| WornStateError::Malformed { reason: e.to_string() })?;
         state.validate()?;
         Ok(state)
     }
+}
+
+/// Why a versioned, checksummed document (`{ "format", "version", "checksum", "content" }`,
+/// as the worn-profile state's) could not be opened.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DocumentError {
+    /// The text is not JSON.
+    NotJson {
+        /// Line of the error.
+        line: usize,
+        /// Column of the error.
+        column: usize,
+        /// What the parser found.
+        reason: String,
+    },
+    /// The text ends before the document does.
+    Truncated {
+        /// Last line.
+        line: usize,
+        /// Last column.
+        column: usize,
+    },
+    /// Another `format` (what was found, quoted, or `absent`).
+    Format {
+        /// What was found.
+        found: String,
+    },
+    /// Another `version` (or `absent`).
+    Version {
+        /// What was found.
+        found: String,
+    },
+    /// No `content`.
+    NoContent,
+    /// The content does not match its checksum.
+    Checksum {
+        /// Checksum in the document.
+        stored: String,
+        /// Checksum of the content read.
+        computed: String,
+    },
+    /// A value that is not a finite number (JSON `null`, or a number out of range).
+    NonFinite {
+        /// Where.
+        field: String,
+    },
+}
+
+/// The content of a document of `format` and `version`, its checksum checked
+/// ([`content_checksum`]) and free of `null` (serde_json's non-finite numbers).
+pub fn open_document(text: &str, format: &str, version: u64) -> Result<Value, DocumentError> {
+    let doc: Value = serde_json::from_str(text).map_err(|e| {
+        let (line, column) = (e.line(), e.column());
+        if e.is_eof() {
+            DocumentError::Truncated { line, column }
+        } else if e.to_string().contains("number out of range") {
+            DocumentError::NonFinite { field: format!("the number at line {line}, column {column}") }
+        } else {
+            DocumentError::NotJson { line, column, reason: e.to_string() }
+        }
+    })?;
+    match doc.get("format") {
+        Some(Value::String(s)) if s == format => {}
+        Some(Value::String(s)) => return Err(DocumentError::Format { found: format!("\"{s}\"") }),
+        Some(other) => return Err(DocumentError::Format { found: other.to_string() }),
+        None => return Err(DocumentError::Format { found: "absent".into() }),
+    }
+    match doc.get("version") {
+        Some(Value::Number(n)) if n.as_u64() == Some(version) => {}
+        Some(v) => return Err(DocumentError::Version { found: v.to_string() }),
+        None => return Err(DocumentError::Version { found: "absent".into() }),
+    }
+    let content = doc.get("content").ok_or(DocumentError::NoContent)?;
+    let stored = match doc.get("checksum") {
+        Some(Value::String(s)) => s.clone(),
+        _ => String::from("absent"),
+    };
+    let computed = content_checksum(content);
+    if stored != computed {
+        return Err(DocumentError::Checksum { stored, computed });
+    }
+    if let Some(field) = first_null(content, String::new()) {
+        return Err(DocumentError::NonFinite { field });
+    }
+    Ok(content.clone())
 }
 
 /// The checksum of a document's content: FNV-1a 64 of its compact JSON

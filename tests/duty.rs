@@ -1,0 +1,167 @@
+//! The load duty a run produced (`dynamics::duty`) and its file (`wear::duty`).
+
+use planetwear::contact::ltca::SetModel;
+use planetwear::dynamics::duty::{input_torque_per_mesh_force, DutyBins, DutyError, LoadDuty};
+use planetwear::dynamics::equations::PlanetaryDynamics;
+use planetwear::dynamics::simulation::Simulation;
+use planetwear::model::gear::{GearSet, MeshKind};
+use planetwear::scene::{Fidelity, Scene};
+use planetwear::wear::duty::{DutyCycle, DutyCycleError, FORMAT};
+
+fn edges(from: f64, to: f64, bins: usize) -> Vec<f64> {
+    (0..=bins).map(|k| from + (to - from) * k as f64 / bins as f64).collect()
+}
+
+#[test]
+fn bins_are_half_open_with_the_last_closed_and_outside_values_are_kept() {
+    let bins = DutyBins::new(vec![0.0, 10.0, 20.0], vec![0.0, 100.0]).unwrap();
+    assert_eq!(bins.bin(0.0, 50.0), Some((0, 0)));
+    assert_eq!(bins.bin(10.0, 50.0), Some((1, 0)), "an inner edge opens the next bin");
+    assert_eq!(bins.bin(20.0, 100.0), Some((1, 0)), "the last edge closes the last bin");
+    assert_eq!(bins.bin(-1e-9, 50.0), None);
+    assert_eq!(bins.bin(5.0, 100.0 + 1e-9), None);
+    let mut duty = LoadDuty::new(bins, 1);
+    duty.record(&[5.0, 25.0], 50.0, 2.0, 0.1).unwrap();
+    duty.record(&[15.0, 15.0], 150.0, 3.0, 0.1).unwrap();
+    assert_eq!(duty.mesh(0, MeshKind::SunPlanet).unwrap(), &[2.0, 0.0]);
+    assert_eq!(duty.outside(0, MeshKind::SunPlanet), Some(3.0));
+    assert_eq!(duty.mesh(0, MeshKind::RingPlanet).unwrap(), &[0.0, 0.0]);
+    assert_eq!(duty.outside(0, MeshKind::RingPlanet), Some(5.0));
+    assert_eq!((duty.total_revolutions(), duty.duration()), (5.0, 0.2));
+    duty.check().unwrap();
+    assert_eq!(duty.mesh(1, MeshKind::SunPlanet), None, "one planet only");
+}
+
+#[test]
+fn bad_edges_and_records_are_refused_by_name() {
+    let refused = |t: Vec<f64>, s: Vec<f64>| DutyBins::new(t, s).unwrap_err().to_string();
+    assert!(refused(vec![0.0], vec![0.0, 1.0]).starts_with("torque_edges"), "one edge");
+    assert!(refused(vec![0.0, 1.0], vec![1.0, 1.0]).starts_with("speed_edges"), "not increasing");
+    assert!(refused(vec![0.0, f64::NAN], vec![0.0, 1.0]).contains("finite"));
+    assert!(refused(edges(0.0, 1.0, 200), edges(0.0, 1.0, 200)).contains("at most 10000 bins"));
+    let mut duty = LoadDuty::new(DutyBins::new(vec![0.0, 1.0], vec![0.0, 1.0]).unwrap(), 1);
+    let before = duty.clone();
+    for (torques, speed, revolutions, duration) in [
+        (vec![0.5, f64::NAN], 0.5, 1.0, 1.0),
+        (vec![0.5, 0.5], f64::INFINITY, 1.0, 1.0),
+        (vec![0.5, 0.5], 0.5, -1.0, 1.0),
+        (vec![0.5, 0.5], 0.5, 1.0, f64::NAN),
+    ] {
+        assert!(matches!(duty.record(&torques, speed, revolutions, duration), Err(DutyError::Record { .. })));
+    }
+    assert_eq!(duty.record(&[0.5], 0.5, 1.0, 1.0), Err(DutyError::Mismatch("numbers of meshes")));
+    assert_eq!(duty, before, "nothing recorded by a refused record");
+    let other = LoadDuty::new(DutyBins::new(vec![0.0, 2.0], vec![0.0, 1.0]).unwrap(), 1);
+    assert_eq!(duty.add(&other), Err(DutyError::Mismatch("bins")));
+}
+
+fn example(fidelity: Fidelity) -> (GearSet, Simulation) {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = fidelity;
+    let (set, run) = s.validate_with_run().unwrap();
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+    let sim = Simulation::new(&set, &run, model, 0.0, run.input_speed()).unwrap();
+    (set, sim)
+}
+
+/// Over whole mesh cycles at steady speed the sun's torque balance makes every mesh's mean
+/// force balance the input torque (n F̄ r_b = T; the ring mesh's equals the sun mesh's by the
+/// planet's balance), and the revolutions are the input angle turned.
+#[test]
+fn a_run_s_duty_holds_the_input_torque_on_every_mesh_and_its_revolutions() {
+    let (set, mut sim) = example(Fidelity::Torsional);
+    let torque = set.input_torque().abs();
+    let bins = DutyBins::new(edges(0.5 * torque, 1.5 * torque, 200), edges(0.0, 2000.0, 4)).unwrap();
+    let omega = sim.speed(set.input());
+    let cycle = 1.0 / (omega * planetwear::dynamics::equations::PlanetaryDynamics::new(&set, SetModel::new(&set))
+        .unwrap()
+        .mesh_frequency_per_input_speed);
+    // A run-in of 100 mesh cycles, then 100 steps of 4 mesh cycles each recorded.
+    sim.do_step(0.0, 100.0 * cycle).unwrap();
+    assert!(sim.duty().is_none(), "no duty unless asked for");
+    sim.record_duty(bins);
+    let start = sim.angle(set.input());
+    for _ in 0..100 {
+        sim.do_step(sim.time(), 4.0 * cycle).unwrap();
+    }
+    let duty = sim.duty().unwrap().clone();
+    let turned = (sim.angle(set.input()) - start) / std::f64::consts::TAU;
+    assert!((duty.total_revolutions() - turned).abs() <= 1e-9 * turned, "{} {turned}", duty.total_revolutions());
+    let steady = omega * 400.0 * cycle / std::f64::consts::TAU;
+    assert!((turned - steady).abs() <= 1e-2 * steady, "turned {turned} at steady speed {steady}");
+    let (nt, ns) = duty.bins().shape();
+    let t_edges = duty.bins().torque_edges().to_vec();
+    let mut worst: f64 = 0.0;
+    for p in 0..set.planet_angles().len() {
+        for kind in MeshKind::ALL {
+            let counts = duty.mesh(p, kind).unwrap();
+            assert_eq!(duty.outside(p, kind), Some(0.0), "planet {p} {kind:?} outside the bins");
+            let mut weighted = 0.0;
+            for i in 0..nt {
+                let r: f64 = counts[i * ns..(i + 1) * ns].iter().sum();
+                weighted += r * 0.5 * (t_edges[i] + t_edges[i + 1]);
+            }
+            let mean = weighted / duty.total_revolutions();
+            worst = worst.max((mean - torque).abs() / torque);
+            assert!(
+                (mean - torque).abs() <= 0.02 * torque,
+                "planet {} {kind:?}: mean load torque {mean:.2} N·m against the input torque {torque} N·m",
+                p + 1
+            );
+        }
+    }
+    println!("largest deviation of a mesh's mean load torque from the input torque: {:.3} %", 100.0 * worst);
+    assert!(input_torque_per_mesh_force(&set) > 0.0);
+}
+
+#[test]
+fn a_duty_cycle_file_reads_back_and_refuses_what_it_is_not() {
+    let (set, mut sim) = example(Fidelity::Torsional);
+    let torque = set.input_torque().abs();
+    let bins = DutyBins::new(edges(0.0, 2.0 * torque, 11), edges(0.0, 1000.0, 11)).unwrap();
+    sim.record_duty(bins);
+    for _ in 0..5 {
+        sim.do_step(sim.time(), 1e-3).unwrap();
+    }
+    let cycle = DutyCycle::new(&set, "simulate", sim.duty().unwrap().clone());
+    let text = cycle.to_json().unwrap();
+    assert_eq!(DutyCycle::from_json(&text, &set).unwrap(), cycle);
+
+    let refused = |text: &str| DutyCycle::from_json(text, &set).unwrap_err().to_string();
+    assert!(refused(&text[..text.len() / 2]).contains("truncated"));
+    assert!(refused(&text.replacen(FORMAT, "planetwear-worn-profile", 1)).contains("format is"));
+    assert!(refused(&text.replacen("\"version\": 1", "\"version\": 2", 1)).contains("version 2"));
+    let altered = text.replacen("\"simulate\"", "\"simulatE\"", 1);
+    assert!(refused(&altered).contains("checksum"));
+
+    let mut other = Scene::example_2004();
+    other.material.youngs_modulus_gpa = 210.0;
+    let other = other.validate().unwrap();
+    let message = DutyCycle::from_json(&text, &other).unwrap_err();
+    assert!(matches!(message, DutyCycleError::GearSet { .. }), "{message}");
+    assert!(message.to_string().contains("fingerprint"));
+}
+
+/// A state saved and restored carries the duty recorded up to it, through the serialized
+/// format too, so that a step taken again after a restore is not counted twice.
+#[test]
+fn a_restored_state_carries_the_duty_recorded_up_to_it() {
+    use planetwear::dynamics::state_format::{decode, encode};
+    let (set, mut sim) = example(Fidelity::Torsional);
+    let torque = set.input_torque().abs();
+    sim.record_duty(DutyBins::new(edges(0.0, 2.0 * torque, 11), edges(0.0, 1000.0, 11)).unwrap());
+    for _ in 0..3 {
+        sim.do_step(sim.time(), 1e-3).unwrap();
+    }
+    let saved = decode(&encode(&sim.snapshot(), "print"), "print").unwrap();
+    let at_save = sim.duty().unwrap().clone();
+    sim.do_step(sim.time(), 1e-3).unwrap();
+    let once = sim.duty().unwrap().clone();
+    sim.restore(&saved).unwrap();
+    assert_eq!(sim.duty().unwrap(), &at_save);
+    sim.do_step(sim.time(), 1e-3).unwrap();
+    assert_eq!(sim.duty().unwrap(), &once, "the step again, counted once");
+    let mut other = saved.clone();
+    other.duty.pop();
+    assert!(sim.restore(&other).is_err(), "a duty of other bins is refused");
+}
