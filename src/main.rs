@@ -657,9 +657,9 @@ fn check_outputs(command: &Command) -> Result<()> {
         Command::Fmu { action: FmuAction::Xml(a) | FmuAction::Variables(a) } => {
             a.out.iter().try_for_each(|p| file("--out", p))
         }
-        Command::Scene { .. }
-        | Command::Modes(_)
-        | Command::Wear { action: WearAction::Compare(_) } => Ok(()),
+        Command::Scene { .. } | Command::Modes(_) | Command::Wear { action: WearAction::Compare(_) } => {
+            Ok(())
+        }
     }
 }
 

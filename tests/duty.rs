@@ -73,9 +73,11 @@ fn a_run_s_duty_holds_the_input_torque_on_every_mesh_and_its_revolutions() {
     let torque = set.input_torque().abs();
     let bins = DutyBins::new(edges(0.5 * torque, 1.5 * torque, 200), edges(0.0, 2000.0, 4)).unwrap();
     let omega = sim.speed(set.input());
-    let cycle = 1.0 / (omega * planetwear::dynamics::equations::PlanetaryDynamics::new(&set, SetModel::new(&set))
-        .unwrap()
-        .mesh_frequency_per_input_speed);
+    let cycle = 1.0
+        / (omega
+            * planetwear::dynamics::equations::PlanetaryDynamics::new(&set, SetModel::new(&set))
+                .unwrap()
+                .mesh_frequency_per_input_speed);
     // A run-in of 100 mesh cycles, then 100 steps of 4 mesh cycles each recorded.
     sim.do_step(0.0, 100.0 * cycle).unwrap();
     assert!(sim.duty().is_none(), "no duty unless asked for");
@@ -86,7 +88,11 @@ fn a_run_s_duty_holds_the_input_torque_on_every_mesh_and_its_revolutions() {
     }
     let duty = sim.duty().unwrap().clone();
     let turned = (sim.angle(set.input()) - start) / std::f64::consts::TAU;
-    assert!((duty.total_revolutions() - turned).abs() <= 1e-9 * turned, "{} {turned}", duty.total_revolutions());
+    assert!(
+        (duty.total_revolutions() - turned).abs() <= 1e-9 * turned,
+        "{} {turned}",
+        duty.total_revolutions()
+    );
     let steady = omega * 400.0 * cycle / std::f64::consts::TAU;
     assert!((turned - steady).abs() <= 1e-2 * steady, "turned {turned} at steady speed {steady}");
     let (nt, ns) = duty.bins().shape();

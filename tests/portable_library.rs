@@ -26,10 +26,8 @@ fn the_newest_glibc_of_an_executable_is_the_highest_objdump_lists() {
     let listing = std::process::Command::new("objdump").arg("-T").arg(&exe).output().expect("objdump runs");
     assert!(listing.status.success(), "objdump -T {}", exe.display());
     let text = String::from_utf8_lossy(&listing.stdout);
-    let highest = text
-        .split(|c: char| c.is_whitespace() || c == '(' || c == ')')
-        .filter_map(GlibcVersion::parse)
-        .max();
+    let highest =
+        text.split(|c: char| c.is_whitespace() || c == '(' || c == ')').filter_map(GlibcVersion::parse).max();
     assert!(highest.is_some(), "objdump lists no GLIBC version for {}", exe.display());
     assert_eq!(newest_glibc(&exe).unwrap(), highest);
 }

@@ -12,6 +12,7 @@ tests/python/test_package_layers.py holds the list and checks it:
      nothing: importing any module of the package runs it first, so it
      must not pull in the others;
   1. `campaign_file`: the campaign file and the worn-profile state's format;
+     `duty`: the load duty the FMU gives (`dutyCycle`) as a duty-cycle file;
   2. FMU access and results: `fmu_check` (the FMU's verdict and
      `load_campaign`, the full check), `sweep` (one task), `plots`,
      `regression` (the regression-test kit, apart from the campaigns);

@@ -29,6 +29,7 @@ LIMITS = {
     "campaign": 1 << 20,
     "record": 16 << 20,
     "library": 512 << 20,
+    "duty_cycle": 32 << 20,
 }
 
 # How every temporary file of the project begins (the Rust crate's

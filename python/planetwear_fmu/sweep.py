@@ -8,8 +8,10 @@ cycles of run-in, then `window_cycles` whose mesh-force harmonics the FMU
 reports through its windowed outputs (harmonicWindowCycles = window).
 
 Each finished point is one small Parquet file (one row) and, written before
-it, the FMU state after the point (fmi2SerializeFMUstate bytes), both
-atomically (temporary file, fsync, rename). A task that finds k finished
+it, the FMU state after the point (fmi2SerializeFMUstate bytes) and the
+task's load duty up to the point (the FMU's dutyCycle output as a
+duty-cycle file, `<point>.duty.json`, docs/DUTY.md), all atomically
+(temporary file, fsync, rename). A task that finds k finished
 points in its directory deserializes the state of point k − 1 into a fresh
 instance and continues with point k at the stored communication point:
 nothing is recomputed or written twice, and with a deterministic integrator
@@ -18,8 +20,8 @@ the continued sweep gives the numbers of an uninterrupted one.
 Layer 2 (FMU access): this module owns one task (`run_task`), its point
 files (`PointStore`, `task_directory`, the Parquet `schema`, `table_bytes`)
 and the fingerprint of its results (`task_fingerprint`). Of the package it
-imports only `files` (`write_atomic`, re-exported here); Dask workers
-import it alone, and the runner (`runner.task_specs`) builds its specs.
+imports only `files` (`write_atomic`, re-exported here) and `duty`; Dask
+workers import it alone, and the runner (`runner.task_specs`) builds its specs.
 """
 
 from __future__ import annotations
@@ -34,9 +36,11 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from .duty import write_duty_cycle
 from .files import read_input, write_atomic
 
 STATE_SUFFIX = ".fmustate"
+DUTY_SUFFIX = ".duty.json"
 
 BASE_COLUMNS = [
     ("label", pa.string()),
@@ -99,12 +103,16 @@ class PointStore:
     def row(self, i):
         return pq.read_table(self.result_path(i)).to_pylist()[0]
 
+    def duty_path(self, i):
+        return self.dir / f"{self.name(i)}{DUTY_SUFFIX}"
+
     def state(self, i):
         return read_input(self.state_path(i), "record")
 
-    def write(self, i, table, state):
-        # The state first: a result on disk always has its state beside it.
+    def write(self, i, table, state, duty):
+        # The state and the duty first: a result on disk always has them beside it.
         write_atomic(self.state_path(i), state)
+        write_duty_cycle(self.duty_path(i), duty)
         write_atomic(self.result_path(i), table_bytes(table))
 
 
@@ -216,6 +224,8 @@ def run_task(spec, on_point=None):
             saved = slave.getFMUState()
             state = slave.serializeFMUState(saved)
             slave.freeFMUState(saved)
+            duty = slave.getString([vr["dutyCycle"]])[0]
+            duty = duty.decode() if isinstance(duty, bytes) else duty
             row = {"label": spec["label"], "kappa": spec["kappa"], "state": spec["state"],
                    "sun_torque_nm": spec["torque"], "direction": spec["direction"], "index": i, "speed_rpm": rpm,
                    "mesh_frequency_hz": fm, "time_s": t, **values,
@@ -223,7 +233,7 @@ def run_task(spec, on_point=None):
                    "ring_frms_n_per_mm": values["window.ringMeshFrms"] / spec["face_width_mm"],
                    "fmu_step_s": step_s, "wall_s": 0.0}
             row["wall_s"] = time.perf_counter() - t_point
-            store.write(i, pa.Table.from_pylist([row], schema=sch), state)
+            store.write(i, pa.Table.from_pylist([row], schema=sch), state, duty)
             summary["computed"] += 1
             summary["fmu_step_s"] += step_s
             _emit(spec["topic"], {"key": spec["key"], "index": i}, on_point)

@@ -86,8 +86,8 @@ pub(crate) fn simulate_command(
     Ok(())
 }
 
-/// Bins of `--duty-torque-edges` [N·m] and `--duty-speed-edges` [rpm]; either left out: 0 to
-/// twice the scene's input torque or speed in [`DEFAULT_DUTY_BINS`] bins.
+/// Bins of `--duty-torque-edges` [N·m] and `--duty-speed-edges` [rpm]; either left out: that
+/// axis of `DutyBins::around` the scene's input torque and speed.
 fn duty_bins(
     set: &planetwear::model::gear::GearSet,
     run: &planetwear::model::run::RunSettings,
@@ -98,24 +98,17 @@ fn duty_bins(
     // The speed edges checked as given, so that a refusal quotes them in rpm.
     if !speed_rpm.is_empty() {
         check_edges("speed_edges", &speed_rpm).map_err(|e| match e {
-            DutyError::Edges { value, allowed, .. } => anyhow::anyhow!("--duty-speed-edges {value} rpm: {allowed}"),
+            DutyError::Edges { value, allowed, .. } => {
+                anyhow::anyhow!("--duty-speed-edges {value} rpm: {allowed}")
+            }
             other => other.into(),
         })?;
     }
-    let even = |top: f64, what: &str, flag: &str| -> Result<Vec<f64>> {
-        if top.is_nan() || top <= 0.0 {
-            bail!("the scene's input {what} is 0, so the default bins are empty: give {flag}");
-        }
-        Ok((0..=DEFAULT_DUTY_BINS).map(|k| 2.0 * top * k as f64 / DEFAULT_DUTY_BINS as f64).collect())
-    };
+    let around = DutyBins::around(set.input_torque(), run.input_speed());
     let given = (torque.clone(), speed_rpm.clone());
-    let torque = if torque.is_empty() {
-        even(set.input_torque().abs(), "torque", "--duty-torque-edges")?
-    } else {
-        torque
-    };
+    let torque = if torque.is_empty() { around.torque_edges().to_vec() } else { torque };
     let speed = if speed_rpm.is_empty() {
-        even(run.input_speed().abs(), "speed", "--duty-speed-edges")?
+        around.speed_edges().to_vec()
     } else {
         speed_rpm.iter().map(|&r| planetwear::scene::units::rpm_to_rad_per_s(r)).collect()
     };
@@ -133,10 +126,6 @@ fn duty_bins(
     })?;
     Ok(bins)
 }
-
-/// Bins of each axis of a duty cycle when its edges are not given: odd, so that the scene's
-/// torque and speed lie in the middle of a bin, not on an edge.
-const DEFAULT_DUTY_BINS: usize = 11;
 
 /// Most communication points `simulate` runs and prints.
 const MAX_COMMUNICATION_POINTS: f64 = 1e7;

@@ -16,7 +16,8 @@ pub(crate) fn fmu_pack_command(FmuPackArgs { out, library, scene }: FmuPackArgs)
     };
     // A missing library is the pack's own error (it names the build).
     let glibc = if library.is_file() { planetwear::package::elf::newest_glibc(&library)? } else { None };
-    let limit = planetwear::package::elf::GlibcVersion::parse(PORTABLE_GLIBC).context("the portable glibc level")?;
+    let limit =
+        planetwear::package::elf::GlibcVersion::parse(PORTABLE_GLIBC).context("the portable glibc level")?;
     let needs = glibc.as_ref().map_or_else(|| "no glibc version".to_string(), |v| v.to_string());
     if glibc.as_ref().is_some_and(|v| *v > limit) {
         eprintln!(

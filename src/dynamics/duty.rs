@@ -21,6 +21,8 @@ use crate::model::gear::{GearSet, Member, MeshKind};
 
 /// Most edges of either axis (1000 bins).
 pub const MAX_EDGES: usize = 1001;
+/// Bins of each axis of [`DutyBins::around`].
+pub const DEFAULT_BINS: usize = 11;
 /// Most bins (torque bins × speed bins) per mesh.
 pub const MAX_BINS: usize = 10_000;
 
@@ -57,6 +59,22 @@ pub enum DutyError {
 pub struct DutyBins {
     torque: Vec<f64>,
     speed: Vec<f64>,
+}
+
+/// The edges of a comma-separated list (`"0, 150, 300"`), checked as [`check_edges`] does;
+/// `name` names the list in the message.
+pub fn parse_edges(name: &'static str, text: &str) -> Result<Vec<f64>, DutyError> {
+    let fail = |allowed: String| DutyError::Edges { name, value: format!("\"{text}\""), allowed };
+    let edges = text
+        .split(',')
+        .map(|p| {
+            p.trim()
+                .parse::<f64>()
+                .map_err(|_| fail(format!("comma-separated numbers (\"{}\" is not one)", p.trim())))
+        })
+        .collect::<Result<Vec<f64>, DutyError>>()?;
+    check_edges(name, &edges)?;
+    Ok(edges)
 }
 
 /// Checks one axis's edges (`name` in the message): from 2 to [`MAX_EDGES`] finite, strictly
@@ -99,6 +117,17 @@ impl DutyBins {
             });
         }
         Ok(Self { torque, speed })
+    }
+
+    /// The default bins around an operating point: 0 to twice `torque` \[N·m\] and 0 to twice
+    /// `speed` \[rad/s\] (their magnitudes; 1 where one is 0 or not finite), in
+    /// [`DEFAULT_BINS`] bins each, an odd number so that the point lies mid-bin, not on an edge.
+    pub fn around(torque: f64, speed: f64) -> Self {
+        let axis = |x: f64| {
+            let top = if x.is_finite() && x != 0.0 { 2.0 * x.abs() } else { 2.0 };
+            (0..=DEFAULT_BINS).map(|k| top * k as f64 / DEFAULT_BINS as f64).collect()
+        };
+        Self { torque: axis(torque), speed: axis(speed) }
     }
 
     /// The torque edges \[N·m\].
@@ -160,7 +189,14 @@ impl LoadDuty {
     pub fn new(bins: DutyBins, planets: usize) -> Self {
         let (nt, ns) = bins.shape();
         let meshes = 2 * planets;
-        Self { bins, planets, revolutions: vec![0.0; meshes * nt * ns], outside: vec![0.0; meshes], total: 0.0, duration: 0.0 }
+        Self {
+            bins,
+            planets,
+            revolutions: vec![0.0; meshes * nt * ns],
+            outside: vec![0.0; meshes],
+            total: 0.0,
+            duration: 0.0,
+        }
     }
 
     fn mesh_index(&self, p: usize, kind: MeshKind) -> Option<usize> {
@@ -171,7 +207,13 @@ impl LoadDuty {
     /// speed `speed` \[rad/s\] with the meshes' load torques `torques` \[N·m\] (planet-major,
     /// sun then ring). Refuses non-finite values and negative revolutions or duration (nothing
     /// is recorded then).
-    pub fn record(&mut self, torques: &[f64], speed: f64, revolutions: f64, duration: f64) -> Result<(), DutyError> {
+    pub fn record(
+        &mut self,
+        torques: &[f64],
+        speed: f64,
+        revolutions: f64,
+        duration: f64,
+    ) -> Result<(), DutyError> {
         let record = |name, value: f64, allowed| DutyError::Record { name, value, allowed };
         if !(revolutions.is_finite() && revolutions >= 0.0) {
             return Err(record("revolutions", revolutions, "finite and non-negative"));
@@ -304,7 +346,8 @@ impl LoadDuty {
             return Err(format!("a count of {v}: revolutions and time are finite and non-negative"));
         }
         for m in 0..meshes {
-            let sum: f64 = self.revolutions[m * nt * ns..(m + 1) * nt * ns].iter().sum::<f64>() + self.outside[m];
+            let sum: f64 =
+                self.revolutions[m * nt * ns..(m + 1) * nt * ns].iter().sum::<f64>() + self.outside[m];
             if (sum - self.total).abs() > 1e-9 * self.total.max(1.0) {
                 return Err(format!(
                     "mesh {} has {sum} revolutions in its bins and outside, the duty {}",

@@ -709,7 +709,11 @@ impl Simulation {
             .flat_map(|p| MeshKind::ALL.map(|kind| extremes.mean(p, kind).unwrap_or(f64::NAN) * per_newton))
             .collect();
         duty.record(&torques, turned / h, turned.abs() / std::f64::consts::TAU, h).map_err(|e| {
-            SimulationError::InvalidInput { name: "load duty".into(), value: format!("t = {time} s"), reason: e.to_string() }
+            SimulationError::InvalidInput {
+                name: "load duty".into(),
+                value: format!("t = {time} s"),
+                reason: e.to_string(),
+            }
         })
     }
 

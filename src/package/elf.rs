@@ -23,7 +23,8 @@ impl GlibcVersion {
     /// The version named `name` (`GLIBC_2.17`); `None` for any other name (`GLIBC_PRIVATE`,
     /// `GCC_3.0`).
     pub fn parse(name: &str) -> Option<Self> {
-        let parts: Option<Vec<u32>> = name.strip_prefix("GLIBC_")?.split('.').map(|p| p.parse().ok()).collect();
+        let parts: Option<Vec<u32>> =
+            name.strip_prefix("GLIBC_")?.split('.').map(|p| p.parse().ok()).collect();
         parts.filter(|p| !p.is_empty()).map(Self)
     }
 }

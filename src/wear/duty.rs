@@ -111,7 +111,8 @@ impl DutyCycle {
     /// another gear set (by its fingerprint).
     pub fn from_json(text: &str, set: &GearSet) -> Result<Self, DutyCycleError> {
         let content = open_document(text, FORMAT, VERSION).map_err(document_error)?;
-        let cycle: DutyCycle = serde_json::from_value(content).map_err(|e| DutyCycleError::Invalid(e.to_string()))?;
+        let cycle: DutyCycle =
+            serde_json::from_value(content).map_err(|e| DutyCycleError::Invalid(e.to_string()))?;
         cycle.duty.check().map_err(DutyCycleError::Invalid)?;
         let here = GearSetPrint::of(set);
         if here.fingerprint != cycle.gear_set.fingerprint {
@@ -135,7 +136,8 @@ impl DutyCycle {
 
 /// Writes a duty cycle to `path` atomically (nothing is written when it is refused).
 pub fn write_duty_cycle(path: &std::path::Path, cycle: &DutyCycle) -> Result<(), DutyFileError> {
-    let text = cycle.to_json().map_err(|source| DutyFileError::Content { path: path.to_path_buf(), source })?;
+    let text =
+        cycle.to_json().map_err(|source| DutyFileError::Content { path: path.to_path_buf(), source })?;
     crate::files::check_output_size(path, crate::files::InputKind::DutyCycle, text.len())?;
     Ok(crate::files::write_durable(path, text.as_bytes())?)
 }

@@ -835,7 +835,9 @@ impl WornState {
     /// Reads a JSON document with every check but the gear set's.
     pub fn from_json_any_set(text: &str) -> Result<Self, WornStateError> {
         let content = open_document(text, FORMAT, VERSION).map_err(|e| match e {
-            DocumentError::NotJson { line, column, reason } => WornStateError::NotJson { line, column, reason },
+            DocumentError::NotJson { line, column, reason } => {
+                WornStateError::NotJson { line, column, reason }
+            }
             DocumentError::Truncated { line, column } => WornStateError::Truncated { line, column },
             DocumentError::Format { found } => WornStateError::Format { found, expected: FORMAT },
             DocumentError::Version { found } => WornStateError::Version { found, supported: VERSION },

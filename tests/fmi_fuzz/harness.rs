@@ -769,14 +769,17 @@ impl Files {
 
 /// Where the numbers of a serialized state are: (offset of the time,
 /// offset of the seven array lengths, number of f64 after the time).
+/// Arrays of the serialized state (format version 2: the load duty's counts are the eighth).
+const ARRAYS: usize = 8;
+
 fn blob_layout(b: &[u8]) -> Option<(usize, usize, usize)> {
-    if b.len() < 16 + 8 + 28 + 40 {
+    if b.len() < 16 + 8 + 4 * ARRAYS + 40 {
         return None;
     }
     let flen = u32::from_le_bytes(b[12..16].try_into().ok()?) as usize;
     let time = 16 + flen;
     let lens = time + 8;
-    let floats = b.len().checked_sub(lens + 28 + 8)? / 8;
+    let floats = b.len().checked_sub(lens + 4 * ARRAYS + 8)? / 8;
     Some((time, lens, floats))
 }
 
@@ -834,7 +837,7 @@ fn forge(rng: &mut Rng, blob: &[u8]) -> (Vec<u8>, Forgery, &'static str) {
         }
         5 => match layout {
             Some((_, lens, _)) => {
-                let k = lens + 4 * rng.below(7);
+                let k = lens + 4 * rng.below(ARRAYS);
                 let v = u32::from_le_bytes(b[k..k + 4].try_into().unwrap_or([0; 4]));
                 let w = rng.pick(&[v.wrapping_add(1), v.wrapping_sub(1), 0, u32::MAX]);
                 if w == v {
@@ -850,7 +853,7 @@ fn forge(rng: &mut Rng, blob: &[u8]) -> (Vec<u8>, Forgery, &'static str) {
             Some((_, lens, _)) => {
                 // Moves one element from one array to another: the total
                 // length (and so the format's check) still holds.
-                let (i, j) = (rng.below(7), rng.below(7));
+                let (i, j) = (rng.below(ARRAYS), rng.below(ARRAYS));
                 let (ki, kj) = (lens + 4 * i, lens + 4 * j);
                 let vi = u32::from_le_bytes(b[ki..ki + 4].try_into().unwrap_or([0; 4]));
                 let vj = u32::from_le_bytes(b[kj..kj + 4].try_into().unwrap_or([0; 4]));
@@ -869,7 +872,7 @@ fn forge(rng: &mut Rng, blob: &[u8]) -> (Vec<u8>, Forgery, &'static str) {
                 // One number replaced: the time (index 0), an array element
                 // or a torque, with the checksum recomputed.
                 let index = rng.below(floats + 1);
-                let at = if index == 0 { time } else { time + 8 + 28 + 8 * (index - 1) };
+                let at = if index == 0 { time } else { time + 8 + 4 * ARRAYS + 8 * (index - 1) };
                 let v = rng.pick(&SPECIAL_REALS);
                 b[at..at + 8].copy_from_slice(&v.to_le_bytes());
                 fix_checksum(&mut b);

@@ -27,7 +27,8 @@ from planetwear_fmu import campaign_file
 from planetwear_fmu.campaign import dask_client, main, run_campaign, task_specs
 from planetwear_fmu.campaign_file import CampaignError
 from planetwear_fmu.fmu_check import load_campaign
-from planetwear_fmu.sweep import TIMING_COLUMNS, PointStore, run_task
+from planetwear_fmu.duty import read_duty_cycle
+from planetwear_fmu.sweep import TIMING_COLUMNS, PointStore, run_task, task_directory
 from wear_states import write_foreign_state
 
 REPO = Path(__file__).resolve().parents[2]
@@ -89,6 +90,8 @@ def reference(tmp_path_factory):
         store = PointStore(spec["dir"], spec["speeds"])
         for i in range(len(spec["speeds"])):
             r = store.row(i)
+            # The sweep's load duty up to the point (its FMU's dutyCycle), beside its state.
+            r["_duty_revolutions"] = read_duty_cycle(store.duty_path(i))["content"]["duty"]["total"]
             rows[(r["label"], r["sun_torque_nm"], r["direction"], r["index"])] = r
     assert len(rows) == 2 * len(SPEEDS)
     return rows
@@ -121,6 +124,14 @@ def check_exactly_once_and_equal(out, reference):
                 assert v == ref[k], (k, v, ref[k])
     print(f"largest relative difference against the uninterrupted sweeps: {worst:.3e}")
     assert worst <= RESUME_TOLERANCE
+    # Each point's load duty (cumulative over its sweep, carried through a resume by the FMU
+    # state) is the uninterrupted sweep's.
+    for r in table:
+        ref = reference[(r["label"], r["sun_torque_nm"], r["direction"], r["index"])]
+        directory = task_directory(out, r["label"], r["sun_torque_nm"], r["direction"])
+        (path,) = directory.glob(f"{r['index']:03d}_*.duty.json")
+        total = read_duty_cycle(path)["content"]["duty"]["total"]
+        assert abs(total - ref["_duty_revolutions"]) <= RESUME_TOLERANCE * ref["_duty_revolutions"], (path, total)
 
 
 def test_a_worker_killed_in_the_middle_of_a_campaign(tmp_path, client, reference):

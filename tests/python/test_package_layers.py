@@ -30,6 +30,8 @@ LAYERS = {
     "extras": 0,
     # The campaign file and the worn-profile state's format.
     "campaign_file": 1,
+    # The duty-cycle document the FMU gives (dutyCycle) and its file.
+    "duty": 1,
     # FMU access and results: the FMU's verdict and the full check of a
     # campaign file (load_campaign), one task, the plots, the regression kit.
     "fmu_check": 2,

@@ -42,6 +42,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
 use crate::contact::ltca::SetModel;
+use crate::dynamics::duty::{parse_edges, DutyBins, DutyError};
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::simulation::{Bearing, MeshExtremes, Simulation, Snapshot};
 use crate::dynamics::spectrum::Harmonics;
@@ -49,6 +50,7 @@ use crate::dynamics::state_format;
 use crate::fmi::variables::{vr, Causality, Kind, Settable, Start, Variable, GUID, VARIABLES};
 use crate::model::gear::{Member, MeshKind};
 use crate::scene::Scene;
+use crate::wear::duty::DutyCycle;
 
 /// FMI status of a refused or partial call.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -386,9 +388,34 @@ impl Instance {
         })?;
         let cycles = usize::try_from(self.int(vr::HARMONIC_WINDOW_CYCLES)).unwrap_or(0);
         sim.set_window(cycles, run.samples_per_mesh_cycle()).map_err(|e| Refusal::error(e.to_string()))?;
+        sim.record_duty(self.duty_bins(set.input_torque(), speed)?);
         self.sim = Some(sim);
         self.built_from = self.build_key();
         self.push_inputs()
+    }
+
+    /// The load duty's bins from dutyTorqueEdges \[N·m\] and dutySpeedEdges \[rad/s\]; an empty
+    /// one: that axis of [`DutyBins::around`] the input torque and the initial speed `speed`.
+    fn duty_bins(&self, torque: f64, speed: f64) -> Result<DutyBins, Refusal> {
+        let around = DutyBins::around(torque, speed);
+        let axis = |v: u32, name: &'static str, default: &[f64]| {
+            let text = self.strings.get(&v).map_or("", String::as_str);
+            if text.trim().is_empty() {
+                return Ok(default.to_vec());
+            }
+            parse_edges(name, text).map_err(|e| Refusal::error(e.to_string()))
+        };
+        let torque = axis(vr::DUTY_TORQUE_EDGES, "dutyTorqueEdges", around.torque_edges())?;
+        let speed = axis(vr::DUTY_SPEED_EDGES, "dutySpeedEdges", around.speed_edges())?;
+        DutyBins::new(torque, speed).map_err(|e| {
+            Refusal::error(match e {
+                DutyError::Edges { name: "speed_edges", value, allowed } => {
+                    format!("dutySpeedEdges = {value}: {allowed}")
+                }
+                DutyError::Edges { value, allowed, .. } => format!("dutyTorqueEdges = {value}: {allowed}"),
+                other => other.to_string(),
+            })
+        })
     }
 
     fn push_inputs(&mut self) -> Result<(), Refusal> {
@@ -472,6 +499,8 @@ impl Instance {
             V::SceneFile
             | V::WearStateFile
             | V::WearStateAccept
+            | V::DutyTorqueEdges
+            | V::DutySpeedEdges
             | V::Fidelity
             | V::HeldMember
             | V::InputMember
@@ -699,6 +728,7 @@ impl Instance {
             | V::Planet8RingToothForceMax
             | V::SunToothForceMax
             | V::RingToothForceMax
+            | V::DutyCycle
             | V::ReactionTorque
             | V::BalancingTorque => {
                 Err(Refusal::error(format!("{} is an output and cannot be set", variable.name())))
@@ -770,9 +800,10 @@ impl Instance {
             Ok::<_, Refusal>(Value::Integer(i32::from(sim()?.step_extremes().any_separated(m))))
         };
         Ok(match variable {
-            V::SceneFile | V::WearStateFile | V::WearStateAccept => {
+            V::SceneFile | V::WearStateFile | V::WearStateAccept | V::DutyTorqueEdges | V::DutySpeedEdges => {
                 Value::String(self.strings.get(&v).cloned().unwrap_or_default())
             }
+            V::DutyCycle => Value::String(duty_document(sim()?)?),
             V::Fidelity
             | V::HeldMember
             | V::InputMember
@@ -1200,6 +1231,14 @@ impl Instance {
         saved.terminated = false;
         Ok(saved)
     }
+}
+
+/// The duty-cycle document of the load duty `sim` recorded (the dutyCycle output).
+fn duty_document(sim: &Simulation) -> Result<String, Refusal> {
+    let duty = sim.duty().ok_or_else(|| Refusal::error("dutyCycle: no load duty is recorded"))?;
+    DutyCycle::new(sim.gear_set(), "fmu", duty.clone())
+        .to_json()
+        .map_err(|e| Refusal::error(format!("dutyCycle: {e}")))
 }
 
 #[cfg(test)]

@@ -70,6 +70,8 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
         // Read before the scene exists (it chooses the scene) and by the
         // contact model (the worn flanks).
         Settable::SceneFile | Settable::WearStateFile | Settable::WearStateAccept => {}
+        // The load duty's bins, read when the simulation is built.
+        Settable::DutyTorqueEdges | Settable::DutySpeedEdges => {}
         // The simulation's initial state, set when it is built; also the
         // run's input speed, so that the scene's speed rule names it.
         Settable::InitialSpeed => {
@@ -359,6 +361,8 @@ pub fn scene_values(scene: &Scene) -> Result<BTreeMap<Settable, Start>, SceneErr
             Settable::SceneFile
             | Settable::WearStateFile
             | Settable::WearStateAccept
+            | Settable::DutyTorqueEdges
+            | Settable::DutySpeedEdges
             | Settable::HarmonicWindowCycles => continue,
             Settable::GearData => Start::Integer(i32::from(by_data.is_some())),
             Settable::SpeedDrivenMember => d.speed_driven_member.map_or(Start::Integer(-1), code),
@@ -485,6 +489,8 @@ pub(super) fn scene_keys(p: Settable) -> &'static [&'static str] {
         Settable::SceneFile
         | Settable::WearStateFile
         | Settable::WearStateAccept
+        | Settable::DutyTorqueEdges
+        | Settable::DutySpeedEdges
         | Settable::InputSpeedReference
         | Settable::HarmonicWindowCycles => &[],
         Settable::SunTorque | Settable::RingTorque | Settable::CarrierTorque => {
