@@ -414,6 +414,21 @@ struct WearStepArgs {
     /// input speed [rpm] instead of the quasi-static LTCA.
     #[arg(long)]
     dynamic_speed: Option<f64>,
+    /// Wear by this duty-cycle file (`simulate --duty-cycle`, the FMU's dutyCycle): the Archard
+    /// wear of each load bin's revolutions, summed, for the revolutions the duty stands for
+    /// (once, or --repeat/--hours), over as many updates as the update depth asks (docs/DUTY.md).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["revolutions", "dynamic_speed"])]
+    duty_cycle: Option<PathBuf>,
+    /// With --duty-cycle: wear this many passes of the duty (default 1).
+    #[arg(long, requires = "duty_cycle", conflicts_with = "hours")]
+    repeat: Option<f64>,
+    /// With --duty-cycle: wear this many hours of operation (the duty's passes that last so long).
+    #[arg(long, requires = "duty_cycle")]
+    hours: Option<f64>,
+    /// With --duty-cycle: the steady dynamic tooth loads of each torque × speed bin (at its mid
+    /// speed) instead of the quasi-static loads of each torque bin.
+    #[arg(long, requires = "duty_cycle")]
+    dynamic: bool,
 }
 
 /// Compare the wear per cycle driven by quasi-static and by dynamic tooth

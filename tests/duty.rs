@@ -171,3 +171,114 @@ fn a_restored_state_carries_the_duty_recorded_up_to_it() {
     other.duty.pop();
     assert!(sim.restore(&other).is_err(), "a duty of other bins is refused");
 }
+
+mod wear_by_duty {
+    use super::*;
+    use planetwear::wear::archard::{Stop, WearSettings};
+    use planetwear::wear::duty_wear::DutyWear;
+    use planetwear::wear::flank::Flank;
+    use planetwear::wear::state::WornState;
+    use planetwear::wear::stepper::WearModel;
+
+    /// A duty of `revolutions` per torque (every mesh alike), 10 s long, on 4 planets.
+    fn duty_at(set: &GearSet, torque_edges: Vec<f64>, revolutions: &[(f64, f64)]) -> DutyCycle {
+        let bins = DutyBins::new(torque_edges, vec![0.0, 1000.0]).unwrap();
+        let mut duty = LoadDuty::new(bins, set.planet_angles().len());
+        for &(torque, r) in revolutions {
+            duty.record(
+                &vec![torque; 2 * set.planet_angles().len()],
+                300.0,
+                r,
+                10.0 / revolutions.len() as f64,
+            )
+            .unwrap();
+        }
+        DutyCycle::new(set, "test", duty)
+    }
+
+    fn set() -> GearSet {
+        Scene::example_2004().validate().unwrap()
+    }
+
+    fn largest_difference(a: &WornState, b: &WornState) -> f64 {
+        let mut worst: f64 = 0.0;
+        for flank in Flank::ALL {
+            for (x, y) in a.flanks.get(flank).iter().zip(b.flanks.get(flank)) {
+                for (p, q) in x.depth.iter().zip(&y.depth) {
+                    worst = worst.max((p - q).abs());
+                }
+            }
+        }
+        worst
+    }
+
+    /// One bin whose mid torque is the scene's: the duty wears as the scene's own load does
+    /// over the same revolutions (the mixture of one bin is that bin's wear).
+    #[test]
+    fn a_duty_at_the_scene_s_torque_wears_as_the_scene_does() {
+        let set = set();
+        let torque = set.input_torque();
+        let cycle = duty_at(&set, vec![0.5 * torque, 1.5 * torque], &[(torque, 1.0e6)]);
+        let settings = WearSettings::for_set(&set);
+        let wear = DutyWear::new(&set, None, &settings, &cycle).unwrap();
+        let model = WearModel::new(&set, settings).unwrap();
+        let unworn = model.unworn();
+        let by_duty = wear.advance(&unworn, 5.0).unwrap();
+        let by_scene = model.run(&unworn, Stop::Revolutions(5.0e6)).unwrap();
+        assert_eq!((by_duty.kappa, by_duty.revolutions), (by_scene.kappa, by_scene.revolutions));
+        let depth = by_scene.deepest().depth;
+        let diff = largest_difference(&by_duty, &by_scene);
+        println!("κ {}, deepest {:.3} µm, largest difference {:.2e} m", by_duty.kappa, depth * 1e6, diff);
+        assert!(diff <= 1e-12 * depth, "{diff:e} against {depth:e}");
+        // The state records the duty: its fingerprint (the file's checksum), passes and time.
+        let record = &by_duty.duty_cycles[0];
+        assert_eq!(record.checksum, cycle.fingerprint());
+        let doc: serde_json::Value = serde_json::from_str(&cycle.to_json().unwrap()).unwrap();
+        assert_eq!(doc["checksum"], record.checksum.as_str());
+        assert_eq!((record.passes, record.operating_time, record.kappa), (5.0, 50.0, (0, by_duty.kappa)));
+        assert_eq!(by_duty.operating_time, 50.0);
+        let back = WornState::from_json(&by_duty.to_json().unwrap(), &set).unwrap();
+        assert_eq!(back, by_duty);
+    }
+
+    /// Half the revolutions at 0.5 T and half at 1.5 T: each flank wears per revolution the
+    /// mean of the two loads' wear (Archard's law summed over the duty), more than at 0.5 T
+    /// and less than at 1.5 T.
+    #[test]
+    fn a_split_duty_wears_the_mean_of_its_loads() {
+        let set = set();
+        let t = set.input_torque();
+        let settings = WearSettings::for_set(&set);
+        let unworn = WearModel::new(&set, settings.clone()).unwrap().unworn();
+        let rate = |cycle: &DutyCycle| {
+            let c = DutyWear::new(&set, None, &settings, cycle).unwrap().cycle(&unworn).unwrap();
+            c.flank(Flank::SunDrive, 0).unwrap().wear_per_cycle.iter().cloned().fold(0.0, f64::max)
+        };
+        let edges = vec![0.25 * t, 0.75 * t, 1.25 * t, 1.75 * t];
+        let low = rate(&duty_at(&set, edges.clone(), &[(0.5 * t, 1e6)]));
+        let high = rate(&duty_at(&set, edges.clone(), &[(1.5 * t, 1e6)]));
+        let split = rate(&duty_at(&set, edges, &[(0.5 * t, 1e6), (1.5 * t, 1e6)]));
+        println!(
+            "largest sun wear per cycle: {low:.4e} (0.5 T), {high:.4e} (1.5 T), {split:.4e} (half each)"
+        );
+        assert!(low < split && split < high);
+        // The maxima of the two may lie at different points: the mixture's is at most their mean.
+        assert!(split <= 0.5 * (low + high) * (1.0 + 1e-12));
+    }
+
+    #[test]
+    fn coast_bins_and_empty_duties_are_refused() {
+        let set = set();
+        let settings = WearSettings::for_set(&set);
+        let coast = duty_at(&set, vec![-100.0, 0.0, 100.0], &[(-50.0, 1e3)]);
+        let e = DutyWear::new(&set, None, &settings, &coast).err().unwrap().to_string();
+        assert!(e.contains("positive load torque"), "{e}");
+        let empty = DutyCycle::new(
+            &set,
+            "test",
+            LoadDuty::new(DutyBins::new(vec![0.0, 1.0], vec![0.0, 1.0]).unwrap(), 4),
+        );
+        let e = DutyWear::new(&set, None, &settings, &empty).err().unwrap().to_string();
+        assert!(e.contains("revolutions"), "{e}");
+    }
+}

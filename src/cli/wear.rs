@@ -29,6 +29,65 @@ pub(crate) fn wear_model(
     })
 }
 
+/// `wear step --duty-cycle`: the state `before` worn by the duty in `path`, `repeat` passes
+/// or the passes `hours` of operation take (one by default), written to `out`.
+fn duty_step(
+    set: &GearSet,
+    run: &RunSettings,
+    model: &WearModel,
+    before: &planetwear::wear::state::WornState,
+    (path, (repeat, hours), dynamic): (&Path, (Option<f64>, Option<f64>), bool),
+    out: &Path,
+) -> Result<()> {
+    use planetwear::wear::duty_wear::DutyWear;
+    let cycle = planetwear::wear::duty::read_duty_cycle(path, set)?;
+    let mut settings = model.settings().clone();
+    if dynamic {
+        // The speed is each bin's; this one only selects the dynamic source.
+        settings.source = PressureSource::Dynamic { speed: run.input_speed() };
+    }
+    let wear = DutyWear::new(set, Some(run), &settings, &cycle)
+        .with_context(|| format!("--duty-cycle {}", path.display()))?;
+    let (revolutions, duration) = wear.duty();
+    let passes = match (repeat, hours) {
+        (Some(n), _) if n.is_finite() && n > 0.0 => n,
+        (Some(n), _) => bail!("--repeat {n}: must be a finite number of passes > 0"),
+        (None, Some(h)) if h.is_finite() && h > 0.0 && duration > 0.0 => h * 3600.0 / duration,
+        (None, Some(h)) => bail!(
+            "--hours {h}: must be a finite number of hours > 0, of a duty that lasts (this one {duration} s)"
+        ),
+        (None, None) => 1.0,
+    };
+    if wear.outside_share() > 0.0 {
+        eprintln!(
+            "warning: --duty-cycle {}: {:.2} % of a mesh's revolutions lie outside the torque bins and do not wear",
+            path.display(),
+            100.0 * wear.outside_share()
+        );
+    }
+    let after = wear.advance(before, passes)?;
+    planetwear::wear::state::write_worn_state(out, &after)?;
+    let worn = after.revolutions - before.revolutions;
+    let time = after.operating_time - before.operating_time;
+    let deepest = after.deepest();
+    outln!(
+        "κ {} → {}: {:.4} passes of the duty ({} load bins, {:.4e} input revolutions of {:.4e} asked, {:.4} h of \
+         operation; {:.4} h in all); deepest wear {:.3} µm on {}; wrote {}",
+        before.kappa,
+        after.kappa,
+        worn / revolutions,
+        wear.bins(),
+        worn,
+        passes * revolutions,
+        time / 3600.0,
+        after.operating_time / 3600.0,
+        deepest.depth * 1e6,
+        deepest.flank.name(),
+        out.display()
+    )?;
+    Ok(())
+}
+
 /// Removes a directory's completion marker left by an earlier run.
 pub(crate) fn remove_marker(path: &Path) -> Result<()> {
     match std::fs::remove_file(path) {
@@ -223,7 +282,20 @@ pub(crate) fn wear_effect_command(
 }
 
 pub(crate) fn wear_step_command(
-    WearStepArgs { scene, state, accept_state_difference, out, threshold, revolutions, ring, dynamic_speed }: WearStepArgs,
+    WearStepArgs {
+        scene,
+        state,
+        accept_state_difference,
+        out,
+        threshold,
+        revolutions,
+        ring,
+        dynamic_speed,
+        duty_cycle,
+        repeat,
+        hours,
+        dynamic,
+    }: WearStepArgs,
 ) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     let model = wear_model(&set, &run, ring, threshold, dynamic_speed)?;
@@ -231,6 +303,10 @@ pub(crate) fn wear_step_command(
         Some(path) => read_state("--state", path, &set, accept_state_difference.as_deref())?,
         None => model.unworn(),
     };
+    if let Some(path) = duty_cycle {
+        let passes = (repeat, hours);
+        return duty_step(&set, &run, &model, &before, (&path, passes, dynamic), &out);
+    }
     let limit = match revolutions {
         Some(n) if n.is_finite() && n > 0.0 => Limit::Revolutions(n),
         Some(n) => bail!("--revolutions {n}: must be a finite number of input revolutions > 0"),

@@ -473,6 +473,12 @@ impl GearSet {
         self.input_torque
     }
 
+    /// The same set under another input torque [N·m] (`None` unless finite): the operating
+    /// point, not the geometry, as a duty cycle's load bins ask.
+    pub fn with_input_torque(&self, torque: f64) -> Option<GearSet> {
+        torque.is_finite().then(|| GearSet { input_torque: torque, ..self.clone() })
+    }
+
     /// Factors on the tooth-pair stiffness of the sun–planet and the ring–planet mesh [-].
     pub fn stiffness_scales(&self) -> [f64; 2] {
         self.stiffness_scale

@@ -93,6 +93,12 @@ impl DutyCycle {
         Self { gear_set: GearSetPrint::of(set), source: source.to_string(), duty }
     }
 
+    /// The checksum of its content (`fnv1a64:…`), the one its document carries: the duty's
+    /// fingerprint.
+    pub fn fingerprint(&self) -> String {
+        serde_json::to_value(self).map_or_else(|_| String::new(), |v| content_checksum(&v))
+    }
+
     /// The JSON document; a duty that does not add up ([`LoadDuty::check`]) is refused.
     pub fn to_json(&self) -> Result<String, DutyCycleError> {
         self.duty.check().map_err(DutyCycleError::Invalid)?;

@@ -16,11 +16,13 @@
 //!   of one cycle, errors.
 //! - [`dynamic`]: tooth-pair loads recorded from a dynamic steady state.
 //! - [`stepper`]: the wear model of a gear set and its updates κ → κ + 1.
+//! - [`duty_wear`]: the wear of a duty cycle's load bins, summed.
 //! - [`compare`]: quasi-static against dynamic wear loads.
 
 pub mod archard;
 pub mod compare;
 pub mod duty;
+pub mod duty_wear;
 pub mod dynamic;
 pub mod flank;
 pub mod state;

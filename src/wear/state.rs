@@ -468,6 +468,34 @@ pub struct WornState {
     /// wear was made on (absent when none).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub accepted_differences: Vec<StateDifference>,
+    /// Operating time the wear stands for \[s\]: the duty cycles' (absent when no duty cycle
+    /// wore it).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub operating_time: f64,
+    /// The duty cycles that wore it, oldest first (absent when none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub duty_cycles: Vec<DutyRecord>,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
+/// A duty cycle's passes that wore a state (`wear step --duty-cycle`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DutyRecord {
+    /// The duty-cycle document's checksum (`fnv1a64:…`): its fingerprint.
+    pub checksum: String,
+    /// What produced the duty (`simulate`, `fmu`, …).
+    pub source: String,
+    /// Passes of the duty worn [-].
+    pub passes: f64,
+    /// Input revolutions worn \[rev\].
+    pub revolutions: f64,
+    /// Operating time worn \[s\].
+    pub operating_time: f64,
+    /// κ before and after.
+    pub kappa: (u32, u32),
 }
 
 impl WornState {
@@ -496,6 +524,8 @@ impl WornState {
             },
             history: Vec::new(),
             accepted_differences: Vec::new(),
+            operating_time: 0.0,
+            duty_cycles: Vec::new(),
         }
     }
 
@@ -666,6 +696,12 @@ impl WornState {
         };
         for (name, v) in &self.gear_set.parameters {
             finite(&|| format!("gear_set.parameters.{name}"), *v)?;
+        }
+        amount(&|| "operating_time".into(), self.operating_time)?;
+        for (i, d) in self.duty_cycles.iter().enumerate() {
+            amount(&|| format!("duty_cycles[{i}].passes"), d.passes)?;
+            amount(&|| format!("duty_cycles[{i}].revolutions"), d.revolutions)?;
+            amount(&|| format!("duty_cycles[{i}].operating_time"), d.operating_time)?;
         }
         let slices = self.face_slices();
         for flank in Flank::ALL {
