@@ -249,7 +249,7 @@ mod wear_by_duty {
         let set = set();
         let t = set.input_torque();
         let settings = WearSettings::for_set(&set);
-        let unworn = WearModel::new(&set, settings.clone()).unwrap().unworn();
+        let unworn = WearModel::new(&set, settings).unwrap().unworn();
         let rate = |cycle: &DutyCycle| {
             let c = DutyWear::new(&set, None, &settings, cycle).unwrap().cycle(&unworn).unwrap();
             c.flank(Flank::SunDrive, 0).unwrap().wear_per_cycle.iter().cloned().fold(0.0, f64::max)

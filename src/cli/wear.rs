@@ -41,7 +41,7 @@ fn duty_step(
 ) -> Result<()> {
     use planetwear::wear::duty_wear::DutyWear;
     let cycle = planetwear::wear::duty::read_duty_cycle(path, set)?;
-    let mut settings = model.settings().clone();
+    let mut settings = *model.settings();
     if dynamic {
         // The speed is each bin's; this one only selects the dynamic source.
         settings.source = PressureSource::Dynamic { speed: run.input_speed() };
