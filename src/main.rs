@@ -417,8 +417,9 @@ struct WearStepArgs {
     /// Wear by this duty-cycle file (`simulate --duty-cycle`, the FMU's dutyCycle): the Archard
     /// wear of each load bin's revolutions, summed, for the revolutions the duty stands for
     /// (once, or --repeat/--hours), over as many updates as the update depth asks (docs/DUTY.md).
+    /// Given more than once, the duties (on the same bins) are added: one pass is all of them.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["revolutions", "dynamic_speed"])]
-    duty_cycle: Option<PathBuf>,
+    duty_cycle: Vec<PathBuf>,
     /// With --duty-cycle: wear this many passes of the duty (default 1).
     #[arg(long, requires = "duty_cycle", conflicts_with = "hours")]
     repeat: Option<f64>,

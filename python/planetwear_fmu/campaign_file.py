@@ -46,7 +46,7 @@ TABLE_KEYS = {
     "integrator": ("integrator", "steps_per_mesh_cycle", "rho_infinity", "relative_tolerance",
                    "samples_per_mesh_cycle"),
     "outputs": ("keep",),
-    "loop": ("threshold_um", "ring", "dynamic_speed_rpm"),
+    "loop": ("threshold_um", "ring", "dynamic_speed_rpm", "hours_per_stage"),
 }
 # Campaign integrator keys → FMU parameters.
 INTEGRATOR_PARAMETERS = {
@@ -603,6 +603,12 @@ def from_dict(raw, source, output_dir=None, *, probe):
         bad("loop.ring", lp["ring"], "must be true or false")
     if "dynamic_speed_rpm" in lp and (not _number(lp["dynamic_speed_rpm"]) or not lp["dynamic_speed_rpm"] > 0):
         bad("loop.dynamic_speed_rpm", lp["dynamic_speed_rpm"], "must be a positive speed [rpm]")
+    if "hours_per_stage" in lp:
+        if not _number(lp["hours_per_stage"]) or not 0 < lp["hours_per_stage"] < 1e6:
+            bad("loop.hours_per_stage", lp["hours_per_stage"], "must be a positive number of operating hours")
+        elif "dynamic_speed_rpm" in lp:
+            bad("loop.dynamic_speed_rpm", lp["dynamic_speed_rpm"],
+                "cannot be given with loop.hours_per_stage: the stage's duty cycle sets the loads and speeds")
 
     # Wear states: the JSON structure here, the FMU's verdict below.
     states = []

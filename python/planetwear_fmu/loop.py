@@ -31,6 +31,7 @@ from .campaign_file import CampaignError, Problem, check_state_document, find_pl
 from .files import read_input, sha256_file, write_atomic
 from .fmu_check import load_campaign
 from .runner import consolidate, dask_client, print_summary, run_campaign, task_specs
+from .sweep import PointStore
 
 MAX_STAGES = 200
 
@@ -48,7 +49,8 @@ def _state_record(path):
     import hashlib
 
     return {"path": str(path), "sha256": hashlib.sha256(data).hexdigest(), "kappa": content["kappa"],
-            "max_wear_um": max_wear_depth(content) * 1e6}
+            "max_wear_um": max_wear_depth(content) * 1e6,
+            "operating_hours": content.get("operating_time", 0.0) / 3600.0}
 
 
 def _starting_state(campaign, from_state, states_dir):
@@ -117,7 +119,8 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
     for _ in range(MAX_STAGES):
         t_stage = time.perf_counter()
         stage_started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
-        rec_in = _state_record(state) if state else {"path": "", "sha256": "", "kappa": 0, "max_wear_um": 0.0}
+        rec_in = _state_record(state) if state else {"path": "", "sha256": "", "kappa": 0, "max_wear_um": 0.0,
+                                                     "operating_hours": 0.0}
         kappa = rec_in["kappa"]
         stage_dir = root / f"kappa-{kappa}"
         stage_dir.mkdir(parents=True, exist_ok=True)
@@ -133,11 +136,19 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
             to_wear_um is not None and rec_in["max_wear_um"] >= to_wear_um)
         step = None
         if not last:
-            out = states_dir / f"kappa-{kappa + 1}.json"
+            lp = campaign.loop
+            hours = lp.get("hours_per_stage")
+            # With hours_per_stage the duty cycle decides how far κ goes: the file is named by the stage.
+            out = states_dir / (f"stage-{len(stages) + 1}.json" if hours else f"kappa-{kappa + 1}.json")
             cmd = [exe, "wear", "step", "--scene", stage.scene.cli_value, "--out", str(out)]
             if state:
                 cmd += ["--state", str(state)]
-            lp = campaign.loop
+            if hours:
+                # The loads this stage's campaign produced: each sweep's duty up to its last point.
+                for spec in task_specs(stage):
+                    store = PointStore(spec["dir"], spec["speeds"])
+                    cmd += ["--duty-cycle", str(store.duty_path(len(spec["speeds"]) - 1))]
+                cmd += ["--hours", str(hours)]
             if "threshold_um" in lp:
                 cmd += ["--threshold", str(lp["threshold_um"])]
             if lp.get("ring"):
@@ -193,7 +204,9 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
     record = {"campaign": str(campaign.source), "to_kappa": to_kappa, "to_wear_um": to_wear_um,
               "stages": [{"kappa": s["kappa"], "manifest": str(root / f"kappa-{s['kappa']}" / "manifest.json"),
                           "points": s["points"], "computed": s["runs"][-1]["campaign"]["computed"],
-                          "max_wear_um": s["state_in"]["max_wear_um"], "wall_s": s["runs"][-1]["wall_s"]}
+                          "max_wear_um": s["state_in"]["max_wear_um"],
+                          "operating_hours": s["state_in"].get("operating_hours", 0.0),
+                          "wall_s": s["runs"][-1]["wall_s"]}
                          for s in stages],
             "wall_s": time.perf_counter() - started, "files": files}
     write_atomic(root / "loop.json", json.dumps(record, indent=1).encode())
@@ -202,7 +215,8 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
 
 def print_loop(record):
     for s in record["stages"]:
-        print(f"κ = {s['kappa']}: deepest wear {s['max_wear_um']:.2f} µm, {s['points']} points ({s['computed']} "
+        print(f"κ = {s['kappa']}: deepest wear {s['max_wear_um']:.2f} µm after {s['operating_hours']:.4g} h of "
+              f"operation, {s['points']} points ({s['computed']} "
               f"computed now), {s['wall_s']:.1f} s "
               f"({s['manifest']})")
     print(f"loop: {len(record['stages'])} stage(s) in {record['wall_s']:.1f} s; gathered results and plots: "

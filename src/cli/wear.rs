@@ -29,25 +29,46 @@ pub(crate) fn wear_model(
     })
 }
 
-/// `wear step --duty-cycle`: the state `before` worn by the duty in `path`, `repeat` passes
-/// or the passes `hours` of operation take (one by default), written to `out`.
+/// The duty-cycle files `paths` read for `set` and added (one file: itself).
+fn summed_duty(set: &GearSet, paths: &[PathBuf]) -> Result<planetwear::wear::duty::DutyCycle> {
+    let mut cycles = paths.iter().map(|p| planetwear::wear::duty::read_duty_cycle(p, set));
+    let mut sum = cycles.next().context("--duty-cycle: no file")??;
+    let mut sources = vec![sum.source.clone()];
+    for (cycle, path) in cycles.zip(&paths[1..]) {
+        let cycle = cycle?;
+        sum.duty.add(&cycle.duty).with_context(|| {
+            format!("--duty-cycle {}: cannot be added to {}", path.display(), paths[0].display())
+        })?;
+        sources.push(cycle.source);
+    }
+    if paths.len() > 1 {
+        sources.dedup();
+        sum.source = format!("sum of {} duty cycles ({})", paths.len(), sources.join(", "));
+    }
+    Ok(sum)
+}
+
+/// `wear step --duty-cycle`: the state `before` worn by the duty in `paths` (added), `repeat`
+/// passes or the passes `hours` of operation take (one by default), written to `out`.
 fn duty_step(
     set: &GearSet,
     run: &RunSettings,
     model: &WearModel,
     before: &planetwear::wear::state::WornState,
-    (path, (repeat, hours), dynamic): (&Path, (Option<f64>, Option<f64>), bool),
+    (paths, (repeat, hours), dynamic): (&[PathBuf], (Option<f64>, Option<f64>), bool),
     out: &Path,
 ) -> Result<()> {
     use planetwear::wear::duty_wear::DutyWear;
-    let cycle = planetwear::wear::duty::read_duty_cycle(path, set)?;
+    let cycle = summed_duty(set, paths)?;
+    let named: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    let named = named.join(", ");
     let mut settings = *model.settings();
     if dynamic {
         // The speed is each bin's; this one only selects the dynamic source.
         settings.source = PressureSource::Dynamic { speed: run.input_speed() };
     }
-    let wear = DutyWear::new(set, Some(run), &settings, &cycle)
-        .with_context(|| format!("--duty-cycle {}", path.display()))?;
+    let wear =
+        DutyWear::new(set, Some(run), &settings, &cycle).with_context(|| format!("--duty-cycle {named}"))?;
     let (revolutions, duration) = wear.duty();
     let passes = match (repeat, hours) {
         (Some(n), _) if n.is_finite() && n > 0.0 => n,
@@ -60,8 +81,7 @@ fn duty_step(
     };
     if wear.outside_share() > 0.0 {
         eprintln!(
-            "warning: --duty-cycle {}: {:.2} % of a mesh's revolutions lie outside the torque bins and do not wear",
-            path.display(),
+            "warning: --duty-cycle {named}: {:.2} % of a mesh's revolutions lie outside the torque bins and do not wear",
             100.0 * wear.outside_share()
         );
     }
@@ -303,9 +323,9 @@ pub(crate) fn wear_step_command(
         Some(path) => read_state("--state", path, &set, accept_state_difference.as_deref())?,
         None => model.unworn(),
     };
-    if let Some(path) = duty_cycle {
+    if !duty_cycle.is_empty() {
         let passes = (repeat, hours);
-        return duty_step(&set, &run, &model, &before, (&path, passes, dynamic), &out);
+        return duty_step(&set, &run, &model, &before, (&duty_cycle, passes, dynamic), &out);
     }
     let limit = match revolutions {
         Some(n) if n.is_finite() && n > 0.0 => Limit::Revolutions(n),

@@ -23,7 +23,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::dynamics::duty::LoadDuty;
 use crate::model::gear::GearSet;
-use crate::wear::state::{content_checksum, open_document, DocumentError, GearSetPrint};
+use crate::wear::state::{
+    content_checksum, describe_differences, open_document, DocumentError, GearSetPrint,
+};
 
 /// The `format` name of the document.
 pub const FORMAT: &str = "planetwear-duty-cycle";
@@ -53,9 +55,11 @@ pub enum DutyCycleError {
     /// The duty was produced on another gear set.
     #[error(
         "the duty cycle belongs to gear set '{found}' (fingerprint {found_fingerprint}), not to '{expected}' \
-         (fingerprint {expected_fingerprint}): its loads and revolutions are another set's"
+         (fingerprint {expected_fingerprint}): its loads and revolutions are another set's: {differences}"
     )]
     GearSet {
+        /// The parameters that differ, in words.
+        differences: String,
         /// The duty's set.
         found: String,
         /// Its fingerprint.
@@ -121,8 +125,10 @@ impl DutyCycle {
             serde_json::from_value(content).map_err(|e| DutyCycleError::Invalid(e.to_string()))?;
         cycle.duty.check().map_err(DutyCycleError::Invalid)?;
         let here = GearSetPrint::of(set);
-        if here.fingerprint != cycle.gear_set.fingerprint {
+        let differences = cycle.gear_set.differences(&here);
+        if here.fingerprint != cycle.gear_set.fingerprint && !differences.is_empty() {
             return Err(DutyCycleError::GearSet {
+                differences: describe_differences(&differences),
                 found: cycle.gear_set.name,
                 found_fingerprint: cycle.gear_set.fingerprint,
                 expected: here.name,
@@ -142,8 +148,9 @@ impl DutyCycle {
 
 /// Writes a duty cycle to `path` atomically (nothing is written when it is refused).
 pub fn write_duty_cycle(path: &std::path::Path, cycle: &DutyCycle) -> Result<(), DutyFileError> {
-    let text =
-        cycle.to_json().map_err(|source| DutyFileError::Content { path: path.to_path_buf(), source })?;
+    let text = cycle
+        .to_json()
+        .map_err(|source| DutyFileError::Content { path: path.to_path_buf(), source: Box::new(source) })?;
     crate::files::check_output_size(path, crate::files::InputKind::DutyCycle, text.len())?;
     Ok(crate::files::write_durable(path, text.as_bytes())?)
 }
@@ -152,7 +159,7 @@ pub fn write_duty_cycle(path: &std::path::Path, cycle: &DutyCycle) -> Result<(),
 pub fn read_duty_cycle(path: &std::path::Path, set: &GearSet) -> Result<DutyCycle, DutyFileError> {
     let bytes = crate::files::read_input(path, crate::files::InputKind::DutyCycle)?;
     DutyCycle::from_json(&String::from_utf8_lossy(&bytes), set)
-        .map_err(|source| DutyFileError::Content { path: path.to_path_buf(), source })
+        .map_err(|source| DutyFileError::Content { path: path.to_path_buf(), source: Box::new(source) })
 }
 
 /// Why a duty-cycle file could not be written or read.
@@ -168,6 +175,6 @@ pub enum DutyFileError {
         path: std::path::PathBuf,
         /// Why.
         #[source]
-        source: DutyCycleError,
+        source: Box<DutyCycleError>,
     },
 }

@@ -191,7 +191,8 @@ pub struct ParameterDifference {
     pub expected: Option<f64>,
 }
 
-fn describe_differences(d: &[ParameterDifference]) -> String {
+/// The differing parameters in words, each with its value in the file and here.
+pub fn describe_differences(d: &[ParameterDifference]) -> String {
     if d.is_empty() {
         return "the parameters agree but the fingerprint does not (the state was made by another fingerprint rule)"
             .into();
@@ -334,6 +335,26 @@ fn form_parameters(out: &mut BTreeMap<String, f64>, gear: &str, f: &ToothForm) {
 }
 
 impl GearSetPrint {
+    /// The parameters in which `self` (a state's or a file's set) and `here` differ by more
+    /// than [`SAME_PARAMETER`] relatively, or that only one of them has (none for the same
+    /// set, whatever the last bits of its values).
+    pub fn differences(&self, here: &GearSetPrint) -> Vec<ParameterDifference> {
+        let names: std::collections::BTreeSet<&String> =
+            here.parameters.keys().chain(self.parameters.keys()).collect();
+        let mut differences = Vec::new();
+        for name in names {
+            let (a, b) = (self.parameters.get(name).copied(), here.parameters.get(name).copied());
+            let same = match (a, b) {
+                (Some(x), Some(y)) => (x - y).abs() <= SAME_PARAMETER * x.abs().max(y.abs()),
+                _ => false,
+            };
+            if !same {
+                differences.push(ParameterDifference { name: name.clone(), state: a, expected: b });
+            }
+        }
+        differences
+    }
+
     /// The print of a gear set.
     pub fn of(set: &GearSet) -> Self {
         let mut p = BTreeMap::new();
@@ -596,19 +617,7 @@ impl WornState {
         if here.fingerprint == self.gear_set.fingerprint {
             return Ok(Vec::new());
         }
-        let mut differences = Vec::new();
-        let names: std::collections::BTreeSet<&String> =
-            here.parameters.keys().chain(self.gear_set.parameters.keys()).collect();
-        for name in names {
-            let (a, b) = (self.gear_set.parameters.get(name).copied(), here.parameters.get(name).copied());
-            let same = match (a, b) {
-                (Some(x), Some(y)) => (x - y).abs() <= SAME_PARAMETER * x.abs().max(y.abs()),
-                _ => false,
-            };
-            if !same {
-                differences.push(ParameterDifference { name: name.clone(), state: a, expected: b });
-            }
-        }
+        let differences = self.gear_set.differences(&here);
         let accepted = |d: &ParameterDifference| {
             StateDifference::of_parameter(&d.name).is_some_and(|k| accept.contains(&k))
         };

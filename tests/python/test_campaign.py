@@ -353,3 +353,34 @@ def test_an_output_dir_that_cannot_be_created_is_refused_before_any_run(tmp_path
     raw["output_dir"] = str(blocker)
     with pytest.raises(campaign_file.CampaignError, match=r"output_dir.*exists and is not a directory"):
         campaign_file.from_dict(raw, tmp_path / "c.toml", probe=False)
+
+
+def test_a_loop_with_hours_per_stage_wears_each_stage_by_the_duty_its_campaign_produced(tmp_path, client):
+    """loop.hours_per_stage: each stage's state is worn by the duty cycle of the
+    stage's own sweeps (the FMU's dutyCycle at each sweep's last point) for
+    that many hours; the state records the duty and the hours, the loop's
+    record gives κ and the deepest wear against operating hours."""
+    from planetwear_fmu.loop import print_loop, run_loop
+
+    text = SMALL.replace(f"values_rpm = {SPEEDS}", "values_rpm = [2000.0, 3000.0]").replace(
+        'directions = "both"', 'directions = "up"').replace("steps_per_mesh_cycle = 600", "steps_per_mesh_cycle = 120")
+    text = text.replace('states = ["wear/example-2004/kappa-2.json"]', 'states = ["wear/example-2004/kappa-0.json"]')
+    text = f'planetwear_bin = "{EXE}"\n' + text + "\n[loop]\nhours_per_stage = 20.0\n"
+    (tmp_path / "c.toml").write_text(text)
+    c = load_campaign(tmp_path / "c.toml")
+    record = run_loop(c, to_kappa=2, client=client, progress=False)
+    print_loop(record)
+    hours = [s["operating_hours"] for s in record["stages"]]
+    wear = [s["max_wear_um"] for s in record["stages"]]
+    kappas = [s["kappa"] for s in record["stages"]]
+    assert hours == pytest.approx([20.0 * i for i in range(len(hours))], rel=1e-9)
+    assert kappas[-1] >= 2 and all(b > a for a, b in zip(kappas, kappas[1:]))
+    assert all(b > a for a, b in zip(wear, wear[1:]))
+    manifests = [json.loads(Path(s["manifest"]).read_text()) for s in record["stages"]]
+    first = manifests[0]["wear_step"]
+    assert "--duty-cycle" in first["command"] and first["command"][first["command"].index("--hours") + 1] == "20.0"
+    state = json.loads(Path(first["state_out"]["path"]).read_text())["content"]
+    (duty,) = state["duty_cycles"]
+    assert duty["source"] == "fmu" and duty["operating_time"] == pytest.approx(72000.0, rel=1e-9)
+    used = read_duty_cycle(first["command"][first["command"].index("--duty-cycle") + 1])
+    assert duty["checksum"] == used["checksum"]
