@@ -375,8 +375,10 @@ fn a_forged_state_with_a_valid_checksum_never_brings_a_nan_or_an_infinity() {
         let (mut state, bytes) = get_and_serialize(c);
         let u32_at = |i: usize| u32::from_le_bytes(std::array::from_fn(|j| bytes[i + j] as u8)) as usize;
         let time = 16 + u32_at(12);
-        let lens: Vec<usize> = (0..7).map(|j| u32_at(time + 8 + 4 * j)).collect();
-        let array = |k: usize| time + 36 + 8 * lens[..k].iter().sum::<usize>();
+        // State format 2: eight arrays, the last the load duty's counts.
+        let lens: Vec<usize> = (0..8).map(|j| u32_at(time + 8 + 4 * j)).collect();
+        let array = |k: usize| time + 8 + 4 * 8 + 8 * lens[..k].iter().sum::<usize>();
+        assert!(lens[7] > 0, "the state holds the load duty");
         assert!(lens[3] > 0, "the window holds samples");
         let window_outputs = [vr::WINDOW_SUN_MESH_F1, vr::WINDOW_SUN_MESH_FRMS];
         for (what, at, value) in [
@@ -384,6 +386,7 @@ fn a_forged_state_with_a_valid_checksum_never_brings_a_nan_or_an_infinity() {
             ("integrator state", array(2), f64::INFINITY),
             ("window sample", array(3), f64::NAN),
             ("speed drive or last window point", array(5), f64::NEG_INFINITY),
+            ("load duty count", array(7), f64::NAN),
         ] {
             let forged = forge(&bytes, at, value);
             let mut s: fmi2FMUstate = std::ptr::null_mut();

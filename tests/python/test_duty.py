@@ -5,26 +5,17 @@ Needs fmu/planetwear.fmu (the README's test command builds and packs it)."""
 
 import json
 import math
-from pathlib import Path
 
 import pytest
-from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 
 from planetwear_fmu.duty import DutyCycleError, check_document, duty_cycle_text, read_duty_cycle, write_duty_cycle
 
-REPO = Path(__file__).resolve().parents[2]
-FMU = REPO / "fmu" / "planetwear.fmu"
+# The packed FMU, extracted once per module (its fixture is test_fmu's).
+from test_fmu import fmu  # noqa: E402,F401
+
 OMEGA = 3000 * math.pi / 30
-
-
-@pytest.fixture(scope="module")
-def fmu():
-    if not FMU.is_file():
-        pytest.fail(f"{FMU} is missing: run `cargo build --release && target/release/planetwear fmu pack`")
-    md = read_model_description(str(FMU))
-    return md, extract(str(FMU))
 
 
 def started(md, unzipdir, strings=None):
