@@ -281,4 +281,30 @@ mod wear_by_duty {
         let e = DutyWear::new(&set, None, &settings, &empty).err().unwrap().to_string();
         assert!(e.contains("revolutions"), "{e}");
     }
+
+    /// With dynamic loads, a one-bin duty whose mid torque and mid speed are the scene's wears
+    /// per cycle exactly as the scene's own dynamic source at that speed does.
+    #[test]
+    fn a_dynamic_duty_at_one_operating_point_wears_as_the_dynamic_source_there() {
+        use planetwear::wear::archard::PressureSource;
+        let (set, run) = Scene::example_2004().validate_with_run().unwrap();
+        let (torque, omega) = (set.input_torque(), run.input_speed());
+        let bins = DutyBins::new(vec![0.5 * torque, 1.5 * torque], vec![0.5 * omega, 1.5 * omega]).unwrap();
+        let mut duty = LoadDuty::new(bins, set.planet_angles().len());
+        duty.record(&vec![torque; 2 * set.planet_angles().len()], omega, 1e3, 1.0).unwrap();
+        let cycle = DutyCycle::new(&set, "test", duty);
+        let mut settings = WearSettings::for_set(&set);
+        settings.source = PressureSource::Dynamic { speed: omega };
+        let wear = DutyWear::new(&set, Some(&run), &settings, &cycle).unwrap();
+        assert_eq!(wear.bins(), 1);
+        let model = WearModel::with_run(&set, &run, settings).unwrap();
+        let unworn = model.unworn();
+        let (by_duty, by_scene) = (wear.cycle(&unworn).unwrap(), model.cycle(&unworn).unwrap());
+        let a = &by_duty.flank(Flank::SunDrive, 0).unwrap().wear_per_cycle;
+        let b = &by_scene.flank(Flank::SunDrive, 0).unwrap().wear_per_cycle;
+        let top = b.iter().cloned().fold(0.0, f64::max);
+        let diff = a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        println!("dynamic: largest sun wear per cycle {top:.4e} m, largest difference {diff:.2e} m");
+        assert!(top > 0.0 && diff <= 1e-12 * top, "{diff:e} against {top:e}");
+    }
 }
