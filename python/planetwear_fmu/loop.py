@@ -9,12 +9,14 @@ points and the stage's wall time. The states the stepper writes are in
 <output_dir>/loop/states/. A loop run again continues: a stage's finished
 points are not recomputed (the campaign resumes) and a state already
 written is not stepped again. At the end the stages' points are gathered
-into <output_dir>/loop/results.parquet and .csv with the plots over κ.
+into <output_dir>/loop/results.parquet and .csv with the plots over κ,
+and with `[loop] hours_per_stage` the deepest wear against operating hours
+(`loop/plots/wear_hours.png`).
 
 Layer 4 (front end): this module owns the loop (`run_loop`, `stage_raw`,
 `print_loop`, `LoopError`). Of the package it imports `files`,
-`campaign_file`, `fmu_check` (`load_campaign` for each stage's file) and
-`runner`, all below it; only the command line (`campaign`) imports it.
+`campaign_file`, `fmu_check` (`load_campaign` for each stage's file),
+`sweep` (each sweep's duty-cycle files), `plots` and `runner`, all below it; only the command line (`campaign`) imports it.
 """
 
 from __future__ import annotations
@@ -209,6 +211,10 @@ def run_loop(campaign, to_kappa=None, to_wear_um=None, from_state=None, client=N
                           "wall_s": s["runs"][-1]["wall_s"]}
                          for s in stages],
             "wall_s": time.perf_counter() - started, "files": files}
+    if any(s["operating_hours"] for s in record["stages"]):
+        from .plots import plot_wear_against_hours
+
+        record["files"].append(str(plot_wear_against_hours(record["stages"], root / "plots" / "wear_hours.png")))
     write_atomic(root / "loop.json", json.dumps(record, indent=1).encode())
     return record
 

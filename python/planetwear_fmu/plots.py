@@ -85,6 +85,32 @@ def plot_results(table, directory):
     return files
 
 
+def plot_wear_against_hours(stages, path):
+    """The loop's deepest wear and κ against operating hours (`stages`: the
+    loop record's stages, each with `operating_hours`, `max_wear_um` and
+    `kappa`), one point per stage; written to `path`, returned."""
+    require("plot", "drawing the loop's wear against operating hours")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    hours = [s["operating_hours"] for s in stages]
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    ax.plot(hours, [s["max_wear_um"] for s in stages], "o-", color="tab:red")
+    for s in stages:
+        ax.annotate(f"κ = {s['kappa']}", (s["operating_hours"], s["max_wear_um"]), textcoords="offset points",
+                    xytext=(-6, 6), ha="right", fontsize=8)
+    ax.set_xlabel("operating hours (the stages' duty cycles) [h]")
+    ax.set_ylabel("deepest wear [µm]")
+    ax.set_title("Wear against operating hours (campaign loop)")
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    _save(fig, Path(path))
+    plt.close(fig)
+    return Path(path)
+
+
 def _two_meshes(curves, colour, style, series, title, ylabel, path, zero_line=False):
     """One figure, a panel per mesh (sun–planet, ring–planet), a line per
     (κ, direction): `series(points, column, direction)` gives its (x, y)."""

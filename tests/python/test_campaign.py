@@ -384,3 +384,5 @@ def test_a_loop_with_hours_per_stage_wears_each_stage_by_the_duty_its_campaign_p
     assert duty["source"] == "fmu" and duty["operating_time"] == pytest.approx(72000.0, rel=1e-9)
     used = read_duty_cycle(first["command"][first["command"].index("--duty-cycle") + 1])
     assert duty["checksum"] == used["checksum"]
+    # The wear against operating hours, drawn.
+    assert (c.output_dir / "loop" / "plots" / "wear_hours.png").stat().st_size > 10_000
