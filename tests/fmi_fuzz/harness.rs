@@ -1912,6 +1912,20 @@ impl Engine<'_> {
                 strings.push(CString::new(self.rng.pick(&ACCEPT)).ok());
                 continue;
             }
+            let duty = [
+                planetwear::fmi::variables::vr::DUTY_TORQUE_EDGES,
+                planetwear::fmi::variables::vr::DUTY_SPEED_EDGES,
+            ];
+            if duty.contains(r) && kind == Kind::String {
+                // Bin edges, not files: mostly valid lists, some refused (too few, not
+                // increasing, not numbers, not finite, too many bins).
+                const EDGES: [&str; 9] =
+                    ["", "", "0,500,1000", " 0, 300 ,400", "-1e3,0,1e3", "1,1", "5", "x,1", "0,1e400"];
+                let many = (0..=2000).map(|k| k.to_string()).collect::<Vec<_>>().join(",");
+                let value = if self.rng.chance(0.05) { many } else { self.rng.pick(&EDGES).to_string() };
+                strings.push(CString::new(value).ok());
+                continue;
+            }
             let choice = self.rng.below(self.files.choices.len() + 1);
             strings.push(self.files.choices.get(choice).map(|b| CString::new(b.clone()).unwrap_or_default()));
         }
