@@ -17,7 +17,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::gear::{GearSet, Member, MeshKind};
+use crate::model::gear::{GearSet, MeshKind};
 
 /// Most edges of either axis (1000 bins).
 pub const MAX_EDGES: usize = 1001;
@@ -157,15 +157,9 @@ impl DutyBins {
 }
 
 /// The input torque \[N·m\] that one newton of mesh force on every planet balances:
-/// n r_b of the input member's lever ([`GearSet::mesh_load_per_planet`]).
+/// n r_b of the input member's lever ([`GearSet::input_lever`]).
 pub fn input_torque_per_mesh_force(set: &GearSet) -> f64 {
-    let n = set.planet_angles().len() as f64;
-    let lever = match set.input() {
-        Member::Sun => set.sun().base_radius(),
-        Member::Ring => set.ring().base_radius(),
-        Member::Carrier => set.sun().base_radius() + set.ring().base_radius(),
-    };
-    n * lever
+    set.planet_angles().len() as f64 * set.input_lever()
 }
 
 /// The input revolutions each mesh spent in each bin (module documentation).
@@ -200,7 +194,7 @@ impl LoadDuty {
     }
 
     fn mesh_index(&self, p: usize, kind: MeshKind) -> Option<usize> {
-        (p < self.planets).then_some(2 * p + usize::from(kind == MeshKind::RingPlanet))
+        (p < self.planets).then_some(kind.of_planet(p))
     }
 
     /// Records a step of `duration` \[s\] in which the input turned `revolutions` at mean

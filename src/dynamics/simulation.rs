@@ -240,7 +240,7 @@ impl StepExtremes {
     /// the time average to the grid's resolution); before a step, the force at the start.
     /// `None` beyond the number of planets.
     pub fn mean(&self, p: usize, kind: MeshKind) -> Option<f64> {
-        let m = 2 * p + usize::from(kind == MeshKind::RingPlanet);
+        let m = kind.of_planet(p);
         let extremes = self.meshes.get(m)?;
         Some(if self.samples == 0 { extremes.min } else { self.sums[m] / self.samples as f64 })
     }
@@ -248,13 +248,11 @@ impl StepExtremes {
     /// The extremes of planet `p`'s (0-based) mesh of kind `kind`; `None`
     /// beyond the number of planets.
     pub fn mesh(&self, p: usize, kind: MeshKind) -> Option<MeshExtremes> {
-        let offset = usize::from(kind == MeshKind::RingPlanet);
-        self.meshes.get(2 * p + offset).copied()
+        self.meshes.get(kind.of_planet(p)).copied()
     }
 
     fn of_kind(&self, kind: MeshKind) -> impl Iterator<Item = &MeshExtremes> {
-        let offset = usize::from(kind == MeshKind::RingPlanet);
-        self.meshes.iter().skip(offset).step_by(2)
+        self.meshes.iter().skip(kind.offset()).step_by(2)
     }
 
     /// The largest mesh force of any planet's mesh of kind `kind` \[N\] (0
@@ -698,13 +696,10 @@ impl Simulation {
     /// over the step as the input torque it balances, the input's mean speed and the
     /// revolutions it turned.
     fn record_step(&mut self, input_angle: f64, h: f64) -> Result<(), SimulationError> {
-        if self.duty.is_none() {
-            return Ok(());
-        }
-        let per_newton = input_torque_per_mesh_force(&self.set);
         let turned = self.angle(self.set.input()) - input_angle;
-        let (time, extremes) = (self.time, &self.extremes);
         let Some(duty) = &mut self.duty else { return Ok(()) };
+        let per_newton = input_torque_per_mesh_force(&self.set);
+        let (time, extremes) = (self.time, &self.extremes);
         let torques: Vec<f64> = (0..duty.planets())
             .flat_map(|p| MeshKind::ALL.map(|kind| extremes.mean(p, kind).unwrap_or(f64::NAN) * per_newton))
             .collect();
@@ -913,7 +908,7 @@ impl Simulation {
     }
 
     fn mesh_state(&self, p: usize, mesh: MeshKind) -> Option<crate::dynamics::equations::MeshState> {
-        let i = 2 * p + usize::from(mesh == MeshKind::RingPlanet);
+        let i = mesh.of_planet(p);
         (i < self.model.mesh_count()).then(|| self.model.meshes[i])
     }
 

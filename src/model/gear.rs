@@ -366,6 +366,17 @@ impl MeshKind {
             MeshKind::RingPlanet => "ring_planet",
         }
     }
+
+    /// Its place among a planet's two meshes: 0 sun–planet, 1 ring–planet.
+    pub fn offset(self) -> usize {
+        usize::from(self == MeshKind::RingPlanet)
+    }
+
+    /// The index of planet `p`'s (0-based) mesh of this kind in planet-major order
+    /// (planet 1's sun–planet, its ring–planet, planet 2's, …).
+    pub fn of_planet(self, p: usize) -> usize {
+        2 * p + self.offset()
+    }
 }
 
 /// A validated spur planetary gear set, SI units.
@@ -699,12 +710,17 @@ impl GearSet {
     /// T_sun = n F r_b,sun, T_ring = n F r_b,ring, T_carrier = −n F (r_b,sun + r_b,ring)
     /// (frictionless, equal sun and ring mesh forces on a planet).
     pub fn mesh_load_per_planet(&self) -> f64 {
-        let lever = match self.input {
+        self.input_torque.abs() / (self.planet_angles.len() as f64 * self.input_lever())
+    }
+
+    /// The input member's lever on a planet's tooth force \[m\]: r_b,sun (sun), r_b,ring
+    /// (ring), r_b,sun + r_b,ring (carrier), as in [`Self::mesh_load_per_planet`].
+    pub fn input_lever(&self) -> f64 {
+        match self.input {
             Member::Sun => self.sun.base_radius(),
             Member::Ring => self.ring.base_radius(),
             Member::Carrier => self.sun.base_radius() + self.ring.base_radius(),
-        };
-        self.input_torque.abs() / (self.planet_angles.len() as f64 * lever)
+        }
     }
 
     /// The balanced external torques on sun, ring and carrier [N·m],

@@ -169,7 +169,7 @@ impl DutyWear {
         let mut mixed = cycles[0].clone();
         for fw in &mut mixed.flanks {
             let kind = fw.flank.drive_mesh().map_or(MeshKind::SunPlanet, |(k, _)| k);
-            let k = usize::from(kind == MeshKind::RingPlanet);
+            let k = kind.offset();
             fw.wear_per_cycle.iter_mut().for_each(|h| *h = 0.0);
             fw.wear_per_planet.iter_mut().flatten().for_each(|h| *h = 0.0);
             for (bin, c) in self.bins.iter().zip(&cycles) {
