@@ -680,6 +680,42 @@ impl PlanetaryDynamics {
         self.cache = None;
     }
 
+    /// The same model with its members free under the external torques `torques` on sun,
+    /// ring and carrier [N·m]: no speed drive and no load balance, so every turning
+    /// member takes its torque. The `steady` response's periodic states are this model's
+    /// (docs/STEADY.md): its drive acts on the rigid-body rotation between communication
+    /// points, not within one mesh cycle.
+    pub fn free_under(&self, torques: [f64; 3]) -> Self {
+        let mut free = self.clone();
+        free.speed_drive = None;
+        free.balance = None;
+        free.set_torques(torques[0], torques[1], torques[2]);
+        free
+    }
+
+    /// The kinetic energy of the rigid-body rotation per unit input speed squared, doubled:
+    /// the train's inertia referred to the input member, J = Σ m_i r_i² [kg·m²], with r the
+    /// rigid-body velocity per rad/s of input speed.
+    pub fn rigid_inertia(&self) -> f64 {
+        self.mass.iter().zip(&self.rigid_velocity).map(|(m, r)| m * r * r).sum()
+    }
+
+    /// The inertia of the input member's own rotation [kg·m²].
+    pub fn input_member_inertia(&self) -> f64 {
+        self.mass[self.input_index] * self.input_lever * self.input_lever
+    }
+
+    /// The generalised torque of external torques `torques` on sun, ring and carrier [N·m]
+    /// on the rigid-body rotation, referred to the input member: Σ T_m ω_m / ω_input [N·m]
+    /// (the held member's torque does no work).
+    pub fn rigid_torque(&self, torques: [f64; 3]) -> f64 {
+        self.rotations
+            .iter()
+            .zip([torques[2], torques[1], torques[0]])
+            .filter_map(|((index, lever), t)| index.map(|i| t * self.rigid_velocity[i] / lever))
+            .sum()
+    }
+
     /// Torque of the speed drive's shaft on the speed-driven member
     /// ([`GearSet::speed_driven_member`], the input member by default)
     /// [N·m], counter-clockwise positive, under the speed drive.

@@ -28,3 +28,4 @@ pub mod simulation;
 pub mod solver;
 pub mod spectrum;
 pub mod state_format;
+pub mod steady;

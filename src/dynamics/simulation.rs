@@ -17,6 +17,9 @@ use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{static_state, Stepper};
 use crate::dynamics::solver::{RelativeOrigin, Rk45, Rk45Settings, SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
+use crate::dynamics::steady::grid::GridSettings;
+use crate::dynamics::steady::point::MeshSummary;
+use crate::dynamics::steady::{DriveInputs, SteadyEngine};
 use crate::model::gear::{Drive, GearSet, IntegratorKind, Member, MeshKind};
 use crate::model::lumped::{full_index, planet_bearing_vectors, Coordinate, Fidelity};
 use crate::model::run::RunSettings;
@@ -227,6 +230,22 @@ impl StepExtremes {
         self.samples = 0;
     }
 
+    /// The extremes and means of a steady state's meshes over its period.
+    fn of_steady(&mut self, meshes: impl Iterator<Item = MeshSummary>) {
+        self.meshes.clear();
+        self.sums.clear();
+        for m in meshes {
+            self.meshes.push(MeshExtremes {
+                min: m.min,
+                max: m.max,
+                peak_pair: m.peak_pair,
+                separated: m.separation > 0.0,
+            });
+            self.sums.push(m.mean);
+        }
+        self.samples = 1;
+    }
+
     fn observe(&mut self, meshes: &[crate::dynamics::equations::MeshState]) {
         for ((e, s), m) in self.meshes.iter_mut().zip(&mut self.sums).zip(meshes) {
             e.observe(m);
@@ -300,6 +319,9 @@ pub struct Simulation {
     /// The load duty recorded at each communication step, when asked for
     /// ([`Simulation::record_duty`]).
     duty: Option<LoadDuty>,
+    /// The `steady` response's rigid-body rotation and steady states, when asked for
+    /// ([`Simulation::use_steady`]): the stepper is then not used.
+    steady: Option<Box<SteadyEngine>>,
 }
 
 const TIME_TOLERANCE: f64 = 1e-9;
@@ -410,6 +432,7 @@ impl Simulation {
         Ok(Self {
             extremes,
             duty: None,
+            steady: None,
             model,
             stepper,
             set: set.clone(),
@@ -478,6 +501,10 @@ impl Simulation {
         }
         self.torques = [sun, ring, carrier];
         self.model.set_torques(sun, ring, carrier);
+        if self.steady.is_some() {
+            // The rigid-body rotation reads them at the next step.
+            return Ok(());
+        }
         let t = self.time;
         self.stepper
             .forces_changed(&mut self.model)
@@ -503,6 +530,14 @@ impl Simulation {
             return Err(invalid("must be finite"));
         }
         if omega == self.speed_reference {
+            return Ok(());
+        }
+        if self.steady.is_some() {
+            if self.set.drive() == Drive::SpeedSteps && omega == 0.0 {
+                return Err(invalid("must be non-zero with driveMode 2 (speed steps)"));
+            }
+            // The rigid-body rotation follows it from the next step (docs/STEADY.md).
+            self.speed_reference = omega;
             return Ok(());
         }
         match self.set.drive() {
@@ -587,6 +622,9 @@ impl Simulation {
                 value: t.to_string(),
                 reason: format!("must be the current time {} s", self.time),
             });
+        }
+        if self.steady.is_some() {
+            return self.steady_step(t, h);
         }
         let steps = ((h / self.nominal_step) - 1e-9).ceil().max(1.0);
         // Also catches a non-finite or zero nominal step (NaN fails the test).
@@ -691,6 +729,67 @@ impl Simulation {
         self.record_step(input_angle, h)
     }
 
+    /// Switches to the `steady` response (docs/STEADY.md): from now on a step integrates the
+    /// rigid-body rotation and takes the tooth outputs from the periodic steady state at its
+    /// speed and mesh load, cached on the grid of the run settings' steady values. The first steady state
+    /// (at the current speed reference and the set's torques) is solved here.
+    ///
+    /// With `shared_key` the cache is shared with every later simulation of the same key in
+    /// this process ([`crate::dynamics::steady::SHARED_CACHES`]): the key must stand for
+    /// everything the steady states depend on (the gear set, its worn state, the run settings).
+    pub fn use_steady(&mut self, shared_key: Option<u64>) -> Result<(), SimulationError> {
+        let grid = self.run.steady();
+        let settings = GridSettings {
+            speed_step: grid.speed_step,
+            torque_step: grid.torque_step,
+            speed_floor: grid.speed_floor,
+            agreement: grid.agreement,
+            refinements: grid.refinements,
+            sample_phase: grid.sample_phase,
+        };
+        let engine = SteadyEngine::new(
+            settings,
+            &self.model,
+            &self.set,
+            self.speed_reference,
+            self.run.samples_per_mesh_cycle(),
+            shared_key,
+        )
+        .map_err(|e| SimulationError::InvalidInput {
+            name: "steady response".into(),
+            value: format!("{} rad/s", self.speed_reference),
+            reason: e.to_string(),
+        })?;
+        self.extremes.of_steady((0..self.model.mesh_count()).map(|k| engine.blend().mesh(k)));
+        self.steady = Some(Box::new(engine));
+        let mut f = vec![0.0; self.model.dim()];
+        self.refresh(&mut f);
+        Ok(())
+    }
+
+    /// The `steady` response's engine, when on.
+    pub fn steady(&self) -> Option<&SteadyEngine> {
+        self.steady.as_deref()
+    }
+
+    /// [`Self::do_step`] of the `steady` response.
+    fn steady_step(&mut self, t: f64, h: f64) -> Result<(), SimulationError> {
+        let input_angle = self.angle(self.set.input());
+        let engine = self.steady.as_mut().expect("steady response");
+        let inputs = DriveInputs { torques: self.torques, reference: self.speed_reference };
+        engine.advance(&self.model, inputs, h).map_err(|e| SimulationError::InvalidInput {
+            name: "steady response".into(),
+            value: format!("t = {t} s"),
+            reason: e.to_string(),
+        })?;
+        let meshes = self.model.mesh_count();
+        self.extremes.of_steady((0..meshes).map(|k| engine.blend().mesh(k)));
+        self.time = t + h;
+        let mut f = vec![0.0; self.model.dim()];
+        self.refresh(&mut f);
+        self.record_step(input_angle, h)
+    }
+
     /// Records the load duty of the step of `h` \[s\] just taken from the input angle
     /// `input_angle` \[rad\] at its start ([`crate::dynamics::duty`]): each mesh's mean force
     /// over the step as the input torque it balances, the input's mean speed and the
@@ -742,6 +841,14 @@ impl Simulation {
         anchor(&mut self.stepper, &self.model, speed, t, &q)
     }
 
+    /// The accepted state: the steady response's, else the integrator's.
+    fn state(&self) -> (&[f64], &[f64]) {
+        match &self.steady {
+            Some(engine) => engine.state(),
+            None => self.stepper.state(),
+        }
+    }
+
     fn stepper_time(&self) -> f64 {
         self.stepper.time()
     }
@@ -749,14 +856,20 @@ impl Simulation {
     /// Re-evaluates the meshes at the accepted state (a cache hit when the
     /// integrator's last evaluation was that state).
     fn refresh(&mut self, f: &mut [f64]) {
-        let (q, v) = self.stepper.state();
+        let (q, v) = match &self.steady {
+            Some(engine) => engine.state(),
+            None => self.stepper.state(),
+        };
         self.model.force(self.time, q, v, f);
     }
 
     /// Torque the input member receives [N·m]: from its shaft in the speed
     /// drive, else its input torque.
     pub fn input_torque(&self) -> f64 {
-        let (q, v) = self.stepper.state();
+        if let Some(engine) = &self.steady {
+            return engine.input_torque();
+        }
+        let (q, v) = self.state();
         match self.model.shaft_torque(self.time, q, v) {
             Some(t) => t,
             None => match self.set.input() {
@@ -778,14 +891,17 @@ impl Simulation {
     /// positive, at the current state
     /// ([`PlanetaryDynamics::reaction_torque`]).
     pub fn reaction_torque(&self) -> f64 {
-        let (q, v) = self.stepper.state();
+        let (q, v) = self.state();
         self.model.reaction_torque(q, v)
     }
 
     /// Torque of the load balance's speed controller on the output member
     /// [N·m], counter-clockwise positive; 0 without the load balance.
     pub fn balancing_torque(&self) -> f64 {
-        let (q, v) = self.stepper.state();
+        if let Some(engine) = &self.steady {
+            return engine.balancing_torque();
+        }
+        let (q, v) = self.state();
         self.model.balancing_torque(self.time, q, v).unwrap_or(0.0)
     }
 
@@ -828,7 +944,7 @@ impl Simulation {
     /// Magnitude of a bearing's elastic force \[N\] (central members: 0 in the
     /// torsional model, where they have no translations).
     pub fn bearing_force(&self, bearing: Bearing) -> f64 {
-        let (q, _) = self.stepper.state();
+        let (q, _) = self.state();
         let full = self.model.full_coordinates(q);
         let lumped = &self.model.lumped;
         match bearing {
@@ -859,12 +975,18 @@ impl Simulation {
 
     /// Whole mesh cycles in the harmonic window so far (at most its length).
     pub fn window_cycles(&self) -> usize {
+        if self.steady.is_some() {
+            return self.window.cycles;
+        }
         self.window.sun.len() / self.window.samples_per_cycle
     }
 
     /// Harmonics 1..6 and separation fraction of planet 1's mesh force over
     /// the window, once the window is full.
     pub fn window_harmonics(&self, mesh: MeshKind) -> Option<(Harmonics, f64)> {
+        if let Some(engine) = &self.steady {
+            return Some(engine.blend().window(mesh.offset()));
+        }
         if !self.window.full() {
             return None;
         }
@@ -883,7 +1005,7 @@ impl Simulation {
             Member::Sun => 2,
         };
         let (index, lever) = self.model.rotations[k];
-        let (q, v) = self.stepper.state();
+        let (q, v) = self.state();
         index.map_or(0.0, |i| (if rate { v[i] } else { q[i] }) / lever)
     }
 
@@ -914,12 +1036,15 @@ impl Simulation {
 
     /// A restorable snapshot.
     pub fn snapshot(&self) -> Snapshot {
-        let (q, v) = self.stepper.state();
+        let (q, v) = self.state();
         Snapshot {
             time: self.time,
             q: q.to_vec(),
             v: v.to_vec(),
-            integrator: self.stepper.internal(),
+            integrator: match &self.steady {
+                Some(engine) => engine.internal(),
+                None => self.stepper.internal(),
+            },
             torques: self.torques,
             speed_reference: self.speed_reference,
             window_sun: self.window.sun.iter().copied().collect(),
@@ -980,19 +1105,38 @@ impl Simulation {
         if self.set.drive() != Drive::Torque || self.model.has_load_balance() {
             self.model.set_frame_speed(s.speed_reference);
         }
-        if self.set.drive() != Drive::Torque {
-            // The internal step follows the reference (see `set_speed_reference`).
-            if let Some(stepper) = self.retuned_stepper(s.speed_reference)? {
-                self.stepper = stepper;
+        if let Some(engine) = &mut self.steady {
+            let inputs = DriveInputs { torques: self.torques, reference: self.speed_reference };
+            engine.restore(&self.model, (&s.q, &s.v, &s.integrator), inputs).map_err(|e| {
+                SimulationError::InvalidInput {
+                    name: "snapshot".into(),
+                    value: format!(
+                        "input speed {} rad/s",
+                        s.v[self.model.input_index] / self.model.input_lever
+                    ),
+                    reason: format!("no steady state there: {e}"),
+                }
+            })?;
+        } else {
+            if self.set.drive() != Drive::Torque {
+                // The internal step follows the reference (see `set_speed_reference`).
+                if let Some(stepper) = self.retuned_stepper(s.speed_reference)? {
+                    self.stepper = stepper;
+                }
             }
+            self.stepper
+                .restore(&mut self.model, s.time, &s.q, &s.v, &s.integrator)
+                .map_err(|source| SimulationError::Integration { t: s.time, source })?;
         }
-        self.stepper
-            .restore(&mut self.model, s.time, &s.q, &s.v, &s.integrator)
-            .map_err(|source| SimulationError::Integration { t: s.time, source })?;
         self.time = s.time;
         let mut f = vec![0.0; n];
         self.model.force(s.time, &s.q, &s.v, &mut f);
         self.extremes = StepExtremes::at(&self.model.meshes);
+        if let Some(engine) = &self.steady {
+            let meshes = self.model.mesh_count();
+            self.extremes.of_steady((0..meshes).map(|k| engine.blend().mesh(k)));
+            self.refresh(&mut f);
+        }
         let cap = self.window.cycles * self.window.samples_per_cycle;
         if s.window_sun.len() == s.window_ring.len() && s.window_sun.len() <= cap {
             self.window.sun = s.window_sun.iter().copied().collect();
@@ -1022,6 +1166,9 @@ impl Simulation {
     /// Internal steps a communication step of `h` seconds takes (refused
     /// by [`Self::do_step`] above [`MAX_INTERNAL_STEPS`]).
     pub fn internal_steps(&self, h: f64) -> f64 {
+        if self.steady.is_some() {
+            return 1.0;
+        }
         ((h / self.nominal_step) - 1e-9).ceil().max(1.0)
     }
 }

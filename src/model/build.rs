@@ -14,7 +14,7 @@ use crate::model::gear::{
 use crate::model::gear::{ContactModel, Damping, Drive, Member};
 use crate::model::gear_data::{minimum_profile_shift, name_by_gear_data, trochoid_margin};
 use crate::model::mesh::PathOfContact;
-use crate::model::run::{RunSettings, RunValues};
+use crate::model::run::{RunSettings, RunValues, SteadyValues};
 use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
 use crate::scene::{
     default_chamfer, ChamferSpec, DampingModel, ExternalGearSpec, Problem, RingGearSpec, Scene, SceneError,
@@ -509,8 +509,24 @@ fn validate_radii(given: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
         steady_tolerance: d.steady_tolerance,
         measured_revolutions: d.measured_revolutions,
         samples_per_mesh_cycle: d.samples_per_mesh_cycle as usize,
+        response: d.response,
+        steady: SteadyValues {
+            speed_step: rpm_to_rad_per_s(d.steady_speed_step_rpm),
+            torque_step: d
+                .steady_torque_step_nm
+                .unwrap_or(crate::scene::STEADY_TORQUE_STEP * scene.operation.input_torque_nm.abs()),
+            speed_floor: rpm_to_rad_per_s(d.steady_speed_floor_rpm),
+            agreement: d.steady_agreement,
+            refinements: d.steady_refinements,
+            sample_phase: 0.0,
+        },
     };
     check_run_settings(&run, Some(d.input_speed_rpm), &mut c);
+    if let (Some(x), false) = (d.steady_torque_step_nm, d.response == crate::scene::Response::Steady) {
+        if !(x.is_finite() && (1e-3..=1e7).contains(&x)) {
+            c.fail("dynamics.steady_torque_step_nm", x, "must lie between 1e-3 and 1e7 N·m");
+        }
+    }
 
     let op = &scene.operation;
     if op.held == op.input {
@@ -904,6 +920,38 @@ fn check_run_settings(d: &RunValues, given_rpm: Option<f64>, c: &mut Checker) {
     }
     if !(8..=100_000).contains(&d.samples_per_mesh_cycle) {
         c.fail("dynamics.samples_per_mesh_cycle", d.samples_per_mesh_cycle, "must be between 8 and 100000");
+    }
+    check_steady(&d.steady, d.response == crate::scene::Response::Steady, c);
+}
+
+/// The steady response's cache grid (docs/STEADY.md), checked when the response is steady.
+fn check_steady(s: &SteadyValues, steady: bool, c: &mut Checker) {
+    let rpm = rad_per_s_to_rpm;
+    if !(s.speed_step.is_finite() && (1.0..=10_000.0).contains(&rpm(s.speed_step))) {
+        c.fail("dynamics.steady_speed_step_rpm", rpm(s.speed_step), "must lie between 1 and 10000 rpm");
+    }
+    if steady && !(s.torque_step.is_finite() && (1e-3..=1e7).contains(&s.torque_step)) {
+        c.fail(
+            "dynamics.steady_torque_step_nm",
+            s.torque_step,
+            "must lie between 1e-3 and 1e7 N·m (given, or a fifth of operation.input_torque_nm when absent)",
+        );
+    }
+    if !(s.speed_floor.is_finite() && (1.0..=100_000.0).contains(&rpm(s.speed_floor))) {
+        c.fail("dynamics.steady_speed_floor_rpm", rpm(s.speed_floor), "must lie between 1 and 100000 rpm");
+    }
+    if !(s.agreement.is_finite() && (1e-6..=1.0).contains(&s.agreement)) {
+        c.fail(
+            "dynamics.steady_agreement",
+            s.agreement,
+            "must lie between 1e-6 and 1 (of the static mesh load)",
+        );
+    }
+    if !(0.0..1.0).contains(&s.sample_phase) {
+        c.fail("steady sample phase", s.sample_phase, "must lie in [0, 1) (of the sample interval)");
+    }
+    if s.refinements > 8 {
+        c.fail("dynamics.steady_refinements", s.refinements, "must be between 0 and 8");
     }
 }
 

@@ -21,7 +21,7 @@
 
 use serde::Serialize;
 
-use crate::scene::IntegratorKind;
+use crate::scene::{IntegratorKind, Response};
 
 /// The values of the run settings, SI, not yet checked: what a caller fills
 /// in or changes before [`RunSettings::new`] or [`RunSettings::with`] checks
@@ -51,6 +51,28 @@ pub struct RunValues {
     pub measured_revolutions: f64,
     /// Output samples per mesh cycle.
     pub samples_per_mesh_cycle: usize,
+    /// How a time-domain run computes its tooth outputs.
+    pub response: Response,
+    /// The steady response's cache.
+    pub steady: SteadyValues,
+}
+
+/// The steady response's cache grid (docs/STEADY.md), SI.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SteadyValues {
+    /// Node spacing of input speed on the coarsest grid [rad/s].
+    pub speed_step: f64,
+    /// Node spacing of input torque on the coarsest grid [N·m].
+    pub torque_step: f64,
+    /// Lowest input speed solved [rad/s].
+    pub speed_floor: f64,
+    /// Largest interpolation error of a cell, of the static mesh load [-].
+    pub agreement: f64,
+    /// Halvings of a cell.
+    pub refinements: u32,
+    /// Offset of the output samples from the period's start, a fraction of the sample
+    /// interval in [0, 1) (0 in a scene; the accuracy study sets its reference's).
+    pub sample_phase: f64,
 }
 
 /// Checked run settings, SI (see the module documentation). Its values are
@@ -118,5 +140,15 @@ impl RunSettings {
     /// Output samples per mesh cycle.
     pub fn samples_per_mesh_cycle(&self) -> usize {
         self.values.samples_per_mesh_cycle
+    }
+
+    /// How a time-domain run computes its tooth outputs.
+    pub fn response(&self) -> Response {
+        self.values.response
+    }
+
+    /// The steady response's cache grid.
+    pub fn steady(&self) -> &SteadyValues {
+        &self.values.steady
     }
 }

@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 pub use gear_data::{GearData, ADDENDUM_FACTOR, DEDENDUM_FACTOR, TOOL_TIP_RADIUS_FACTOR};
 pub use validate::{default_chamfer, Problem, SceneError};
 
-pub use terms::{ContactModel, DampingModel, Drive, Fidelity, IntegratorKind, Member};
+pub use terms::{ContactModel, DampingModel, Drive, Fidelity, IntegratorKind, Member, Response};
 
 /// A planetary gear set as written in a scene file (engineering units).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -163,6 +163,31 @@ pub struct InertiaSpec {
     pub carrier_inertia_kg_m2: Option<f64>,
 }
 
+/// Default node spacing of input speed of the steady cache \[rpm\]: about a tenth of the
+/// half-power width of the example's mesh resonances at its mesh damping (docs/STEADY.md).
+pub const STEADY_SPEED_STEP_RPM: f64 = 200.0;
+/// Default node spacing of input torque of the steady cache, a fraction of the input torque.
+pub const STEADY_TORQUE_STEP: f64 = 0.2;
+/// Default lowest input speed the steady cache solves \[rpm\].
+pub const STEADY_SPEED_FLOOR_RPM: f64 = 500.0;
+/// Default largest interpolation error of the steady cache (of the static mesh load).
+pub const STEADY_AGREEMENT: f64 = 0.05;
+/// Default halvings of a steady-cache cell.
+pub const STEADY_REFINEMENTS: u32 = 3;
+
+fn is_default_steady_speed_step(x: &f64) -> bool {
+    *x == STEADY_SPEED_STEP_RPM
+}
+fn is_default_steady_speed_floor(x: &f64) -> bool {
+    *x == STEADY_SPEED_FLOOR_RPM
+}
+fn is_default_steady_agreement(x: &f64) -> bool {
+    *x == STEADY_AGREEMENT
+}
+fn is_default_steady_refinements(x: &u32) -> bool {
+    *x == STEADY_REFINEMENTS
+}
+
 /// Dynamic model and integrator settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -220,6 +245,29 @@ pub struct DynamicsSpec {
     pub measured_revolutions: f64,
     /// Samples per mesh cycle of the recorded outputs.
     pub samples_per_mesh_cycle: u32,
+    /// How `simulate` and the FMU compute the tooth outputs: `"time"` (integrated over
+    /// every mesh cycle, the default) or `"steady"` (the rigid-body rotation at the
+    /// communication step, the tooth outputs from cached periodic steady states:
+    /// docs/STEADY.md).
+    #[serde(skip_serializing_if = "Response::is_time")]
+    pub response: Response,
+    /// The steady response's cache: node spacing of input speed on its coarsest grid \[rpm\].
+    #[serde(skip_serializing_if = "is_default_steady_speed_step")]
+    pub steady_speed_step_rpm: f64,
+    /// ... node spacing of input torque on its coarsest grid \[N·m\]; absent: a fifth of
+    /// the scene's input torque.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steady_torque_step_nm: Option<f64>,
+    /// ... the lowest input speed it solves; slower steps take the steady state there \[rpm\].
+    #[serde(skip_serializing_if = "is_default_steady_speed_floor")]
+    pub steady_speed_floor_rpm: f64,
+    /// ... the largest interpolation error a cell may have, estimated at its centre, as a
+    /// fraction of the static mesh load (and of the separation fraction) \[-\].
+    #[serde(skip_serializing_if = "is_default_steady_agreement")]
+    pub steady_agreement: f64,
+    /// ... the halvings of a cell whose interpolation error is larger.
+    #[serde(skip_serializing_if = "is_default_steady_refinements")]
+    pub steady_refinements: u32,
     /// Load balance: a speed controller (a dynamometer) holds the output
     /// member at the kinematic speed of the input speed, its torque in place
     /// of the output's external torque.
@@ -257,6 +305,12 @@ impl Default for DynamicsSpec {
             samples_per_mesh_cycle: 60,
             load_balance: false,
             speed_driven_member: None,
+            response: Response::Time,
+            steady_speed_step_rpm: STEADY_SPEED_STEP_RPM,
+            steady_torque_step_nm: None,
+            steady_speed_floor_rpm: STEADY_SPEED_FLOOR_RPM,
+            steady_agreement: STEADY_AGREEMENT,
+            steady_refinements: STEADY_REFINEMENTS,
         }
     }
 }

@@ -67,6 +67,25 @@ pub enum Fidelity {
     TransverseTorsional,
 }
 
+/// How a time-domain run (`simulate`, the FMU) computes its tooth-level outputs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Response {
+    /// The equations of motion integrated over every mesh cycle.
+    #[default]
+    Time,
+    /// The rigid-body rotation integrated at the communication step, the tooth outputs
+    /// from the periodic steady state at its speed and mesh load (docs/STEADY.md).
+    Steady,
+}
+
+impl Response {
+    /// Whether this is the default (the scene file then omits it).
+    pub fn is_time(&self) -> bool {
+        *self == Response::Time
+    }
+}
+
 /// The tooth contact law of the dynamic model.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

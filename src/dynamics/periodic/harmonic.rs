@@ -1701,6 +1701,34 @@ impl HarmonicBalance {
         floquet_multipliers(&walk.phi, 2 * m)
     }
 
+    /// The orbit's state relative to its rigid-body motion (the frame's q_e, q̇_e: the absolute
+    /// state at time t is q_e + r t, q̇_e + r with r the rigid-body velocity at the orbit's
+    /// speed) at `samples` equally spaced times over its period from t = 0 (offset by
+    /// `phase` of the sample interval), sample-major (`samples` × coordinates each).
+    pub fn frame_samples(&self, orbit: &HarmonicOrbit, samples: usize, phase: f64) -> (Vec<f64>, Vec<f64>) {
+        let (m, n) = (self.m, self.n);
+        let (mut q, mut v) = (vec![0.0; n], vec![0.0; n]);
+        let (mut y, mut yd) = (vec![0.0; m], vec![0.0; m]);
+        let nu = 2.0 * std::f64::consts::PI / orbit.period;
+        let (mut qs, mut vs) = (Vec::with_capacity(samples * n), Vec::with_capacity(samples * n));
+        for j in 0..samples {
+            let t = orbit.period * (j as f64 + phase) / samples as f64;
+            let q_scale = self.problem.q_scale;
+            series_state(
+                &orbit.coefficients,
+                nu,
+                &self.p,
+                q_scale,
+                t,
+                (&mut y, &mut yd, None),
+                (&mut q, &mut v),
+            );
+            qs.extend_from_slice(&q);
+            vs.extend_from_slice(&v);
+        }
+        (qs, vs)
+    }
+
     /// The orbit's mesh forces over one period at the shooting settings'
     /// samples per mesh cycle, and their measures, as a [`SteadyState`].
     pub fn steady_state(&mut self, orbit: &HarmonicOrbit) -> Result<SteadyState, PeriodicError> {

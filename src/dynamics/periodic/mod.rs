@@ -319,7 +319,7 @@ pub struct Linearization {
 
 /// What a sampled flow does at each sample: time, the relative coordinates
 /// q_e, and the model evaluated there.
-type Observer<'a> = dyn FnMut(f64, &[f64], &PlanetaryDynamics) + 'a;
+type Observer<'a> = dyn FnMut(f64, &[f64], &[f64], &PlanetaryDynamics) + 'a;
 
 /// Mesh cycles (1, 2, …, up to 12) after which the equations of motion in
 /// the relative frame repeat at speed `omega` [rad/s]: the least common
@@ -527,7 +527,7 @@ impl PeriodicProblem {
                     if let Some(i) = f.iter().position(|x| !x.is_finite()) {
                         return Err(err(SolverError::NonFiniteState { t, index: i }));
                     }
-                    observe(t, &q, frame.model());
+                    observe(t, &q, &v, frame.model());
                 }
                 rk.advance_to(&mut frame, period).map_err(err)?;
             }
@@ -711,7 +711,7 @@ impl PeriodicProblem {
     ) -> Result<Vec<f64>, PeriodicError> {
         let n = self.model.dim();
         let mut relative = Vec::with_capacity(samples * n);
-        let mut observe = |_: f64, q: &[f64], _: &PlanetaryDynamics| relative.extend_from_slice(q);
+        let mut observe = |_: f64, q: &[f64], _: &[f64], _: &PlanetaryDynamics| relative.extend_from_slice(q);
         self.flow(omega, z, work, Some((samples, &mut observe)))?;
         let zeros = vec![0.0; n];
         Ok(relative
@@ -721,6 +721,34 @@ impl PeriodicProblem {
                 z[..z.len() / 2].to_vec()
             })
             .collect())
+    }
+
+    /// One period's flow from the unknowns `z` at `omega` [rad/s] sampled at `samples`
+    /// equally spaced times: the coordinates and velocities relative to the rigid-body
+    /// motion (sample-major), and each mesh's force and largest tooth-pair force at each
+    /// sample (mesh-major); `work` counts the flow. The unknowns at the period's end
+    /// come back last.
+    #[allow(clippy::type_complexity)]
+    pub fn sampled_period(
+        &mut self,
+        omega: f64,
+        z: &[f64],
+        samples: usize,
+        work: &mut Work,
+    ) -> Result<(Vec<f64>, Vec<f64>, Vec<Vec<(f64, f64)>>, Vec<f64>), PeriodicError> {
+        let n = self.model.dim();
+        let meshes = self.model.mesh_count();
+        let (mut qs, mut vs) = (Vec::with_capacity(samples * n), Vec::with_capacity(samples * n));
+        let mut forces = vec![Vec::with_capacity(samples); meshes];
+        let mut observe = |_: f64, q: &[f64], v: &[f64], model: &PlanetaryDynamics| {
+            qs.extend_from_slice(q);
+            vs.extend_from_slice(v);
+            for (f, m) in forces.iter_mut().zip(&model.meshes) {
+                f.push((m.force, m.peak_pair_force));
+            }
+        };
+        let end = self.flow(omega, z, work, Some((samples, &mut observe)))?;
+        Ok((qs, vs, forces, end))
     }
 
     /// The periodic state at `omega` [rad/s] by Newton's method with a
@@ -834,7 +862,7 @@ impl PeriodicProblem {
         let mut time = Vec::with_capacity(samples);
         let mut force = vec![Vec::with_capacity(samples); n_mesh];
         let mut work = orbit.work;
-        let mut observe = |t: f64, _: &[f64], m: &PlanetaryDynamics| {
+        let mut observe = |t: f64, _: &[f64], _: &[f64], m: &PlanetaryDynamics| {
             time.push(t);
             for (i, s) in m.meshes.iter().enumerate() {
                 force[i].push(s.force);

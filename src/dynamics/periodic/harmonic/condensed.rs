@@ -1370,17 +1370,26 @@ fn reference_springs(
             let MeshCoordinates { approach: b, position: p, .. } = model.mesh_coordinates(*i);
             let delta: f64 = b.iter().map(|(j, x)| x * q0[*j]).sum();
             let position: f64 = p.iter().map(|(j, x)| x * q0[*j]).sum();
-            let (mut k, mut c) = (0.0, 0.0);
-            for j in 0..samples {
-                let t = period * j as f64 / samples as f64;
-                let (state, damping) =
-                    model.mesh_at(*i, layout.s0[g] + layout.rate[g] * omega * t + position, delta, 0.0);
-                if state.stiffness.is_finite() && damping.is_finite() {
-                    k += state.stiffness;
-                    c += damping;
+            let mean_at = |delta: f64| {
+                let (mut k, mut c) = (0.0, 0.0);
+                for j in 0..samples {
+                    let t = period * j as f64 / samples as f64;
+                    let (state, damping) =
+                        model.mesh_at(*i, layout.s0[g] + layout.rate[g] * omega * t + position, delta, 0.0);
+                    if state.stiffness.is_finite() && damping.is_finite() {
+                        k += state.stiffness;
+                        c += damping;
+                    }
                 }
+                (k / samples as f64, c / samples as f64)
+            };
+            // A static state inside the backlash (a negative load: the mean-stiffness model
+            // puts the coast flanks' approach inside the gap) has no tangent; any reference
+            // has the same root, so the drive flanks' at the same approach serves.
+            match mean_at(delta) {
+                (0.0, _) => mean_at(delta.abs()),
+                springs => springs,
             }
-            (k / samples as f64, c / samples as f64)
         })
         .collect()
 }

@@ -1,0 +1,350 @@
+//! The cache of steady states on a grid of input speed and input torque, and the
+//! interpolation between its nodes (docs/STEADY.md, "The cache").
+//!
+//! Nodes lie at speed ±(ω_floor + i Δω / 2^L) and torque j ΔT / 2^L (i ≥ 0, j signed, L
+//! the refinements). A request is interpolated bilinearly in the coarsest cell whose four
+//! corners agree: every normalised measure (each mesh's largest and mean force and
+//! planet 1's F^(rms), over the static mesh load of the corner's torque, and each mesh's
+//! separation fraction) differs between the corners by at most the agreement tolerance ε.
+//! Where a cell's corners disagree the cell is halved, down to L refinements; a request
+//! whose finest cell still disagrees is interpolated there and counted, with the spread,
+//! as unresolved. The unloaded nodes (j = 0) carry no normalised measure and take no part
+//! in the agreement.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use crate::dynamics::equations::PlanetaryDynamics;
+use crate::dynamics::periodic::PeriodicError;
+use crate::dynamics::spectrum::Harmonics;
+use crate::dynamics::steady::point::{Found, MeshSummary, SteadyPoint, TorqueLevel, MARCH_SETTLED};
+
+/// How the grid is laid out and when neighbours agree.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridSettings {
+    /// Node spacing of input speed on the coarsest level [rad/s].
+    pub speed_step: f64,
+    /// Node spacing of input torque on the coarsest level [N·m].
+    pub torque_step: f64,
+    /// Lowest input speed solved [rad/s]: slower requests take the steady state there.
+    pub speed_floor: f64,
+    /// Largest difference of a normalised measure between the corners of a cell that is
+    /// interpolated [-].
+    pub agreement: f64,
+    /// Halvings of a cell whose corners disagree.
+    pub refinements: u32,
+    /// Offset of the output samples from the period's start, a fraction of the sample
+    /// interval.
+    pub sample_phase: f64,
+}
+
+/// A node: the speed's sign, its finest-grid speed index, its finest-grid torque index.
+type Node = (i8, i64, i64);
+
+/// An interpolated steady state: the corners and their weights.
+#[derive(Clone, Debug)]
+pub struct Blend {
+    /// Corner points and their bilinear weights (weights sum to 1).
+    pub corners: Vec<(Arc<SteadyPoint>, f64)>,
+    /// Input speed [rad/s] and input torque [N·m] asked for.
+    pub speed: f64,
+    /// See `speed`.
+    pub torque: f64,
+    /// Refinement level of the cell interpolated in (0 the coarsest).
+    pub level: u32,
+    /// The largest difference of a normalised measure between the cell's corners [-].
+    pub spread: f64,
+}
+
+impl Blend {
+    /// The interpolated summary of mesh `k`.
+    pub fn mesh(&self, k: usize) -> MeshSummary {
+        let mut m = MeshSummary { min: 0.0, ..MeshSummary::default() };
+        for (p, w) in &self.corners {
+            let c = p.meshes[k];
+            m.min += w * c.min;
+            m.max += w * c.max;
+            m.mean += w * c.mean;
+            m.peak_pair += w * c.peak_pair;
+            m.separation += w * c.separation;
+        }
+        m
+    }
+
+    /// The interpolated harmonics and separation fraction of planet 1's mesh `k` (0 sun, 1 ring).
+    pub fn window(&self, k: usize) -> (Harmonics, f64) {
+        let mut h = Harmonics { mean: 0.0, amplitude: vec![0.0; 6], rms: 0.0 };
+        let mut separation = 0.0;
+        for (p, w) in &self.corners {
+            let (c, s) = &p.window[k];
+            h.mean += w * c.mean;
+            h.rms += w * c.rms;
+            for (a, b) in h.amplitude.iter_mut().zip(&c.amplitude) {
+                *a += w * b;
+            }
+            separation += w * s;
+        }
+        (h, separation)
+    }
+
+    /// The interpolated state relative to the rigid-body motion at input angle `angle`
+    /// \[rad\] into `q` and `v` (each corner read at its own phase, linearly between samples).
+    pub fn relative_state(&self, angle: f64, q: &mut [f64], v: &mut [f64]) {
+        let n = q.len();
+        q.iter_mut().chain(v.iter_mut()).for_each(|x| *x = 0.0);
+        for (p, w) in &self.corners {
+            let phase = ((angle / p.angle_period).rem_euclid(1.0) * p.samples as f64 - p.phase)
+                .rem_euclid(p.samples as f64);
+            let j0 = (phase.floor() as usize).min(p.samples - 1);
+            let j1 = (j0 + 1) % p.samples;
+            let f = phase - j0 as f64;
+            for i in 0..n {
+                let (q0, q1) = (f64::from(p.q[j0 * n + i]), f64::from(p.q[j1 * n + i]));
+                let (v0, v1) = (f64::from(p.v[j0 * n + i]), f64::from(p.v[j1 * n + i]));
+                q[i] += w * ((1.0 - f) * q0 + f * q1);
+                v[i] += w * ((1.0 - f) * v0 + f * v1);
+            }
+        }
+    }
+
+    /// How many corners were found by each way.
+    pub fn found(&self) -> impl Iterator<Item = Found> + '_ {
+        self.corners.iter().map(|(p, _)| p.found)
+    }
+}
+
+/// What the cache has done.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GridStats {
+    /// Requests answered.
+    pub requests: u64,
+    /// Steady states solved (nodes).
+    pub solved: u64,
+    /// Of those, found by a march past a fold.
+    pub marched: u64,
+    /// Of those, found from the static state.
+    pub cold: u64,
+    /// Requests interpolated in a finest cell whose estimated error is above the agreement.
+    pub unresolved: u64,
+    /// Requests in a cell with a node whose march did not settle within its periods (no
+    /// periodic steady state), interpolated without an error estimate.
+    pub unsettled: u64,
+    /// Requests in the low-load strip (a cell with a corner at no torque), interpolated
+    /// without an error estimate.
+    pub low_load: u64,
+    /// The largest spread of such a request [-].
+    pub worst_spread: f64,
+}
+
+/// The cache of one model (one worn state): its nodes and torque levels.
+pub struct SteadyGrid {
+    settings: GridSettings,
+    base: PlanetaryDynamics,
+    /// Balanced torques on sun, ring, carrier per N·m of input torque.
+    torques_per_nm: [f64; 3],
+    /// Static mesh force per N·m of input torque \[N/(N·m)\].
+    load_per_nm: f64,
+    samples_per_cycle: usize,
+    nodes: HashMap<Node, Arc<SteadyPoint>>,
+    levels: HashMap<i64, TorqueLevel>,
+    unloaded: HashMap<(i8, i64), Arc<SteadyPoint>>,
+    stats: GridStats,
+}
+
+impl SteadyGrid {
+    /// The cache of `base` (the simulation's model), its balanced torques
+    /// `torques_per_nm` per N·m of input torque, its static mesh force `load_per_nm` per
+    /// N·m, `samples_per_cycle` output samples per mesh cycle.
+    pub fn new(
+        settings: GridSettings,
+        base: PlanetaryDynamics,
+        torques_per_nm: [f64; 3],
+        load_per_nm: f64,
+        samples_per_cycle: usize,
+    ) -> Self {
+        Self {
+            settings,
+            base,
+            torques_per_nm,
+            load_per_nm,
+            samples_per_cycle,
+            nodes: HashMap::new(),
+            levels: HashMap::new(),
+            unloaded: HashMap::new(),
+            stats: GridStats::default(),
+        }
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &GridSettings {
+        &self.settings
+    }
+
+    /// What the cache has done so far.
+    pub fn stats(&self) -> GridStats {
+        self.stats
+    }
+
+    /// Nodes solved and kept.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Whether no node is kept.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    fn finest(&self) -> (f64, f64) {
+        let scale = f64::from(1u32 << self.settings.refinements);
+        (self.settings.speed_step / scale, self.settings.torque_step / scale)
+    }
+
+    fn speed_of(&self, (sign, i, _): Node) -> f64 {
+        f64::from(sign) * (self.settings.speed_floor + i as f64 * self.finest().0)
+    }
+
+    /// The steady state at input speed `speed` [rad/s] and input torque `torque` [N·m],
+    /// interpolated between cached nodes (solving the nodes it needs).
+    pub fn lookup(&mut self, speed: f64, torque: f64) -> Result<Blend, PeriodicError> {
+        for (name, x) in [("speed", speed), ("torque", torque)] {
+            if !x.is_finite() {
+                return Err(PeriodicError::invalid(name, x, "must be finite"));
+            }
+        }
+        self.stats.requests += 1;
+        let sign: i8 = if speed < 0.0 { -1 } else { 1 };
+        let (ds, dt) = self.finest();
+        let a = ((speed.abs() - self.settings.speed_floor) / ds).max(0.0);
+        let b = torque / dt;
+        let top = self.settings.refinements;
+        let mut parent = f64::INFINITY;
+        for level in 0..=top {
+            let c = 1i64 << (top - level);
+            let i0 = (a / c as f64).floor() as i64 * c;
+            let j0 = (b / c as f64).floor() as i64 * c;
+            let (wa, wb) = ((a - i0 as f64) / c as f64, (b - j0 as f64) / c as f64);
+            // A cell on the unloaded row is halved down to the finest level: there (the
+            // low-load strip between no torque and the first torque node, where the teeth
+            // rattle) it is interpolated without an error estimate, and the request is
+            // counted as a low-load one.
+            let unloaded_row = j0 == 0 || j0 + c == 0;
+            if unloaded_row && level < top {
+                continue;
+            }
+            let mut corners = Vec::with_capacity(4);
+            for (di, dj, w) in [
+                (0, 0, (1.0 - wa) * (1.0 - wb)),
+                (c, 0, wa * (1.0 - wb)),
+                (0, c, (1.0 - wa) * wb),
+                (c, c, wa * wb),
+            ] {
+                corners.push((self.node((sign, i0 + di, j0 + dj))?, w));
+            }
+            if unloaded_row {
+                self.stats.low_load += 1;
+                corners.retain(|(_, w)| *w > 0.0);
+                return Ok(Blend { corners, speed, torque, level, spread: f64::NAN });
+            }
+            // A cell with a corner whose march did not settle (no periodic steady state:
+            // the teeth rattle) is not refined: its error cannot be estimated.
+            if corners.iter().any(|(p, _)| p.settled > MARCH_SETTLED) {
+                self.stats.unsettled += 1;
+                corners.retain(|(_, w)| *w > 0.0);
+                return Ok(Blend { corners, speed, torque, level, spread: f64::NAN });
+            }
+            // The bilinear interpolation's error estimated at the cell's centre, where it is
+            // largest for a smooth response; the finest cell (no node at its centre) takes a
+            // quarter of its parent's (the error of a bilinear interpolation goes with the
+            // square of the cell).
+            let error = if level < top {
+                let centre = self.node((sign, i0 + c / 2, j0 + c / 2))?;
+                self.centre_error(&corners, &centre)
+            } else {
+                parent / 4.0
+            };
+            if error <= self.settings.agreement || level == top {
+                if error > self.settings.agreement {
+                    self.stats.unresolved += 1;
+                    self.stats.worst_spread = self.stats.worst_spread.max(error);
+                }
+                corners.retain(|(_, w)| *w > 0.0);
+                return Ok(Blend { corners, speed, torque, level, spread: error });
+            }
+            parent = error;
+        }
+        unreachable!("the finest level always answers")
+    }
+
+    /// The largest difference between the corners' mean (the bilinear interpolation at the
+    /// cell's centre) and the centre's own steady state, of each mesh's largest, smallest
+    /// and mean force and planet 1's F^(rms) over the centre's static mesh load, and of each
+    /// mesh's separation fraction.
+    fn centre_error(&self, corners: &[(Arc<SteadyPoint>, f64)], centre: &SteadyPoint) -> f64 {
+        let measures = |p: &SteadyPoint| -> Vec<f64> {
+            let mut m: Vec<f64> = p.meshes.iter().flat_map(|s| [s.max, s.min, s.mean]).collect();
+            m.extend(p.window.iter().map(|(h, _)| h.rms));
+            m
+        };
+        let separations = |p: &SteadyPoint| -> Vec<f64> { p.meshes.iter().map(|s| s.separation).collect() };
+        let load = (centre.torque * self.load_per_nm).abs().max(f64::MIN_POSITIVE);
+        let quarter = |f: &dyn Fn(&SteadyPoint) -> Vec<f64>| -> Vec<f64> {
+            let mut sum = vec![0.0; f(centre).len()];
+            for (p, _) in corners {
+                sum.iter_mut().zip(f(p)).for_each(|(s, x)| *s += 0.25 * x);
+            }
+            sum
+        };
+        let (forces, separation) = (quarter(&measures), quarter(&separations));
+        let forces = forces.iter().zip(measures(centre)).map(|(a, b)| (a - b).abs() / load);
+        let separation = separation.iter().zip(separations(centre)).map(|(a, b)| (a - b).abs());
+        forces.chain(separation).fold(0.0, f64::max)
+    }
+
+    /// The node's steady state, solved where it is not cached yet: by continuation from
+    /// the nearest cached node of its torque (in speed), else cold.
+    fn node(&mut self, node: Node) -> Result<Arc<SteadyPoint>, PeriodicError> {
+        if let Some(p) = self.nodes.get(&node) {
+            return Ok(p.clone());
+        }
+        let speed = self.speed_of(node);
+        let (sign, i, j) = node;
+        if j == 0 {
+            let samples = self.samples_per_cycle;
+            let base = &self.base;
+            let p = self
+                .unloaded
+                .entry((sign, i))
+                .or_insert_with(|| Arc::new(SteadyPoint::unloaded(speed, base, samples)));
+            return Ok(p.clone());
+        }
+        let torque = j as f64 * self.finest().1;
+        let neighbour = self
+            .nodes
+            .iter()
+            .filter(|((s, _, jj), _)| *s == sign && *jj == j)
+            .min_by_key(|((_, ii, _), _)| (ii - i).abs())
+            .map(|(_, p)| p.clone());
+        if !self.levels.contains_key(&j) {
+            let torques = self.torques_per_nm.map(|t| t * torque);
+            let level = TorqueLevel::new(
+                &self.base,
+                torque,
+                torques,
+                speed,
+                (self.samples_per_cycle, self.settings.sample_phase),
+            )?;
+            self.levels.insert(j, level);
+        }
+        let level = self.levels.get_mut(&j).expect("inserted above");
+        let point = Arc::new(level.solve(speed, neighbour.as_deref())?);
+        self.stats.solved += 1;
+        match point.found {
+            Found::Marched => self.stats.marched += 1,
+            Found::Cold => self.stats.cold += 1,
+            _ => {}
+        }
+        self.nodes.insert(node, point.clone());
+        Ok(point)
+    }
+}
