@@ -524,7 +524,7 @@ fn every_check_catches_a_corrupted_description() {
         ),
         ("another unit", corrupt("ring.speed", r#"unit="rad/s""#, r#"unit="rad""#), &["ring.speed: unit"]),
         ("another start", corrupt("fidelity", r#"start="1""#, r#"start="0""#), &["fidelity: start"]),
-        ("another max", corrupt("fidelity", r#"max="1""#, r#"max="2""#), &["fidelity: max"]),
+        ("another max", corrupt("fidelity", r#"max="3""#, r#"max="4""#), &["fidelity: max"]),
         ("a min dropped", corrupt("planets", r#" min="1""#, ""), &["planets: min"]),
         (
             "a start past its max",

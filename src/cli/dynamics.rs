@@ -42,6 +42,9 @@ pub(crate) fn simulate_command(
     if let Some(bins) = bins {
         sim.record_duty(bins);
     }
+    if run.response() == planetwear::scene::Response::Steady {
+        sim.use_steady(None).context("dynamics.response = \"steady\"")?;
+    }
     let n = (stop / step).round() as u64;
     use planetwear::model::gear::MeshKind;
     for k in 0..n {
@@ -78,6 +81,19 @@ pub(crate) fn simulate_command(
             }
         }
         outln!("{row}")?;
+    }
+    if let Some(engine) = sim.steady() {
+        let s = engine.stats();
+        eprintln!(
+            "steady response: {} steps, {} steady states solved ({} after a march past a fold, {} from the static \
+             state), {} steps interpolated with an estimated error above dynamics.steady_agreement (largest {:.3})",
+            s.requests.saturating_sub(1),
+            s.solved,
+            s.marched,
+            s.cold,
+            s.unresolved,
+            s.worst_spread
+        );
     }
     if let (Some(path), Some(duty)) = (duty_cycle, sim.duty()) {
         let cycle = planetwear::wear::duty::DutyCycle::new(&set, "simulate", duty.clone());

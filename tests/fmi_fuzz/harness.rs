@@ -543,7 +543,7 @@ pub struct FuzzConfig {
     /// builds the contact tables, about 0.8 s natively and 20 s under
     /// valgrind); beyond, the harness makes the parameters fail early.
     pub builds: u32,
-    /// Share of those builds the harness makes torsional (`fidelity` 0,
+    /// Share of those builds the harness makes cheap (`fidelity` 0 or 2, half each;
     /// force evaluations about 10 times cheaper: a run-away step that uses
     /// its whole work budget costs 0.2 s instead of 2 s).
     pub torsional: f64,
@@ -1497,7 +1497,9 @@ impl Engine<'_> {
         if worth && self.tokens > 0 && spent <= due + 1.0 {
             self.tokens -= 1;
             if settable && self.rng.chance(self.torsional) {
-                self.set_fidelity(k, 0, "harness: a cheap build")?;
+                // Half of the cheap builds torsional, half steady torsional (fidelity 2).
+                let fidelity = if self.rng.chance(0.5) { 2 } else { 0 };
+                self.set_fidelity(k, fidelity, "harness: a cheap build")?;
             }
             return Ok(true);
         }
@@ -2022,7 +2024,7 @@ impl Engine<'_> {
                 }
                 if let Some(f) = fidelity_set {
                     // Unsure whether it was applied unless the call succeeded.
-                    i.poisoned = s == fmi2Status_fmi2OK && !(0..=1).contains(&f);
+                    i.poisoned = s == fmi2Status_fmi2OK && !(0..=3).contains(&f);
                 }
             },
         )?;

@@ -389,6 +389,33 @@ impl Instance {
         let cycles = usize::try_from(self.int(vr::HARMONIC_WINDOW_CYCLES)).unwrap_or(0);
         sim.set_window(cycles, run.samples_per_mesh_cycle()).map_err(|e| Refusal::error(e.to_string()))?;
         sim.record_duty(self.duty_bins(set.input_torque(), speed)?);
+        if run.response() == crate::scene::Response::Steady {
+            // The process's cache of this scene (its operating point aside) and worn state.
+            let mut keyed = scene.clone();
+            keyed.operation.input_torque_nm = 0.0;
+            keyed.dynamics.input_speed_rpm = 0.0;
+            let state = self.strings.get(&vr::WEAR_STATE_FILE).cloned().unwrap_or_default();
+            let state = if state.is_empty() {
+                Vec::new()
+            } else {
+                crate::files::read_input(&self.resolve(&state), crate::files::InputKind::WornState)
+                    .unwrap_or_default()
+            };
+            let key = crate::files::hash::fnv1a64(
+                format!(
+                    "{}|{}",
+                    keyed.to_toml(),
+                    self.strings.get(&vr::WEAR_STATE_ACCEPT).cloned().unwrap_or_default()
+                )
+                .as_bytes(),
+            ) ^ crate::files::hash::fnv1a64(&state).rotate_left(1);
+            sim.use_steady(Some(key)).map_err(|e| {
+                Refusal::error(format!(
+                    "fidelity = {}: the steady response cannot start: {e}",
+                    self.int(vr::FIDELITY)
+                ))
+            })?;
+        }
         self.sim = Some(sim);
         self.built_from = self.build_key();
         self.push_inputs()
@@ -553,6 +580,9 @@ impl Instance {
             | V::BearingDampingRatio
             | V::MeshDampingRatio
             | V::ShaftStiffness
+            | V::SteadySpeedStep
+            | V::SteadyTorqueStep
+            | V::SteadyAgreement
             | V::LoadBalance
             | V::GearData
             | V::SunProfileShift
@@ -872,6 +902,9 @@ impl Instance {
             | V::BearingDampingRatio
             | V::MeshDampingRatio
             | V::ShaftStiffness
+            | V::SteadySpeedStep
+            | V::SteadyTorqueStep
+            | V::SteadyAgreement
             | V::InitialSpeed
             | V::SunTorque
             | V::RingTorque

@@ -15,6 +15,8 @@ use std::collections::BTreeMap;
 use crate::fmi::variables::{Settable, Start, Variable};
 use crate::model::gear::{Drive, IntegratorKind, Member};
 use crate::model::lumped::Fidelity;
+use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
+use crate::scene::Response;
 use crate::scene::{default_chamfer, ChamferSpec, GearData, PlanetLayoutSpec, Problem, Scene, SceneError};
 
 /// The values the importer holds, read by variable.
@@ -84,15 +86,19 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
         | Settable::CarrierTorque
         | Settable::InputSpeedReference => {}
         Settable::Fidelity => {
-            scene.dynamics.fidelity = match values.int(v) {
-                0 => Fidelity::Torsional,
-                1 => Fidelity::TransverseTorsional,
+            let (fidelity, response) = match values.int(v) {
+                0 => (Fidelity::Torsional, Response::Time),
+                1 => (Fidelity::TransverseTorsional, Response::Time),
+                2 => (Fidelity::Torsional, Response::Steady),
+                3 => (Fidelity::TransverseTorsional, Response::Steady),
                 x => {
                     return Err(format!(
-                        "fidelity = {x}: allowed are 0 (torsional), 1 (transverse-torsional)"
+                        "fidelity = {x}: allowed are 0 (torsional), 1 (transverse-torsional), \
+                         2 (steady, torsional), 3 (steady, transverse-torsional)"
                     ))
                 }
-            }
+            };
+            (scene.dynamics.fidelity, scene.dynamics.response) = (fidelity, response);
         }
         Settable::HeldMember => scene.operation.held = member(v, values.int(v))?,
         Settable::InputMember => scene.operation.input = member(v, values.int(v))?,
@@ -202,6 +208,9 @@ pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(
         Settable::BearingDampingRatio => scene.supports.bearing_damping_ratio = r,
         Settable::MeshDampingRatio => scene.dynamics.mesh_damping_ratio = r,
         Settable::ShaftStiffness => scene.dynamics.shaft_stiffness_nm_per_rad = r,
+        Settable::SteadySpeedStep => scene.dynamics.steady_speed_step_rpm = rad_per_s_to_rpm(r),
+        Settable::SteadyTorqueStep => scene.dynamics.steady_torque_step_nm = Some(r),
+        Settable::SteadyAgreement => scene.dynamics.steady_agreement = r,
         // Gear data (ISO 21771): every one of them writes the three gears'
         // gear data from the current values when gearData = 1.
         Settable::GearData
@@ -401,10 +410,15 @@ pub fn scene_values(scene: &Scene) -> Result<BTreeMap<Settable, Start>, SceneErr
             Settable::SunTorque => Start::Real(torques[0]),
             Settable::RingTorque => Start::Real(torques[1]),
             Settable::CarrierTorque => Start::Real(torques[2]),
-            Settable::Fidelity => Start::Integer(match d.fidelity {
-                Fidelity::Torsional => 0,
-                Fidelity::TransverseTorsional => 1,
-            }),
+            Settable::Fidelity => Start::Integer(
+                match d.fidelity {
+                    Fidelity::Torsional => 0,
+                    Fidelity::TransverseTorsional => 1,
+                } + match d.response {
+                    Response::Time => 0,
+                    Response::Steady => 2,
+                },
+            ),
             Settable::HeldMember => code(scene.operation.held),
             Settable::InputMember => code(scene.operation.input),
             Settable::DriveMode => Start::Integer(match d.drive {
@@ -462,6 +476,12 @@ pub fn scene_values(scene: &Scene) -> Result<BTreeMap<Settable, Start>, SceneErr
             Settable::BearingDampingRatio => Start::Real(scene.supports.bearing_damping_ratio),
             Settable::MeshDampingRatio => Start::Real(d.mesh_damping_ratio),
             Settable::ShaftStiffness => Start::Real(d.shaft_stiffness_nm_per_rad),
+            Settable::SteadySpeedStep => Start::Real(rpm_to_rad_per_s(d.steady_speed_step_rpm)),
+            Settable::SteadyTorqueStep => Start::Real(
+                d.steady_torque_step_nm
+                    .unwrap_or(crate::scene::STEADY_TORQUE_STEP * scene.operation.input_torque_nm.abs()),
+            ),
+            Settable::SteadyAgreement => Start::Real(d.steady_agreement),
             Settable::LoadBalance => Start::Integer(i32::from(d.load_balance)),
         };
         out.insert(p, value);
@@ -496,7 +516,7 @@ pub(super) fn scene_keys(p: Settable) -> &'static [&'static str] {
         Settable::SunTorque | Settable::RingTorque | Settable::CarrierTorque => {
             &["operation.input_torque_nm"]
         }
-        Settable::Fidelity => &["dynamics.fidelity"],
+        Settable::Fidelity => &["dynamics.fidelity", "dynamics.response"],
         Settable::HeldMember => &["operation.held"],
         Settable::InputMember => &["operation.input"],
         Settable::DriveMode => &["dynamics.drive"],
@@ -551,6 +571,9 @@ pub(super) fn scene_keys(p: Settable) -> &'static [&'static str] {
         Settable::BearingDampingRatio => &["supports.bearing_damping_ratio"],
         Settable::MeshDampingRatio => &["dynamics.mesh_damping_ratio"],
         Settable::ShaftStiffness => &["dynamics.shaft_stiffness_nm_per_rad"],
+        Settable::SteadySpeedStep => &["dynamics.steady_speed_step_rpm"],
+        Settable::SteadyTorqueStep => &["dynamics.steady_torque_step_nm"],
+        Settable::SteadyAgreement => &["dynamics.steady_agreement"],
         Settable::LoadBalance => &["dynamics.load_balance"],
         Settable::GearData => &[],
         Settable::SunProfileShift => &["sun.gear_data.profile_shift"],
