@@ -76,6 +76,10 @@ enum Command {
     /// Work-precision study of the integrators: E_h of the mesh-force harmonics against CPU time
     /// and work at four operating points and both fidelity levels (docs/ACCURACY.md).
     WorkPrecision(WorkPrecisionArgs),
+    /// E_h of the steady response (fidelity 2 and 3) against the time-domain reference at
+    /// the work-precision study's operating points, at a node and mid-cell of its cache, and
+    /// its error on speed ramps of increasing rate (docs/STEADY.md)
+    SteadyAccuracy(SteadyAccuracyArgs),
     /// Fit chosen scene parameters (by their scene keys, with bounds) to target natural
     /// frequencies and loaded double-contact shares; writes the calibrated scene.
     Calibrate(CalibrateArgs),
@@ -300,6 +304,17 @@ struct WorkPrecisionArgs {
     out: PathBuf,
     /// Reduced grid (torsional points, ρ∞ = 0.9 at 16…256 steps, RK 5(4) to 1e-7, shorter runs,
     /// one repeat): seconds instead of minutes.
+    #[arg(long)]
+    quick: bool,
+}
+
+/// E_h of the steady response against the time-domain reference, and its ramp errors.
+#[derive(clap::Args)]
+struct SteadyAccuracyArgs {
+    /// Write the tables (Markdown) and the figures (JSON) into this directory.
+    #[arg(long)]
+    out: PathBuf,
+    /// Only the torsional points and no ramps: a minute instead of ten.
     #[arg(long)]
     quick: bool,
 }
@@ -663,6 +678,7 @@ fn check_outputs(command: &Command) -> Result<()> {
         }
         Command::Wear { action: WearAction::Effect(a) } => dir("--out", &a.out),
         Command::WorkPrecision(a) => dir("--out", &a.out),
+        Command::SteadyAccuracy(a) => dir("--out", &a.out),
         Command::Validate(a) => {
             dir("--out", &a.out)?;
             dir("--out", &a.out.join("validation"))
@@ -737,6 +753,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Wear { action: WearAction::Effect(a) } => wear_effect_command(a)?,
         Command::Wear { action: WearAction::Step(a) } => wear_step_command(a)?,
         Command::WorkPrecision(WorkPrecisionArgs { out, quick }) => work_precision(&out, quick)?,
+        Command::SteadyAccuracy(SteadyAccuracyArgs { out, quick }) => steady_accuracy(&out, quick)?,
         Command::Validate(a) => validate_command(a)?,
         Command::Calibrate(a) => calibrate_command(a)?,
         Command::Fmu { action: FmuAction::Pack(a) } => fmu_pack_command(a)?,

@@ -26,4 +26,5 @@ pub mod frame_sweep;
 pub mod modes;
 pub mod order_tracking;
 pub mod plausibility;
+pub mod steady_accuracy;
 pub mod study;

@@ -209,3 +209,76 @@ pub(crate) fn work_precision(out: &Path, quick: bool) -> Result<()> {
     outln!("\nstudy took {:.1} s; {} files in {}", study.wall_seconds, files.len(), out.display())?;
     Ok(())
 }
+
+/// `planetwear steady-accuracy`: the steady response's E_h at the work-precision study's
+/// operating points (at a node and mid-cell of its cache) and its error on speed ramps;
+/// prints the tables and writes DIR/steady_accuracy.md and .json.
+pub(crate) fn steady_accuracy(out: &Path, quick: bool) -> Result<()> {
+    use planetwear::analysis::steady_accuracy::{point_error, ramp_errors};
+    use planetwear::model::lumped::Fidelity;
+    use planetwear::report::accuracy::operating_points;
+    use planetwear::scene::units::rpm_to_rad_per_s;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let mut points = operating_points(Fidelity::Torsional)?;
+    if !quick {
+        points.extend(operating_points(Fidelity::TransverseTorsional)?);
+    }
+    let started = std::time::Instant::now();
+    let mut md = String::from(
+        "| operating point | rpm | E_h at a node | E_h mid-cell | cache's estimate | separation sun, ring (reference) | \
+         separation sun, ring (steady) | reference CPU s | steady first state s |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    let mut rows = Vec::new();
+    for p in &points {
+        let e = point_error(p, 1e-9)?;
+        let line = format!(
+            "| {} | {:.0} | {:.1e} | {:.1e} | {} | {:.1} %, {:.1} % | {:.1} %, {:.1} % | {:.1} | {:.2} |",
+            e.name,
+            e.rpm,
+            e.node,
+            e.interpolated,
+            if e.estimate.is_finite() { format!("{:.1e}", e.estimate) } else { "–".into() },
+            100.0 * e.separation[0][0],
+            100.0 * e.separation[0][1],
+            100.0 * e.separation[1][0],
+            100.0 * e.separation[1][1],
+            e.seconds[0],
+            e.seconds[1]
+        );
+        outln!("{line}")?;
+        md.push_str(&line);
+        md.push('\n');
+        rows.push(e);
+    }
+    let mut ramps = Vec::new();
+    if !quick {
+        let scene = planetwear::scene::Scene::example_2004();
+        let mut balanced = scene.clone();
+        balanced.dynamics.load_balance = true;
+        let (set, run) = balanced.validate_with_run()?;
+        let from_to = (rpm_to_rad_per_s(2000.0), rpm_to_rad_per_s(4000.0));
+        ramps = ramp_errors(&set, &run, from_to, &[2.0, 0.5, 0.1, 0.02], 1e-3)?;
+        md.push_str(
+            "\n| ramp 2000 → 4000 rpm over | speed change per mesh cycle | largest error of F_max | mean error of F_max |\n|---|---|---|---|\n",
+        );
+        for r in &ramps {
+            let line = format!(
+                "| {} s | {:.1e} | {:.3} | {:.3} |",
+                r.seconds, r.relative_change_per_cycle, r.max_force_error, r.mean_force_error
+            );
+            outln!("{line}")?;
+            md.push_str(&line);
+            md.push('\n');
+        }
+    }
+    let wall = started.elapsed().as_secs_f64();
+    md.push_str(&format!(
+        "\n`planetwear steady-accuracy{}`: {wall:.0} s.\n",
+        if quick { " --quick" } else { "" }
+    ));
+    outln!("{wall:.0} s")?;
+    write_atomic(&out.join("steady_accuracy.md"), md.as_bytes())?;
+    let json = serde_json::json!({ "points": rows, "ramps": ramps, "wall_seconds": wall });
+    write_atomic(&out.join("steady_accuracy.json"), serde_json::to_string_pretty(&json)?.as_bytes())?;
+    Ok(())
+}
