@@ -8,7 +8,8 @@
 # docs/VALIDATION.md and docs/validation/), the FMU packed
 # with the example's worn states, speed sweeps up and down at κ = 0, 2, 4, 6
 # through the FMU driven by fmpy, the study's plots and report
-# (out/study/report.md), and the drivetrain co-simulation example.
+# (out/study/report.md), a drive cycle through the FMU in its steady fidelity with
+# the wear loop it drives (out/drive_cycle/), and the drivetrain co-simulation example.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -50,7 +51,10 @@ echo '  "_": 0}' >> "$timings"
 mv "$timings" out/timings.json
 .venv/bin/python scripts/study.py --fmu fmu/planetwear.fmu --wear out/wear --out out/study \
     --timings out/timings.json
+echo "== drive cycle: WLTC class 3b (its first 20 s) through the FMU in its steady fidelity, the wear loop to kappa = 6 (out/drive_cycle/, docs/DRIVE_CYCLE.md)"
+PLANETWEAR_BIN="$PWD/$bin" .venv/bin/python -m planetwear_fmu.drive_cycle --fmu fmu/planetwear.fmu \
+    --out out/drive_cycle --seconds 20 --to-kappa 6 --hours-per-stage 1500
 echo "== drivetrain co-simulation with fmpy (out/cosim.png)"
 .venv/bin/python examples/drivetrain_cosim.py --out out/cosim.png
 echo "== the main job took $(( $(date +%s) - built )) s after the build"
-echo "== done: docs/VALIDATION.md (the study beside ours), out/study/report.md (the study), out/wear/, out/continuation/, out/ltca.json, out/modes.txt, out/cosim.png, out/plots/"
+echo "== done: docs/VALIDATION.md (the study beside ours), out/study/report.md (the study), out/wear/, out/continuation/, out/ltca.json, out/modes.txt, out/drive_cycle/, out/cosim.png, out/plots/"

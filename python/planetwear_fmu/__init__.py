@@ -17,7 +17,7 @@ tests/python/test_package_layers.py holds the list and checks it:
      `load_campaign`, the full check), `sweep` (one task), `plots`,
      `regression` (the regression-test kit, apart from the campaigns);
   3. `runner`: a campaign on Dask;
-  4. front ends: `loop`, `bench`, `pytest_plugin`;
+  4. front ends: `loop`, `drive_cycle`, `bench`, `pytest_plugin`;
   5. `campaign`: the command line (`python -m planetwear_fmu.campaign`,
      the `planetwear-campaign` script).
 """

@@ -111,6 +111,68 @@ def plot_wear_against_hours(stages, path):
     return Path(path)
 
 
+def plot_drive_cycle(cycle, path):
+    """A drive cycle's record (`drive_cycle.run_loop`'s cycle.json: time, sun speed and
+    torque, planet 1's dynamic factor and F^(rms) of both meshes) against time: three
+    panels (speed and torque; dynamic factor; F^(rms)); written to `path`, returned."""
+    require("plot", "drawing the drive cycle")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = cycle["time"]
+    fig, axes = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
+    ax = axes[0]
+    ax.plot(t, [w * 30.0 / 3.141592653589793 for w in cycle["sun.speed"]], color="tab:blue", lw=0.8)
+    ax.set_ylabel("sun speed [rpm]", color="tab:blue")
+    twin = ax.twinx()
+    twin.plot(t, cycle["sun_torque"], color="tab:red", lw=0.6)
+    twin.set_ylabel("sun torque [N·m]", color="tab:red")
+    ax.set_title("Drive cycle through the FMU (steady fidelity)")
+    axes[1].plot(t, cycle["dynamic_factor"], color="k", lw=0.6)
+    axes[1].set_ylabel("dynamic factor\nF_max / F_mean (sun–planet)")
+    axes[2].plot(t, cycle["window.sunMeshFrms"], lw=0.6, label="sun–planet")
+    axes[2].plot(t, cycle["window.ringMeshFrms"], lw=0.6, label="ring–planet")
+    axes[2].set_ylabel("F^(rms) [N]")
+    axes[2].set_xlabel("time [s]")
+    axes[2].legend(fontsize=8)
+    for a in axes:
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    _save(fig, Path(path))
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_duty_histogram(doc, path):
+    """The duty-cycle document `doc`'s revolutions per load-torque × input-speed bin of
+    planet 1's sun–planet mesh as an image; written to `path`, returned."""
+    require("plot", "drawing the duty-cycle histogram")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    duty = doc["content"]["duty"]
+    torque, speed = duty["bins"]["torque"], duty["bins"]["speed"]
+    nt, ns = len(torque) - 1, len(speed) - 1
+    counts = duty["revolutions"][: nt * ns]
+    grid = [[counts[i * ns + j] for i in range(nt)] for j in range(ns)]
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    image = ax.pcolormesh(torque, [w * 30.0 / 3.141592653589793 for w in speed], grid, cmap="viridis", shading="flat")
+    fig.colorbar(image, ax=ax, label="input revolutions")
+    ax.set_xlabel("load torque [N·m]")
+    ax.set_ylabel("input speed [rpm]")
+    outside = duty["outside"][0]
+    ax.set_title(f"Load duty, planet 1 sun–planet mesh ({duty['total']:.0f} rev; {outside:.0f} outside the bins)",
+                 fontsize=9)
+    fig.tight_layout()
+    _save(fig, Path(path))
+    plt.close(fig)
+    return Path(path)
+
+
 def _two_meshes(curves, colour, style, series, title, ylabel, path, zero_line=False):
     """One figure, a panel per mesh (sun–planet, ring–planet), a line per
     (κ, direction): `series(points, column, direction)` gives its (x, y)."""

@@ -42,6 +42,8 @@ LAYERS = {
     "runner": 3,
     # Front ends.
     "loop": 4,
+    # The drive cycle through the FMU in its steady fidelity, and its wear loop.
+    "drive_cycle": 4,
     "bench": 4,
     "pytest_plugin": 4,
     # The command line (python -m planetwear_fmu.campaign, planetwear-campaign).
