@@ -182,7 +182,10 @@ fn bad_settings_are_refused_by_name() {
     scene.dynamics.steady_refinements = 9;
     let e = scene.validate_with_run().unwrap_err().to_string();
     assert!(e.contains("dynamics.steady_agreement") && e.contains("dynamics.steady_refinements"), "{e}");
-    // A time response does not read them.
+    // A time response does not need the torque step (a set without input torque).
+    scene.dynamics.steady_agreement = 0.05;
+    scene.dynamics.steady_refinements = 3;
+    scene.dynamics.steady_torque_step_nm = None;
     scene.dynamics.response = Response::Time;
     scene.validate_with_run().unwrap();
     // The speed drive on the output member is a time-domain drive.

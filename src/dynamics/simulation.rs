@@ -17,7 +17,6 @@ use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::{static_state, Stepper};
 use crate::dynamics::solver::{RelativeOrigin, Rk45, Rk45Settings, SecondOrderSystem, SolverError};
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
-use crate::dynamics::steady::grid::GridSettings;
 use crate::dynamics::steady::point::MeshSummary;
 use crate::dynamics::steady::{DriveInputs, SteadyEngine};
 use crate::model::gear::{Drive, GearSet, IntegratorKind, Member, MeshKind};
@@ -738,15 +737,7 @@ impl Simulation {
     /// this process ([`crate::dynamics::steady::SHARED_CACHES`]): the key must stand for
     /// everything the steady states depend on (the gear set, its worn state, the run settings).
     pub fn use_steady(&mut self, shared_key: Option<u64>) -> Result<(), SimulationError> {
-        let grid = self.run.steady();
-        let settings = GridSettings {
-            speed_step: grid.speed_step,
-            torque_step: grid.torque_step,
-            speed_floor: grid.speed_floor,
-            agreement: grid.agreement,
-            refinements: grid.refinements,
-            sample_phase: grid.sample_phase,
-        };
+        let settings = *self.run.steady();
         let engine = SteadyEngine::new(
             settings,
             &self.model,

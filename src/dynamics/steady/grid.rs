@@ -2,14 +2,14 @@
 //! interpolation between its nodes (docs/STEADY.md, "The cache").
 //!
 //! Nodes lie at speed ±(ω_floor + i Δω / 2^L) and torque j ΔT / 2^L (i ≥ 0, j signed, L
-//! the refinements). A request is interpolated bilinearly in the coarsest cell whose four
-//! corners agree: every normalised measure (each mesh's largest and mean force and
-//! planet 1's F^(rms), over the static mesh load of the corner's torque, and each mesh's
-//! separation fraction) differs between the corners by at most the agreement tolerance ε.
-//! Where a cell's corners disagree the cell is halved, down to L refinements; a request
-//! whose finest cell still disagrees is interpolated there and counted, with the spread,
-//! as unresolved. The unloaded nodes (j = 0) carry no normalised measure and take no part
-//! in the agreement.
+//! the refinements). A request is interpolated bilinearly in the coarsest cell whose error,
+//! estimated at its centre (a node: the corners' mean against the centre's own state, each
+//! mesh's largest, smallest and mean force and planet 1's F^(rms) over the centre's static
+//! mesh load, each mesh's separation fraction), is at most the agreement. A cell whose
+//! estimate is larger is halved, down to L times; the finest cell takes a quarter of its
+//! parent's estimate, and a request whose estimate is still larger is counted as
+//! unresolved. Cells on the unloaded row (the low-load strip) and cells with a node whose
+//! march did not settle are interpolated without an estimate and counted apart.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -18,25 +18,7 @@ use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::periodic::PeriodicError;
 use crate::dynamics::spectrum::Harmonics;
 use crate::dynamics::steady::point::{Found, MeshSummary, SteadyPoint, TorqueLevel, MARCH_SETTLED};
-
-/// How the grid is laid out and when neighbours agree.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GridSettings {
-    /// Node spacing of input speed on the coarsest level [rad/s].
-    pub speed_step: f64,
-    /// Node spacing of input torque on the coarsest level [N·m].
-    pub torque_step: f64,
-    /// Lowest input speed solved [rad/s]: slower requests take the steady state there.
-    pub speed_floor: f64,
-    /// Largest difference of a normalised measure between the corners of a cell that is
-    /// interpolated [-].
-    pub agreement: f64,
-    /// Halvings of a cell whose corners disagree.
-    pub refinements: u32,
-    /// Offset of the output samples from the period's start, a fraction of the sample
-    /// interval.
-    pub sample_phase: f64,
-}
+use crate::model::run::SteadyValues;
 
 /// A node: the speed's sign, its finest-grid speed index, its finest-grid torque index.
 type Node = (i8, i64, i64);
@@ -138,7 +120,7 @@ pub struct GridStats {
 
 /// The cache of one model (one worn state): its nodes and torque levels.
 pub struct SteadyGrid {
-    settings: GridSettings,
+    settings: SteadyValues,
     base: PlanetaryDynamics,
     /// Balanced torques on sun, ring, carrier per N·m of input torque.
     torques_per_nm: [f64; 3],
@@ -156,7 +138,7 @@ impl SteadyGrid {
     /// `torques_per_nm` per N·m of input torque, its static mesh force `load_per_nm` per
     /// N·m, `samples_per_cycle` output samples per mesh cycle.
     pub fn new(
-        settings: GridSettings,
+        settings: SteadyValues,
         base: PlanetaryDynamics,
         torques_per_nm: [f64; 3],
         load_per_nm: f64,
@@ -176,7 +158,7 @@ impl SteadyGrid {
     }
 
     /// The settings.
-    pub fn settings(&self) -> &GridSettings {
+    pub fn settings(&self) -> &SteadyValues {
         &self.settings
     }
 

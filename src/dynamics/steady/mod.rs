@@ -18,8 +18,9 @@ use std::sync::{Arc, Mutex};
 
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::periodic::PeriodicError;
-use crate::dynamics::steady::grid::{Blend, GridSettings, GridStats, SteadyGrid};
+use crate::dynamics::steady::grid::{Blend, GridStats, SteadyGrid};
 use crate::model::gear::{Drive, GearSet, Member};
+use crate::model::run::SteadyValues;
 
 /// Caches kept for later engines of the same model in this process, at most this many
 /// (the oldest dropped first): a second FMU instance of the same parameters and worn state
@@ -108,7 +109,7 @@ impl SteadyEngine {
     /// is the process's one of that key (the caller's hash of everything the steady states
     /// depend on: the set, its worn state, the grid and run settings).
     pub fn new(
-        settings: GridSettings,
+        settings: SteadyValues,
         model: &PlanetaryDynamics,
         set: &GearSet,
         speed: f64,

@@ -161,7 +161,7 @@ impl TorqueLevel {
     /// The steady state at `omega` [rad/s], from `neighbour` (a point of this level) where
     /// given: Newton from its orbit, else from a march out of its state, else cold. Under a
     /// negative (coast) load, and wherever the balance finds no orbit, the settled period
-    /// of a march ([`Self::marched`]).
+    /// of a march.
     pub fn solve(
         &mut self,
         omega: f64,
