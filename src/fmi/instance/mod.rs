@@ -1361,13 +1361,19 @@ mod tests {
         // and bearing stiffnesses (the example spaces them equally, alike).
         // The load balance is written only when on; a tip diameter only
         // when the gear data give one (the example's planet has none); the
-        // speed-driven member only when it is not the input member.
+        // speed-driven member only when it is not the input member; the
+        // response only when steady, the steady grid's keys only when not
+        // their defaults.
         let optional = [
             "planets.angles_deg",
             "supports.planet_bearings_n_per_m",
             "dynamics.load_balance",
             "planet.gear_data.tip_diameter_mm",
             "dynamics.speed_driven_member",
+            "dynamics.response",
+            "dynamics.steady_speed_step_rpm",
+            "dynamics.steady_torque_step_nm",
+            "dynamics.steady_agreement",
         ];
         for p in Settable::ALL {
             for key in parameters::scene_keys(*p) {
