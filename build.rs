@@ -62,7 +62,36 @@ struct Var {
     min: Option<toml::Value>,
     /// Inclusive upper bound (FMI 2.0 `max`).
     max: Option<toml::Value>,
+    /// An output's reading: the quantity and the planet, member, mesh or
+    /// harmonic order it is read at.
+    read: Option<Read>,
+    /// A parameter's or input's place in the scene.
+    scene: Option<ScenePlace>,
     description: String,
+}
+
+/// What an output reads (`read = { quantity = "mesh_force", planet = 1, mesh = "sun" }`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Read {
+    quantity: String,
+    planet: Option<u32>,
+    member: Option<String>,
+    mesh: Option<String>,
+    order: Option<u32>,
+}
+
+/// Where a settable variable acts in the scene: `fields` it writes through
+/// a `slot` (`real`, `count` or `derived`), and further scene keys (`names`)
+/// by which a problem the scene reports is told as this variable's.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScenePlace {
+    slot: Option<String>,
+    #[serde(default)]
+    fields: Vec<String>,
+    #[serde(default)]
+    names: Vec<String>,
 }
 
 fn fail(msg: String) -> ! {
@@ -341,6 +370,171 @@ fn settable_source(table: &Table, r: &mut String) {
         let _ = writeln!(r, "            Settable::{variant} => Variable::{variant},");
     }
     r.push_str("        }\n    }\n}\n");
+    reading_source(table, r);
+    scene_source(table, r);
+}
+
+/// The Rust expression of an output's [`Read`]: `Reading::MeshForce { planet: 0, mesh: MeshKind::SunPlanet }`.
+fn reading_expr(v: &Var, read: &Read) -> String {
+    let member = |m: &str| match m {
+        "sun" => "Member::Sun",
+        "ring" => "Member::Ring",
+        "carrier" => "Member::Carrier",
+        other => fail(format!("{}: read.member {other} is not sun, ring or carrier", v.name)),
+    };
+    let mesh = |m: &str| match m {
+        "sun" => "MeshKind::SunPlanet",
+        "ring" => "MeshKind::RingPlanet",
+        other => fail(format!("{}: read.mesh {other} is not sun or ring", v.name)),
+    };
+    let mut fields = Vec::new();
+    if let Some(p) = read.planet {
+        if !(1..=8).contains(&p) {
+            fail(format!("{}: read.planet {p} is not 1 to 8", v.name));
+        }
+        fields.push(format!("planet: {}", p - 1));
+    }
+    fields.extend(read.member.as_deref().map(|m| format!("member: {}", member(m))));
+    fields.extend(read.mesh.as_deref().map(|m| format!("mesh: {}", mesh(m))));
+    if let Some(o) = read.order {
+        if !(1..=6).contains(&o) {
+            fail(format!("{}: read.order {o} is not 1 to 6 (the window's harmonics)", v.name));
+        }
+        fields.push(format!("order: {o}"));
+    }
+    let variant = variant_name(&read.quantity.replace('_', "."));
+    if fields.is_empty() {
+        format!("Reading::{variant}")
+    } else {
+        format!("Reading::{variant} {{ {} }}", fields.join(", "))
+    }
+}
+
+/// `Variable::reading`: what each output reads, from its `read`.
+fn reading_source(table: &Table, r: &mut String) {
+    r.push_str(
+        "\nimpl Variable {\n    /// What the variable reads from the simulation: an output's quantity and \
+         where it is read; `None` for parameters and inputs.\n    pub fn reading(self) -> Option<Reading> {\n        \
+         match self {\n",
+    );
+    for v in &table.variable {
+        if let Some(read) = &v.read {
+            let _ = writeln!(
+                r,
+                "            Variable::{} => Some({}),",
+                variant_name(&v.name),
+                reading_expr(v, read)
+            );
+        }
+    }
+    r.push_str("            _ => None,\n        }\n    }\n}\n");
+}
+
+/// The scene unit of a real field from its key's suffix, which must agree
+/// with the variable's SI unit.
+fn scene_unit(v: &Var, field: &str) -> &'static str {
+    let unit = v.unit.as_deref().unwrap_or("1");
+    let (suffix_unit, si) = if field.ends_with("_mm") {
+        ("Mm", "m")
+    } else if field.ends_with("_deg") {
+        ("Deg", "rad")
+    } else if field.ends_with("_gpa") {
+        ("Gpa", "Pa")
+    } else if field.ends_with("_rpm") {
+        ("Rpm", "rad/s")
+    } else {
+        if ["m", "rad", "Pa", "rad/s"].contains(&unit) {
+            fail(format!("{}: field {field} of a variable in {unit} names no scene unit", v.name));
+        }
+        return "One";
+    };
+    if unit != si {
+        fail(format!("{}: field {field} is in a unit of {si}, the variable in {unit}", v.name));
+    }
+    suffix_unit
+}
+
+/// `Settable::scene_keys` and `Settable::target`: the scene keys each
+/// settable variable writes or answers for, the field accessors of those
+/// written through a slot, and `enum Special` for the rest.
+fn scene_source(table: &Table, r: &mut String) {
+    let settable: Vec<&Var> =
+        table.variable.iter().filter(|v| v.causality == "parameter" || v.causality == "input").collect();
+    let mut accessors = String::new();
+    let mut keys = String::new();
+    let mut targets = String::new();
+    let mut special = Vec::new();
+    for v in &settable {
+        let variant = variant_name(&v.name);
+        let place = v.scene.as_ref();
+        let all: Vec<&String> = place.map(|p| p.fields.iter().chain(&p.names).collect()).unwrap_or_default();
+        let _ = writeln!(keys, "            Settable::{variant} => &{all:?},");
+        let Some((slot, place)) = place.and_then(|p| p.slot.as_deref().map(|s| (s, p))) else {
+            if place.is_some_and(|p| !p.fields.is_empty()) {
+                fail(format!("{}: scene.fields needs a scene.slot", v.name));
+            }
+            special.push(variant.clone());
+            let _ =
+                writeln!(targets, "            Settable::{variant} => Target::Special(Special::{variant}),");
+            continue;
+        };
+        if place.fields.is_empty() {
+            fail(format!("{}: scene.slot {slot} needs scene.fields", v.name));
+        }
+        let (ty, kind) = match (slot, v.ty.as_str()) {
+            ("real", "Real") => ("f64", "Real"),
+            ("count", "Integer") => ("u32", "Count"),
+            ("derived", "Real") => ("Option<f64>", "Derived"),
+            _ => fail(format!("{}: scene.slot {slot} does not fit type {}", v.name, v.ty)),
+        };
+        let mut names = Vec::new();
+        for (i, field) in place.fields.iter().enumerate() {
+            let f = format!("{}_{i}", const_name(&v.name).to_ascii_lowercase());
+            let _ = writeln!(accessors, "fn {f}(s: &mut Scene) -> &mut {ty} {{\n    &mut s.{field}\n}}");
+            names.push(f);
+        }
+        let list = names.join(", ");
+        let target = match kind {
+            "Real" => {
+                let unit = scene_unit(v, &place.fields[0]);
+                if place.fields.iter().any(|f| scene_unit(v, f) != unit) {
+                    fail(format!("{}: scene.fields are in different units", v.name));
+                }
+                format!("SceneField::Real(SceneUnit::{unit}, &[{list}])")
+            }
+            "Count" => format!("SceneField::Count(&[{list}])"),
+            _ if names.len() == 1 => format!("SceneField::Derived({list})"),
+            _ => fail(format!("{}: a derived slot writes one field", v.name)),
+        };
+        let _ = writeln!(targets, "            Settable::{variant} => Target::Field({target}),");
+    }
+    r.push_str("\n// The scene fields the slots write.\n");
+    r.push_str(&accessors);
+    r.push_str(
+        "\n/// The settable variables whose effect on the scene is written by hand \
+         (not through a [`SceneField`]), one variant each.\n\
+         #[derive(Clone, Copy, Debug, PartialEq, Eq)]\npub enum Special {\n",
+    );
+    for variant in &special {
+        let _ = writeln!(r, "    /// [`Settable::{variant}`].\n    {variant},");
+    }
+    r.push_str(
+        "}\n\nimpl From<Special> for Settable {\n    fn from(s: Special) -> Settable {\n        match s {\n",
+    );
+    for variant in &special {
+        let _ = writeln!(r, "            Special::{variant} => Settable::{variant},");
+    }
+    r.push_str(
+        "        }\n    }\n}\n\nimpl Settable {\n    /// The scene keys the variable writes, as `Scene::validate` names its \
+         problems.\n    pub fn scene_keys(self) -> &'static [&'static str] {\n        match self {\n",
+    );
+    r.push_str(&keys);
+    r.push_str(
+        "        }\n    }\n\n    /// How the variable acts on the scene: through a field, or by hand.\n    \
+         pub fn target(self) -> Target {\n        match self {\n",
+    );
+    r.push_str(&targets);
+    r.push_str("        }\n    }\n}\n");
 }
 
 fn main() {
@@ -401,6 +595,12 @@ fn main() {
                 }
             }
             other => fail(format!("{}: causality {other} is not used by this FMU", v.name)),
+        }
+        if (v.causality == "output") != v.read.is_some() {
+            fail(format!("{}: an output, and only an output, has a read", v.name));
+        }
+        if v.causality == "output" && v.scene.is_some() {
+            fail(format!("{}: an output has no scene place", v.name));
         }
         if v.ty != "Real" && v.variability == "continuous" {
             fail(format!("{}: only Real variables may be continuous", v.name));

@@ -6,6 +6,9 @@
 // for instance), not approximations of named constants.
 #![allow(clippy::approx_constant)]
 
+use crate::model::gear::{Member, MeshKind};
+use crate::scene::Scene;
+
 /// FMI base type of a variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
@@ -82,6 +85,126 @@ pub struct VariableInfo {
     pub max: Option<f64>,
     /// Description.
     pub description: &'static str,
+}
+
+/// What an output reads from the simulation (the table's `read`): the
+/// quantity, and the planet (0-based), member, mesh or harmonic order where
+/// it is read. The instance gives each quantity its one line of physics.
+/// The fields say where: `planet` (0-based), `member`, `mesh`, `order`
+/// (the harmonic, 1-based).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(missing_docs)]
+pub enum Reading {
+    /// A central member's speed.
+    Speed { member: Member },
+    /// A central member's angle.
+    Angle { member: Member },
+    /// The torque in the input shaft.
+    InputShaftTorque,
+    /// A planet's mesh force.
+    MeshForce { planet: usize, mesh: MeshKind },
+    /// The force on the tracked tooth pair of planet 1's mesh.
+    TrackedPairForce { mesh: MeshKind },
+    /// A planet's dynamic transmission error.
+    TransmissionError { planet: usize, mesh: MeshKind },
+    /// A planet's static transmission error.
+    StaticTransmissionError { planet: usize, mesh: MeshKind },
+    /// A central member's bearing force.
+    BearingForce { member: Member },
+    /// A planet's bearing force.
+    PlanetBearingForce { planet: usize },
+    /// A mesh's window harmonic amplitude of an order (1-based).
+    WindowAmplitude { mesh: MeshKind, order: usize },
+    /// A mesh's window F^(rms).
+    WindowRms { mesh: MeshKind },
+    /// A mesh's window separation share.
+    WindowSeparation { mesh: MeshKind },
+    /// A mesh's window mean.
+    WindowMean { mesh: MeshKind },
+    /// The mesh cycles in the window.
+    WindowCycles,
+    /// The tooth pairs in contact in a planet's mesh.
+    PairsInContact { planet: usize, mesh: MeshKind },
+    /// A planet's mesh force maximum over the step.
+    MeshForceMax { planet: usize, mesh: MeshKind },
+    /// A planet's mesh force minimum over the step.
+    MeshForceMin { planet: usize, mesh: MeshKind },
+    /// A planet's largest tooth-pair force over the step.
+    ToothForceMax { planet: usize, mesh: MeshKind },
+    /// Whether a planet's mesh separated in the step.
+    Separated { planet: usize, mesh: MeshKind },
+    /// The largest mesh force of a mesh kind over the step.
+    AnyMeshForceMax { mesh: MeshKind },
+    /// The largest tooth-pair force of a mesh kind over the step.
+    AnyToothForceMax { mesh: MeshKind },
+    /// Whether any mesh of a kind separated in the step.
+    AnySeparated { mesh: MeshKind },
+    /// The load duty document.
+    DutyCycle,
+    /// The held member's reaction torque.
+    ReactionTorque,
+    /// The load balance's torque.
+    BalancingTorque,
+}
+
+/// The unit of a scene field, which a real parameter (SI) is converted to
+/// when it is written (the scene is the command line's edge format).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneUnit {
+    /// The SI unit itself.
+    One,
+    /// Millimetres (from metres).
+    Mm,
+    /// Degrees (from radians).
+    Deg,
+    /// Gigapascals (from pascals).
+    Gpa,
+    /// Revolutions per minute (from radians per second).
+    Rpm,
+}
+
+impl SceneUnit {
+    /// An SI value in this unit.
+    pub fn from_si(self, x: f64) -> f64 {
+        match self {
+            SceneUnit::One => x,
+            SceneUnit::Mm => x * 1e3,
+            SceneUnit::Deg => x.to_degrees(),
+            SceneUnit::Gpa => x * 1e-9,
+            SceneUnit::Rpm => crate::scene::units::rad_per_s_to_rpm(x),
+        }
+    }
+
+    /// A value in this unit in SI.
+    pub fn to_si(self, x: f64) -> f64 {
+        match self {
+            SceneUnit::One => x,
+            SceneUnit::Mm => x * 1e-3,
+            SceneUnit::Deg => x.to_radians(),
+            SceneUnit::Gpa => x * 1e9,
+            SceneUnit::Rpm => crate::scene::units::rpm_to_rad_per_s(x),
+        }
+    }
+}
+
+/// A scene field a settable variable writes (the table's `scene.slot`).
+#[derive(Clone, Copy, Debug)]
+pub enum SceneField {
+    /// Real fields in a unit: every one takes the value.
+    Real(SceneUnit, &'static [fn(&mut Scene) -> &mut f64]),
+    /// Counts: every one takes the value, which must not be negative.
+    Count(&'static [fn(&mut Scene) -> &mut u32]),
+    /// An optional real: 0 means "derived from the geometry" (`None`).
+    Derived(fn(&mut Scene) -> &mut Option<f64>),
+}
+
+/// How a settable variable acts on the scene.
+#[derive(Clone, Copy, Debug)]
+pub enum Target {
+    /// Through its scene fields.
+    Field(SceneField),
+    /// By hand (`fmi::instance::parameters`).
+    Special(Special),
 }
 
 include!(concat!(env!("OUT_DIR"), "/fmi_variables.rs"));

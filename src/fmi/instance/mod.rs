@@ -47,10 +47,55 @@ use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::simulation::{Bearing, MeshExtremes, Simulation, Snapshot};
 use crate::dynamics::spectrum::Harmonics;
 use crate::dynamics::state_format;
-use crate::fmi::variables::{vr, Causality, Kind, Settable, Start, Variable, GUID, VARIABLES};
-use crate::model::gear::{Member, MeshKind};
+use crate::fmi::variables::{vr, Causality, Kind, Reading, Settable, Start, Variable, GUID, VARIABLES};
+use crate::model::gear::MeshKind;
 use crate::scene::Scene;
 use crate::wear::duty::DutyCycle;
+
+/// An output's value: each quantity's one line of physics. Window values
+/// are 0 until the window is full; step values are 0 beyond the number of
+/// planets.
+fn read(s: &Simulation, reading: Reading) -> Result<Value, Refusal> {
+    use Reading as R;
+    let real = Value::Real;
+    let flag = |b: bool| Value::Integer(i32::from(b));
+    let window =
+        |m: MeshKind, f: fn(&Harmonics, f64) -> f64| s.window_harmonics(m).map_or(0.0, |(h, sep)| f(&h, sep));
+    let extreme = |p: usize, m: MeshKind, f: fn(&MeshExtremes) -> f64| {
+        s.step_extremes().mesh(p, m).as_ref().map_or(0.0, f)
+    };
+    Ok(match reading {
+        R::Speed { member } => real(s.speed(member)),
+        R::Angle { member } => real(s.angle(member)),
+        R::InputShaftTorque => real(s.input_torque()),
+        R::MeshForce { planet, mesh } => real(s.mesh_force(planet, mesh)),
+        R::TrackedPairForce { mesh } => real(s.tracked_pair_force(mesh)),
+        R::TransmissionError { planet, mesh } => real(s.transmission_error(planet, mesh)),
+        R::StaticTransmissionError { planet, mesh } => real(s.static_transmission_error(planet, mesh)),
+        R::BearingForce { member } => real(s.bearing_force(Bearing::Member(member))),
+        R::PlanetBearingForce { planet } => real(s.bearing_force(Bearing::Planet(planet))),
+        R::WindowAmplitude { mesh, order } => real(
+            s.window_harmonics(mesh).map_or(0.0, |(h, _)| h.amplitude.get(order - 1).copied().unwrap_or(0.0)),
+        ),
+        R::WindowRms { mesh } => real(window(mesh, |h, _| h.rms)),
+        R::WindowSeparation { mesh } => real(window(mesh, |_, sep| sep)),
+        R::WindowMean { mesh } => real(window(mesh, |h, _| h.mean)),
+        R::WindowCycles => Value::Integer(s.window_cycles() as i32),
+        R::PairsInContact { planet, mesh } => Value::Integer(s.pairs_in_contact(planet, mesh) as i32),
+        R::MeshForceMax { planet, mesh } => real(extreme(planet, mesh, |e| e.max)),
+        R::MeshForceMin { planet, mesh } => real(extreme(planet, mesh, |e| e.min)),
+        R::ToothForceMax { planet, mesh } => real(extreme(planet, mesh, |e| e.peak_pair)),
+        R::Separated { planet, mesh } => {
+            flag(s.step_extremes().mesh(planet, mesh).is_some_and(|e| e.separated))
+        }
+        R::AnyMeshForceMax { mesh } => real(s.step_extremes().any_max(mesh)),
+        R::AnyToothForceMax { mesh } => real(s.step_extremes().any_peak_pair(mesh)),
+        R::AnySeparated { mesh } => flag(s.step_extremes().any_separated(mesh)),
+        R::DutyCycle => Value::String(duty_document(s)?),
+        R::ReactionTorque => real(s.reaction_torque()),
+        R::BalancingTorque => real(s.balancing_torque()),
+    })
+}
 
 /// FMI status of a refused or partial call.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -520,91 +565,14 @@ impl Instance {
     /// stored (the simulation is rebuilt from it), an input is stored and,
     /// once the simulation exists, passed on to it.
     fn set(&mut self, variable: Variable, value: Value) -> Result<(), Refusal> {
-        use Variable as V;
         let v = variable.value_reference();
-        match variable {
-            V::SceneFile
-            | V::WearStateFile
-            | V::WearStateAccept
-            | V::DutyTorqueEdges
-            | V::DutySpeedEdges
-            | V::Fidelity
-            | V::HeldMember
-            | V::InputMember
-            | V::DriveMode
-            | V::Integrator
-            | V::StepsPerMeshCycle
-            | V::HarmonicWindowCycles
-            | V::SamplesPerMeshCycle
-            | V::Planets
-            | V::SunTeeth
-            | V::PlanetTeeth
-            | V::RingTeeth
-            | V::RhoInfinity
-            | V::RelativeTolerance
-            | V::Module
-            | V::PressureAngle
-            | V::FaceWidth
-            | V::CentreDistance
-            | V::SunToothThickness
-            | V::PlanetToothThickness
-            | V::RingToothThickness
-            | V::SunTipRadius
-            | V::SunRootRadius
-            | V::SunBoreRadius
-            | V::PlanetTipRadius
-            | V::PlanetRootRadius
-            | V::PlanetBoreRadius
-            | V::RingMinorRadius
-            | V::RingRootRadius
-            | V::RingRimRadius
-            | V::HobTipRadius
-            | V::RingFilletRadius
-            | V::TipChamferHeight
-            | V::TipChamferAngle
-            | V::YoungsModulus
-            | V::PoissonRatio
-            | V::Density
-            | V::SunInertia
-            | V::SunMass
-            | V::PlanetInertia
-            | V::PlanetMass
-            | V::RingInertia
-            | V::RingMass
-            | V::CarrierInertia
-            | V::CarrierMass
-            | V::SunBearingStiffness
-            | V::RingBearingStiffness
-            | V::CarrierBearingStiffness
-            | V::PlanetBearingStiffness
-            | V::BearingDampingRatio
-            | V::MeshDampingRatio
-            | V::ShaftStiffness
-            | V::SteadySpeedStep
-            | V::SteadyTorqueStep
-            | V::SteadyAgreement
-            | V::LoadBalance
-            | V::GearData
-            | V::SunProfileShift
-            | V::PlanetProfileShift
-            | V::RingProfileShift
-            | V::AddendumFactor
-            | V::DedendumFactor
-            | V::ToolTipRadiusFactor
-            | V::RingToolTipRadiusFactor
-            | V::SunToothThicknessAllowance
-            | V::PlanetToothThicknessAllowance
-            | V::RingToothThicknessAllowance
-            | V::SunTipDiameter
-            | V::PlanetTipDiameter
-            | V::RingTipDiameter
-            | V::SpeedDrivenMember
-            | V::InitialSpeed => {
+        match variable.info().causality {
+            Causality::Parameter => {
                 self.store(v, value);
                 self.changed(v);
                 Ok(())
             }
-            V::SunTorque | V::RingTorque | V::CarrierTorque | V::InputSpeedReference => {
+            Causality::Input => {
                 self.store(v, value);
                 if self.sim.is_some() {
                     self.explicitly_set.insert(v);
@@ -613,154 +581,7 @@ impl Instance {
                 self.changed(v);
                 Ok(())
             }
-            V::SunSpeed
-            | V::RingSpeed
-            | V::CarrierSpeed
-            | V::SunAngle
-            | V::RingAngle
-            | V::CarrierAngle
-            | V::InputShaftTorque
-            | V::Planet1SunMeshForce
-            | V::Planet1RingMeshForce
-            | V::Planet2SunMeshForce
-            | V::Planet2RingMeshForce
-            | V::Planet3SunMeshForce
-            | V::Planet3RingMeshForce
-            | V::Planet4SunMeshForce
-            | V::Planet4RingMeshForce
-            | V::Planet5SunMeshForce
-            | V::Planet5RingMeshForce
-            | V::Planet6SunMeshForce
-            | V::Planet6RingMeshForce
-            | V::Planet7SunMeshForce
-            | V::Planet7RingMeshForce
-            | V::Planet8SunMeshForce
-            | V::Planet8RingMeshForce
-            | V::TrackedPairSunForce
-            | V::TrackedPairRingForce
-            | V::Planet1SunTransmissionError
-            | V::Planet1RingTransmissionError
-            | V::Planet1SunStaticTransmissionError
-            | V::Planet1RingStaticTransmissionError
-            | V::SunBearingForce
-            | V::RingBearingForce
-            | V::CarrierBearingForce
-            | V::Planet1BearingForce
-            | V::Planet2BearingForce
-            | V::Planet3BearingForce
-            | V::Planet4BearingForce
-            | V::Planet5BearingForce
-            | V::Planet6BearingForce
-            | V::Planet7BearingForce
-            | V::Planet8BearingForce
-            | V::WindowSunMeshF1
-            | V::WindowSunMeshF2
-            | V::WindowSunMeshF3
-            | V::WindowSunMeshF4
-            | V::WindowSunMeshF5
-            | V::WindowSunMeshF6
-            | V::WindowSunMeshFrms
-            | V::WindowSunSeparation
-            | V::WindowRingMeshF1
-            | V::WindowRingMeshF2
-            | V::WindowRingMeshF3
-            | V::WindowRingMeshF4
-            | V::WindowRingMeshF5
-            | V::WindowRingMeshF6
-            | V::WindowRingMeshFrms
-            | V::WindowRingSeparation
-            | V::WindowSunMeshMean
-            | V::WindowRingMeshMean
-            | V::Planet1SunPairsInContact
-            | V::Planet1RingPairsInContact
-            | V::Planet2SunPairsInContact
-            | V::Planet2RingPairsInContact
-            | V::Planet3SunPairsInContact
-            | V::Planet3RingPairsInContact
-            | V::Planet4SunPairsInContact
-            | V::Planet4RingPairsInContact
-            | V::Planet5SunPairsInContact
-            | V::Planet5RingPairsInContact
-            | V::Planet6SunPairsInContact
-            | V::Planet6RingPairsInContact
-            | V::Planet7SunPairsInContact
-            | V::Planet7RingPairsInContact
-            | V::Planet8SunPairsInContact
-            | V::Planet8RingPairsInContact
-            | V::WindowCycles
-            | V::Planet1SunMeshForceMax
-            | V::Planet1SunMeshForceMin
-            | V::Planet1RingMeshForceMax
-            | V::Planet1RingMeshForceMin
-            | V::SunMeshForceMax
-            | V::RingMeshForceMax
-            | V::Planet1SunSeparated
-            | V::Planet1RingSeparated
-            | V::SunMeshSeparated
-            | V::RingMeshSeparated
-            | V::Planet2SunMeshForceMax
-            | V::Planet2SunMeshForceMin
-            | V::Planet2RingMeshForceMax
-            | V::Planet2RingMeshForceMin
-            | V::Planet3SunMeshForceMax
-            | V::Planet3SunMeshForceMin
-            | V::Planet3RingMeshForceMax
-            | V::Planet3RingMeshForceMin
-            | V::Planet4SunMeshForceMax
-            | V::Planet4SunMeshForceMin
-            | V::Planet4RingMeshForceMax
-            | V::Planet4RingMeshForceMin
-            | V::Planet5SunMeshForceMax
-            | V::Planet5SunMeshForceMin
-            | V::Planet5RingMeshForceMax
-            | V::Planet5RingMeshForceMin
-            | V::Planet6SunMeshForceMax
-            | V::Planet6SunMeshForceMin
-            | V::Planet6RingMeshForceMax
-            | V::Planet6RingMeshForceMin
-            | V::Planet7SunMeshForceMax
-            | V::Planet7SunMeshForceMin
-            | V::Planet7RingMeshForceMax
-            | V::Planet7RingMeshForceMin
-            | V::Planet8SunMeshForceMax
-            | V::Planet8SunMeshForceMin
-            | V::Planet8RingMeshForceMax
-            | V::Planet8RingMeshForceMin
-            | V::Planet2SunSeparated
-            | V::Planet2RingSeparated
-            | V::Planet3SunSeparated
-            | V::Planet3RingSeparated
-            | V::Planet4SunSeparated
-            | V::Planet4RingSeparated
-            | V::Planet5SunSeparated
-            | V::Planet5RingSeparated
-            | V::Planet6SunSeparated
-            | V::Planet6RingSeparated
-            | V::Planet7SunSeparated
-            | V::Planet7RingSeparated
-            | V::Planet8SunSeparated
-            | V::Planet8RingSeparated
-            | V::Planet1SunToothForceMax
-            | V::Planet1RingToothForceMax
-            | V::Planet2SunToothForceMax
-            | V::Planet2RingToothForceMax
-            | V::Planet3SunToothForceMax
-            | V::Planet3RingToothForceMax
-            | V::Planet4SunToothForceMax
-            | V::Planet4RingToothForceMax
-            | V::Planet5SunToothForceMax
-            | V::Planet5RingToothForceMax
-            | V::Planet6SunToothForceMax
-            | V::Planet6RingToothForceMax
-            | V::Planet7SunToothForceMax
-            | V::Planet7RingToothForceMax
-            | V::Planet8SunToothForceMax
-            | V::Planet8RingToothForceMax
-            | V::SunToothForceMax
-            | V::RingToothForceMax
-            | V::DutyCycle
-            | V::ReactionTorque
-            | V::BalancingTorque => {
+            Causality::Output => {
                 Err(Refusal::error(format!("{} is an output and cannot be set", variable.name())))
             }
         }
@@ -803,261 +624,17 @@ impl Instance {
     /// The value of a variable: a parameter's or an input's as set, an
     /// output's read from the simulation (built first if need be).
     fn get(&mut self, variable: Variable) -> Result<Value, Refusal> {
-        use MeshKind::{RingPlanet as Ring, SunPlanet as Sun};
-        use Variable as V;
         let v = variable.value_reference();
-        if variable.info().causality == Causality::Output {
-            self.sim()?;
-        }
-        let sim = || self.sim.as_ref().ok_or_else(|| Refusal::error("no simulation"));
-        let real = |read: &dyn Fn(&Simulation) -> f64| Ok::<_, Refusal>(Value::Real(read(sim()?)));
-        let mesh_force = |p: usize, m: MeshKind| real(&|s| s.mesh_force(p, m));
-        let bearing = |b: Bearing| real(&|s| s.bearing_force(b));
-        // Over the window; 0 until it is full.
-        let window = |m: MeshKind, read: fn(&Harmonics, f64) -> f64| {
-            real(&|s| s.window_harmonics(m).map_or(0.0, |(h, sep)| read(&h, sep)))
+        let Some(reading) = variable.reading() else {
+            return Ok(match variable.info().kind {
+                Kind::Real => Value::Real(self.real(v)),
+                Kind::Integer => Value::Integer(self.int(v)),
+                Kind::Boolean => Value::Boolean(self.booleans.get(&v).copied().unwrap_or(false)),
+                Kind::String => Value::String(self.strings.get(&v).cloned().unwrap_or_default()),
+            });
         };
-        let pairs = |p: usize, m: MeshKind| Ok(Value::Integer(sim()?.pairs_in_contact(p, m) as i32));
-        // Over the last communication step; 0 beyond the number of planets.
-        let extreme = |p: usize, m: MeshKind, read: fn(&MeshExtremes) -> f64| {
-            real(&|s| s.step_extremes().mesh(p, m).as_ref().map_or(0.0, read))
-        };
-        let flag = |p: usize, m: MeshKind| {
-            let separated = sim()?.step_extremes().mesh(p, m).is_some_and(|e| e.separated);
-            Ok::<_, Refusal>(Value::Integer(i32::from(separated)))
-        };
-        let any_flag = |m: MeshKind| {
-            Ok::<_, Refusal>(Value::Integer(i32::from(sim()?.step_extremes().any_separated(m))))
-        };
-        Ok(match variable {
-            V::SceneFile | V::WearStateFile | V::WearStateAccept | V::DutyTorqueEdges | V::DutySpeedEdges => {
-                Value::String(self.strings.get(&v).cloned().unwrap_or_default())
-            }
-            V::DutyCycle => Value::String(duty_document(sim()?)?),
-            V::Fidelity
-            | V::HeldMember
-            | V::InputMember
-            | V::DriveMode
-            | V::Integrator
-            | V::StepsPerMeshCycle
-            | V::HarmonicWindowCycles
-            | V::SamplesPerMeshCycle
-            | V::Planets
-            | V::SunTeeth
-            | V::PlanetTeeth
-            | V::RingTeeth
-            | V::LoadBalance
-            | V::GearData
-            | V::SpeedDrivenMember => Value::Integer(self.int(v)),
-            V::SunProfileShift
-            | V::PlanetProfileShift
-            | V::RingProfileShift
-            | V::AddendumFactor
-            | V::DedendumFactor
-            | V::ToolTipRadiusFactor
-            | V::RingToolTipRadiusFactor
-            | V::SunToothThicknessAllowance
-            | V::PlanetToothThicknessAllowance
-            | V::RingToothThicknessAllowance
-            | V::SunTipDiameter
-            | V::PlanetTipDiameter
-            | V::RingTipDiameter
-            | V::RhoInfinity
-            | V::RelativeTolerance
-            | V::Module
-            | V::PressureAngle
-            | V::FaceWidth
-            | V::CentreDistance
-            | V::SunToothThickness
-            | V::PlanetToothThickness
-            | V::RingToothThickness
-            | V::SunTipRadius
-            | V::SunRootRadius
-            | V::SunBoreRadius
-            | V::PlanetTipRadius
-            | V::PlanetRootRadius
-            | V::PlanetBoreRadius
-            | V::RingMinorRadius
-            | V::RingRootRadius
-            | V::RingRimRadius
-            | V::HobTipRadius
-            | V::RingFilletRadius
-            | V::TipChamferHeight
-            | V::TipChamferAngle
-            | V::YoungsModulus
-            | V::PoissonRatio
-            | V::Density
-            | V::SunInertia
-            | V::SunMass
-            | V::PlanetInertia
-            | V::PlanetMass
-            | V::RingInertia
-            | V::RingMass
-            | V::CarrierInertia
-            | V::CarrierMass
-            | V::SunBearingStiffness
-            | V::RingBearingStiffness
-            | V::CarrierBearingStiffness
-            | V::PlanetBearingStiffness
-            | V::BearingDampingRatio
-            | V::MeshDampingRatio
-            | V::ShaftStiffness
-            | V::SteadySpeedStep
-            | V::SteadyTorqueStep
-            | V::SteadyAgreement
-            | V::InitialSpeed
-            | V::SunTorque
-            | V::RingTorque
-            | V::CarrierTorque
-            | V::InputSpeedReference => Value::Real(self.real(v)),
-            V::SunSpeed => real(&|s| s.speed(Member::Sun))?,
-            V::RingSpeed => real(&|s| s.speed(Member::Ring))?,
-            V::CarrierSpeed => real(&|s| s.speed(Member::Carrier))?,
-            V::SunAngle => real(&|s| s.angle(Member::Sun))?,
-            V::RingAngle => real(&|s| s.angle(Member::Ring))?,
-            V::CarrierAngle => real(&|s| s.angle(Member::Carrier))?,
-            V::InputShaftTorque => real(&|s| s.input_torque())?,
-            V::Planet1SunMeshForce => mesh_force(0, Sun)?,
-            V::Planet1RingMeshForce => mesh_force(0, Ring)?,
-            V::Planet2SunMeshForce => mesh_force(1, Sun)?,
-            V::Planet2RingMeshForce => mesh_force(1, Ring)?,
-            V::Planet3SunMeshForce => mesh_force(2, Sun)?,
-            V::Planet3RingMeshForce => mesh_force(2, Ring)?,
-            V::Planet4SunMeshForce => mesh_force(3, Sun)?,
-            V::Planet4RingMeshForce => mesh_force(3, Ring)?,
-            V::Planet5SunMeshForce => mesh_force(4, Sun)?,
-            V::Planet5RingMeshForce => mesh_force(4, Ring)?,
-            V::Planet6SunMeshForce => mesh_force(5, Sun)?,
-            V::Planet6RingMeshForce => mesh_force(5, Ring)?,
-            V::Planet7SunMeshForce => mesh_force(6, Sun)?,
-            V::Planet7RingMeshForce => mesh_force(6, Ring)?,
-            V::Planet8SunMeshForce => mesh_force(7, Sun)?,
-            V::Planet8RingMeshForce => mesh_force(7, Ring)?,
-            V::TrackedPairSunForce => real(&|s| s.tracked_pair_force(Sun))?,
-            V::TrackedPairRingForce => real(&|s| s.tracked_pair_force(Ring))?,
-            V::Planet1SunTransmissionError => real(&|s| s.transmission_error(0, Sun))?,
-            V::Planet1RingTransmissionError => real(&|s| s.transmission_error(0, Ring))?,
-            V::Planet1SunStaticTransmissionError => real(&|s| s.static_transmission_error(0, Sun))?,
-            V::Planet1RingStaticTransmissionError => real(&|s| s.static_transmission_error(0, Ring))?,
-            V::SunBearingForce => bearing(Bearing::Member(Member::Sun))?,
-            V::RingBearingForce => bearing(Bearing::Member(Member::Ring))?,
-            V::CarrierBearingForce => bearing(Bearing::Member(Member::Carrier))?,
-            V::Planet1BearingForce => bearing(Bearing::Planet(0))?,
-            V::Planet2BearingForce => bearing(Bearing::Planet(1))?,
-            V::Planet3BearingForce => bearing(Bearing::Planet(2))?,
-            V::Planet4BearingForce => bearing(Bearing::Planet(3))?,
-            V::Planet5BearingForce => bearing(Bearing::Planet(4))?,
-            V::Planet6BearingForce => bearing(Bearing::Planet(5))?,
-            V::Planet7BearingForce => bearing(Bearing::Planet(6))?,
-            V::Planet8BearingForce => bearing(Bearing::Planet(7))?,
-            V::WindowSunMeshF1 => window(Sun, |h, _| h.amplitude[0])?,
-            V::WindowSunMeshF2 => window(Sun, |h, _| h.amplitude[1])?,
-            V::WindowSunMeshF3 => window(Sun, |h, _| h.amplitude[2])?,
-            V::WindowSunMeshF4 => window(Sun, |h, _| h.amplitude[3])?,
-            V::WindowSunMeshF5 => window(Sun, |h, _| h.amplitude[4])?,
-            V::WindowSunMeshF6 => window(Sun, |h, _| h.amplitude[5])?,
-            V::WindowSunMeshFrms => window(Sun, |h, _| h.rms)?,
-            V::WindowSunSeparation => window(Sun, |_, sep| sep)?,
-            V::WindowSunMeshMean => window(Sun, |h, _| h.mean)?,
-            V::WindowRingMeshF1 => window(Ring, |h, _| h.amplitude[0])?,
-            V::WindowRingMeshF2 => window(Ring, |h, _| h.amplitude[1])?,
-            V::WindowRingMeshF3 => window(Ring, |h, _| h.amplitude[2])?,
-            V::WindowRingMeshF4 => window(Ring, |h, _| h.amplitude[3])?,
-            V::WindowRingMeshF5 => window(Ring, |h, _| h.amplitude[4])?,
-            V::WindowRingMeshF6 => window(Ring, |h, _| h.amplitude[5])?,
-            V::WindowRingMeshFrms => window(Ring, |h, _| h.rms)?,
-            V::WindowRingSeparation => window(Ring, |_, sep| sep)?,
-            V::WindowRingMeshMean => window(Ring, |h, _| h.mean)?,
-            V::Planet1SunPairsInContact => pairs(0, Sun)?,
-            V::Planet1RingPairsInContact => pairs(0, Ring)?,
-            V::Planet2SunPairsInContact => pairs(1, Sun)?,
-            V::Planet2RingPairsInContact => pairs(1, Ring)?,
-            V::Planet3SunPairsInContact => pairs(2, Sun)?,
-            V::Planet3RingPairsInContact => pairs(2, Ring)?,
-            V::Planet4SunPairsInContact => pairs(3, Sun)?,
-            V::Planet4RingPairsInContact => pairs(3, Ring)?,
-            V::Planet5SunPairsInContact => pairs(4, Sun)?,
-            V::Planet5RingPairsInContact => pairs(4, Ring)?,
-            V::Planet6SunPairsInContact => pairs(5, Sun)?,
-            V::Planet6RingPairsInContact => pairs(5, Ring)?,
-            V::Planet7SunPairsInContact => pairs(6, Sun)?,
-            V::Planet7RingPairsInContact => pairs(6, Ring)?,
-            V::Planet8SunPairsInContact => pairs(7, Sun)?,
-            V::Planet8RingPairsInContact => pairs(7, Ring)?,
-            V::WindowCycles => Value::Integer(sim()?.window_cycles() as i32),
-            V::Planet1SunMeshForceMax => extreme(0, Sun, |e| e.max)?,
-            V::Planet1SunMeshForceMin => extreme(0, Sun, |e| e.min)?,
-            V::Planet1RingMeshForceMax => extreme(0, Ring, |e| e.max)?,
-            V::Planet1RingMeshForceMin => extreme(0, Ring, |e| e.min)?,
-            V::Planet2SunMeshForceMax => extreme(1, Sun, |e| e.max)?,
-            V::Planet2SunMeshForceMin => extreme(1, Sun, |e| e.min)?,
-            V::Planet2RingMeshForceMax => extreme(1, Ring, |e| e.max)?,
-            V::Planet2RingMeshForceMin => extreme(1, Ring, |e| e.min)?,
-            V::Planet3SunMeshForceMax => extreme(2, Sun, |e| e.max)?,
-            V::Planet3SunMeshForceMin => extreme(2, Sun, |e| e.min)?,
-            V::Planet3RingMeshForceMax => extreme(2, Ring, |e| e.max)?,
-            V::Planet3RingMeshForceMin => extreme(2, Ring, |e| e.min)?,
-            V::Planet4SunMeshForceMax => extreme(3, Sun, |e| e.max)?,
-            V::Planet4SunMeshForceMin => extreme(3, Sun, |e| e.min)?,
-            V::Planet4RingMeshForceMax => extreme(3, Ring, |e| e.max)?,
-            V::Planet4RingMeshForceMin => extreme(3, Ring, |e| e.min)?,
-            V::Planet5SunMeshForceMax => extreme(4, Sun, |e| e.max)?,
-            V::Planet5SunMeshForceMin => extreme(4, Sun, |e| e.min)?,
-            V::Planet5RingMeshForceMax => extreme(4, Ring, |e| e.max)?,
-            V::Planet5RingMeshForceMin => extreme(4, Ring, |e| e.min)?,
-            V::Planet6SunMeshForceMax => extreme(5, Sun, |e| e.max)?,
-            V::Planet6SunMeshForceMin => extreme(5, Sun, |e| e.min)?,
-            V::Planet6RingMeshForceMax => extreme(5, Ring, |e| e.max)?,
-            V::Planet6RingMeshForceMin => extreme(5, Ring, |e| e.min)?,
-            V::Planet7SunMeshForceMax => extreme(6, Sun, |e| e.max)?,
-            V::Planet7SunMeshForceMin => extreme(6, Sun, |e| e.min)?,
-            V::Planet7RingMeshForceMax => extreme(6, Ring, |e| e.max)?,
-            V::Planet7RingMeshForceMin => extreme(6, Ring, |e| e.min)?,
-            V::Planet8SunMeshForceMax => extreme(7, Sun, |e| e.max)?,
-            V::Planet8SunMeshForceMin => extreme(7, Sun, |e| e.min)?,
-            V::Planet8RingMeshForceMax => extreme(7, Ring, |e| e.max)?,
-            V::Planet8RingMeshForceMin => extreme(7, Ring, |e| e.min)?,
-            V::Planet1SunToothForceMax => extreme(0, Sun, |e| e.peak_pair)?,
-            V::Planet1RingToothForceMax => extreme(0, Ring, |e| e.peak_pair)?,
-            V::Planet2SunToothForceMax => extreme(1, Sun, |e| e.peak_pair)?,
-            V::Planet2RingToothForceMax => extreme(1, Ring, |e| e.peak_pair)?,
-            V::Planet3SunToothForceMax => extreme(2, Sun, |e| e.peak_pair)?,
-            V::Planet3RingToothForceMax => extreme(2, Ring, |e| e.peak_pair)?,
-            V::Planet4SunToothForceMax => extreme(3, Sun, |e| e.peak_pair)?,
-            V::Planet4RingToothForceMax => extreme(3, Ring, |e| e.peak_pair)?,
-            V::Planet5SunToothForceMax => extreme(4, Sun, |e| e.peak_pair)?,
-            V::Planet5RingToothForceMax => extreme(4, Ring, |e| e.peak_pair)?,
-            V::Planet6SunToothForceMax => extreme(5, Sun, |e| e.peak_pair)?,
-            V::Planet6RingToothForceMax => extreme(5, Ring, |e| e.peak_pair)?,
-            V::Planet7SunToothForceMax => extreme(6, Sun, |e| e.peak_pair)?,
-            V::Planet7RingToothForceMax => extreme(6, Ring, |e| e.peak_pair)?,
-            V::Planet8SunToothForceMax => extreme(7, Sun, |e| e.peak_pair)?,
-            V::Planet8RingToothForceMax => extreme(7, Ring, |e| e.peak_pair)?,
-            V::SunMeshForceMax => real(&|s| s.step_extremes().any_max(Sun))?,
-            V::RingMeshForceMax => real(&|s| s.step_extremes().any_max(Ring))?,
-            V::SunToothForceMax => real(&|s| s.step_extremes().any_peak_pair(Sun))?,
-            V::RingToothForceMax => real(&|s| s.step_extremes().any_peak_pair(Ring))?,
-            V::Planet1SunSeparated => flag(0, Sun)?,
-            V::Planet1RingSeparated => flag(0, Ring)?,
-            V::Planet2SunSeparated => flag(1, Sun)?,
-            V::Planet2RingSeparated => flag(1, Ring)?,
-            V::Planet3SunSeparated => flag(2, Sun)?,
-            V::Planet3RingSeparated => flag(2, Ring)?,
-            V::Planet4SunSeparated => flag(3, Sun)?,
-            V::Planet4RingSeparated => flag(3, Ring)?,
-            V::Planet5SunSeparated => flag(4, Sun)?,
-            V::Planet5RingSeparated => flag(4, Ring)?,
-            V::Planet6SunSeparated => flag(5, Sun)?,
-            V::Planet6RingSeparated => flag(5, Ring)?,
-            V::Planet7SunSeparated => flag(6, Sun)?,
-            V::Planet7RingSeparated => flag(6, Ring)?,
-            V::Planet8SunSeparated => flag(7, Sun)?,
-            V::Planet8RingSeparated => flag(7, Ring)?,
-            V::SunMeshSeparated => any_flag(Sun)?,
-            V::RingMeshSeparated => any_flag(Ring)?,
-            V::ReactionTorque => real(&|s| s.reaction_torque())?,
-            V::BalancingTorque => real(&|s| s.balancing_torque())?,
-        })
+        let sim = self.sim()?;
+        read(sim, reading)
     }
 
     /// The variable of a base type with a value reference; `a` is the
@@ -1277,6 +854,7 @@ fn duty_document(sim: &Simulation) -> Result<String, Refusal> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::gear::Member;
 
     #[test]
     fn parameters_change_the_build_key_and_inputs_do_not() {
@@ -1376,7 +954,7 @@ mod tests {
             "dynamics.steady_agreement",
         ];
         for p in Settable::ALL {
-            for key in parameters::scene_keys(*p) {
+            for key in p.scene_keys() {
                 assert!(
                     has(key) || optional.contains(key),
                     "{}: scene key {key} is not in the scene file",
