@@ -52,6 +52,33 @@ pub enum DutyError {
     /// Two duties with different bins or meshes cannot be added.
     #[error("load duties with different {0} cannot be added")]
     Mismatch(&'static str),
+    /// A duty read back whose counts do not fit its bins and planets.
+    #[error("{planets} planets need {revolutions} revolutions and {outside} outside values, found {found_revolutions} and {found_outside}")]
+    Sizes {
+        /// Planets of the duty.
+        planets: usize,
+        /// Revolutions the bins need.
+        revolutions: usize,
+        /// Outside values the meshes need.
+        outside: usize,
+        /// Revolutions found.
+        found_revolutions: usize,
+        /// Outside values found.
+        found_outside: usize,
+    },
+    /// A duty read back with a negative or non-finite count.
+    #[error("a count of {0}: revolutions and time are finite and non-negative")]
+    Count(f64),
+    /// A mesh whose bins and outside do not add up to the duty's total.
+    #[error("mesh {mesh} has {sum} revolutions in its bins and outside, the duty {total}")]
+    Unbalanced {
+        /// The mesh, 1-based.
+        mesh: usize,
+        /// Its bins and outside.
+        sum: f64,
+        /// The duty's total.
+        total: f64,
+    },
 }
 
 /// The bin edges: load torque \[N·m\] × input speed \[rad/s\].
@@ -322,32 +349,28 @@ impl LoadDuty {
 
     /// Checks a duty read back: bins, sizes, finite non-negative counts, and each mesh's bins
     /// and outside adding up to the total (to a relative 1e-9).
-    pub fn check(&self) -> Result<(), String> {
-        self.bins.check().map_err(|e| e.to_string())?;
+    pub fn check(&self) -> Result<(), DutyError> {
+        self.bins.check()?;
         let (nt, ns) = self.bins.shape();
         let meshes = 2 * self.planets;
         if self.planets == 0 || self.revolutions.len() != meshes * nt * ns || self.outside.len() != meshes {
-            return Err(format!(
-                "{} planets need {} revolutions and {meshes} outside values, found {} and {}",
-                self.planets,
-                meshes * nt * ns,
-                self.revolutions.len(),
-                self.outside.len()
-            ));
+            return Err(DutyError::Sizes {
+                planets: self.planets,
+                revolutions: meshes * nt * ns,
+                outside: meshes,
+                found_revolutions: self.revolutions.len(),
+                found_outside: self.outside.len(),
+            });
         }
         let values = self.revolutions.iter().chain(&self.outside).chain([&self.total, &self.duration]);
         if let Some(v) = values.into_iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
-            return Err(format!("a count of {v}: revolutions and time are finite and non-negative"));
+            return Err(DutyError::Count(*v));
         }
         for m in 0..meshes {
             let sum: f64 =
                 self.revolutions[m * nt * ns..(m + 1) * nt * ns].iter().sum::<f64>() + self.outside[m];
             if (sum - self.total).abs() > 1e-9 * self.total.max(1.0) {
-                return Err(format!(
-                    "mesh {} has {sum} revolutions in its bins and outside, the duty {}",
-                    m + 1,
-                    self.total
-                ));
+                return Err(DutyError::Unbalanced { mesh: m + 1, sum, total: self.total });
             }
         }
         Ok(())

@@ -105,7 +105,7 @@ impl DutyCycle {
 
     /// The JSON document; a duty that does not add up ([`LoadDuty::check`]) is refused.
     pub fn to_json(&self) -> Result<String, DutyCycleError> {
-        self.duty.check().map_err(DutyCycleError::Invalid)?;
+        self.duty.check().map_err(|e| DutyCycleError::Invalid(e.to_string()))?;
         let content = serde_json::to_value(self).map_err(|e| DutyCycleError::Invalid(e.to_string()))?;
         let doc = serde_json::json!({
             "format": FORMAT,
@@ -123,7 +123,7 @@ impl DutyCycle {
         let content = open_document(text, FORMAT, VERSION).map_err(document_error)?;
         let cycle: DutyCycle =
             serde_json::from_value(content).map_err(|e| DutyCycleError::Invalid(e.to_string()))?;
-        cycle.duty.check().map_err(DutyCycleError::Invalid)?;
+        cycle.duty.check().map_err(|e| DutyCycleError::Invalid(e.to_string()))?;
         let here = GearSetPrint::of(set);
         let differences = cycle.gear_set.differences(&here);
         if here.fingerprint != cycle.gear_set.fingerprint && !differences.is_empty() {

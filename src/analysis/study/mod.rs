@@ -5,6 +5,7 @@
 //!
 //! - [`calibrate`]: scene parameters fitted to target natural frequencies
 //!   and double-contact shares.
+//! - [`error`]: why a study failed ([`StudyError`]).
 //! - [`peaks`]: resonance peaks of a sweep and the mode behind each.
 //! - [`validation`]: every claim of the study beside ours, with tolerance
 //!   and verdict, and the published benchmarks.
@@ -12,6 +13,9 @@
 //!   one modelling factor at a time.
 
 pub mod calibrate;
+pub mod error;
 pub mod peaks;
 pub mod validation;
 pub mod wear_effect;
+
+pub use error::StudyError;

@@ -11,6 +11,7 @@
 //! off-resonance speeds. The sign of ΔF^(rms) against the factor says which
 //! modelling choice decides it.
 
+use crate::analysis::study::StudyError;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -271,18 +272,18 @@ pub fn mesh_loads(
     run: &RunSettings,
     state: &WornState,
     speeds: &[f64],
-) -> Result<Vec<MeshLoads>, String> {
-    let mut model = PlanetaryDynamics::new(set, state.set_model(set)).map_err(|e| e.to_string())?;
+) -> Result<Vec<MeshLoads>, StudyError> {
+    let mut model = PlanetaryDynamics::new(set, state.set_model(set))?;
     speeds
         .iter()
         .map(|omega| {
             let ss = steady_state(&mut model, set, run, *omega, None)
-                .map_err(|e| format!("{} rpm: {e}", rad_per_s_to_rpm(*omega)))?;
+                .map_err(|e| StudyError::from(e).at(format!("{} rpm", rad_per_s_to_rpm(*omega))))?;
             let m = |k: MeshKind| {
                 ss.meshes
                     .iter()
                     .find(|m| m.planet == 0 && m.mesh == k)
-                    .ok_or("no mesh of planet 1".to_string())
+                    .ok_or(StudyError::Incomplete("no mesh of planet 1"))
             };
             let (s, r) = (m(MeshKind::SunPlanet)?, m(MeshKind::RingPlanet)?);
             Ok(MeshLoads {
@@ -327,14 +328,14 @@ impl VariantResult {
 }
 
 /// Runs one variant: the wear model to `kappa`, then the figures at κ = 0 and κ.
-pub fn run_variant(v: &Variant, kappa: u32, speeds: &[f64]) -> Result<VariantResult, String> {
+pub fn run_variant(v: &Variant, kappa: u32, speeds: &[f64]) -> Result<VariantResult, StudyError> {
     let started = std::time::Instant::now();
-    let (set, run) = v.scene.validate_with_run().map_err(|e| format!("{}: {e}", v.key))?;
+    let (set, run) = v.scene.validate_with_run().map_err(|e| StudyError::from(e).at(&v.key))?;
     let mut settings = WearSettings::for_set(&set);
     (v.wear)(&mut settings);
-    let model = WearModel::with_run(&set, &run, settings).map_err(|e| format!("{}: {e}", v.key))?;
+    let model = WearModel::with_run(&set, &run, settings).map_err(|e| StudyError::from(e).at(&v.key))?;
     let unworn = model.unworn();
-    let worn = model.run_to_kappa(&unworn, kappa).map_err(|e| format!("{}: {e}", v.key))?;
+    let worn = model.run_to_kappa(&unworn, kappa).map_err(|e| StudyError::from(e).at(&v.key))?;
     let samples = set.analysis().positions_per_mesh_cycle;
     let statics = [StaticFigures::of(&unworn, &set, samples), StaticFigures::of(&worn, &set, samples)];
     let loads = [mesh_loads(&set, &run, &unworn, speeds)?, mesh_loads(&set, &run, &worn, speeds)?];
@@ -352,6 +353,6 @@ pub fn run_variant(v: &Variant, kappa: u32, speeds: &[f64]) -> Result<VariantRes
 }
 
 /// Runs every variant (in parallel) and returns their results in order.
-pub fn run_all(variants: &[Variant], kappa: u32, speeds: &[f64]) -> Vec<Result<VariantResult, String>> {
+pub fn run_all(variants: &[Variant], kappa: u32, speeds: &[f64]) -> Vec<Result<VariantResult, StudyError>> {
     variants.par_iter().map(|v| run_variant(v, kappa, speeds)).collect()
 }

@@ -13,6 +13,7 @@
 //! Where no stable stretch spans a speed, the curve takes the branch's
 //! unstable state there, and the count of such speeds is reported.
 
+use crate::analysis::study::StudyError;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -81,25 +82,23 @@ pub(super) fn follow(
     (from, to, step): (f64, f64, f64),
     spots: &[f64],
     joining: Option<&Branch>,
-) -> Result<(Continued, Branch), String> {
-    let problem =
-        PeriodicProblem::new(model.clone(), ShootingSettings::default(), from).map_err(|e| e.to_string())?;
-    let hb = HarmonicBalance::new(problem, HarmonicSettings::default()).map_err(|e| e.to_string())?;
+) -> Result<(Continued, Branch), StudyError> {
+    let problem = PeriodicProblem::new(model.clone(), ShootingSettings::default(), from)?;
+    let hb = HarmonicBalance::new(problem, HarmonicSettings::default())?;
     let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
     let settings = ContinuationSettings::new(from, to, step);
     let mut solver = CondensedBranch::new(&mut cb);
     let branch = match joining {
         Some(other) => follow_joining(&mut solver, &settings, other, |_| {}),
         None => follow_branch(&mut solver, &settings, |_| {}),
-    }
-    .map_err(|e| e.to_string())?;
+    }?;
     let orbits = std::mem::take(&mut solver.orbits);
     let cyclic = cb.symmetry() == Symmetry::Cyclic;
     let mut points = Vec::with_capacity(orbits.len());
     let mut ends = Vec::with_capacity(orbits.len());
     let mut nearest: Vec<Option<(f64, CurvePoint, State)>> = vec![None; spots.len()];
     for (orbit, p) in orbits.iter().zip(&branch.points) {
-        let ss = cb.balance().steady_state(orbit).map_err(|e| e.to_string())?;
+        let ss = cb.balance().steady_state(orbit)?;
         let m = measures(&ss);
         for (near, spot) in nearest.iter_mut().zip(spots) {
             let d = (orbit.speed - spot).abs();
@@ -247,7 +246,7 @@ impl Continuing<'_> {
     /// unbroken stretch (below, it would retrace it); the up run's curve is
     /// read (its unstable stretches marched) while the down run is followed
     /// and read.
-    fn state(&self, s: usize) -> Result<[Read; 2], String> {
+    fn state(&self, s: usize) -> Result<[Read; 2], StudyError> {
         let model = self.models[s];
         let (up, branch) = follow(model, (self.first, self.last, self.step), &self.spots, None)?;
         let (up, down) = rayon::join(
@@ -274,7 +273,7 @@ impl Continuing<'_> {
     /// stretch, in the run's direction, started as a sweep enters it: from the
     /// stable state read at the grid speed before it ([`Continued::march_start`]).
     /// Speeds below a run's join are left to the caller.
-    fn read(&self, s: usize, run: Continued, direction: Direction) -> Result<Read, String> {
+    fn read(&self, s: usize, run: Continued, direction: Direction) -> Result<Read, StudyError> {
         let (mut curve, mut unstable) = run.curve(&self.speeds, self.kappas[s], direction);
         if let Some(joined) = run.joined {
             for (u, w) in unstable.iter_mut().zip(&self.speeds) {
@@ -303,13 +302,13 @@ impl Continuing<'_> {
                 )
                 .map(|sweep| (indices, sweep))
                 .map_err(|e| {
-                    format!(
-                        "marching over an unstable stretch from {:.0} rpm: {e}",
+                    StudyError::from(e).at(format!(
+                        "marching over an unstable stretch from {:.0} rpm",
                         rad_per_s_to_rpm(grid[0])
-                    )
+                    ))
                 })
             })
-            .collect::<Result<Vec<_>, String>>()?;
+            .collect::<Result<Vec<_>, StudyError>>()?;
         let mut count = 0;
         for (indices, sweep) in marched {
             count += indices.len();
@@ -322,15 +321,16 @@ impl Continuing<'_> {
 
     /// Marches from each run's stable points nearest the spot speeds and
     /// sets the result beside the branch.
-    fn spot_checks(&self, reads: &[Read]) -> Result<Vec<Spot>, String> {
+    fn spot_checks(&self, reads: &[Read]) -> Result<Vec<Spot>, StudyError> {
         let marches: Vec<(usize, &Read, &(CurvePoint, State))> =
             reads.iter().enumerate().flat_map(|(k, r)| r.run.spots.iter().map(move |s| (k, r, s))).collect();
         marches
             .par_iter()
             .map(|&(k, r, (point, state))| {
                 let mut m = self.models[k / 2].clone();
-                let ss = steady_state(&mut m, self.set, self.run, point.speed, Some(state))
-                    .map_err(|e| format!("spot check at {:.1} rpm: {e}", rad_per_s_to_rpm(point.speed)))?;
+                let ss = steady_state(&mut m, self.set, self.run, point.speed, Some(state)).map_err(|e| {
+                    StudyError::from(e).at(format!("spot check at {:.1} rpm", rad_per_s_to_rpm(point.speed)))
+                })?;
                 Ok(Spot {
                     kappa: r.curve.kappa,
                     direction: r.curve.direction,
@@ -375,7 +375,7 @@ pub(super) fn sweep_run(
     models: [&PlanetaryDynamics; 2],
     kappa: u32,
     integrator: &str,
-) -> Result<SweepRun, String> {
+) -> Result<SweepRun, StudyError> {
     debug_assert_eq!(plan.forced, ForcedResponse::Continuation);
     let t = Instant::now();
     let grid = plan.speeds();

@@ -27,6 +27,7 @@
 //! built or from the input data). The headline ([`headline`]) counts the
 //! independent rows' passes and gives the other two apart.
 
+use crate::analysis::study::StudyError;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -549,14 +550,14 @@ struct Modes {
 }
 
 impl Modes {
-    fn compute(scene: &Scene, contact: &SetModel) -> Result<Self, String> {
+    fn compute(scene: &Scene, contact: &SetModel) -> Result<Self, StudyError> {
         let t = Instant::now();
-        let dynamics_of = |fidelity: Fidelity| -> Result<PlanetaryDynamics, String> {
+        let dynamics_of = |fidelity: Fidelity| -> Result<PlanetaryDynamics, StudyError> {
             // The fidelity is a term of the equations, so of the gear set.
             let mut at = scene.clone();
             at.dynamics.fidelity = fidelity;
-            let s = at.validate().map_err(|e| e.to_string())?;
-            PlanetaryDynamics::new(&s, contact.clone()).map_err(|e| e.to_string())
+            let s = at.validate()?;
+            Ok(PlanetaryDynamics::new(&s, contact.clone())?)
         };
         let torsional_model = dynamics_of(Fidelity::Torsional)?;
         let torsional = natural_modes(&torsional_model.lumped);
@@ -584,19 +585,19 @@ struct WearRun {
 }
 
 impl WearRun {
-    fn compute(set: &GearSet, plan: &ValidationPlan) -> Result<Self, String> {
+    fn compute(set: &GearSet, plan: &ValidationPlan) -> Result<Self, StudyError> {
         let t = Instant::now();
-        let wear = WearModel::new(set, WearSettings::for_set(set)).map_err(|e| e.to_string())?;
+        let wear = WearModel::new(set, WearSettings::for_set(set))?;
         let unworn = wear.unworn();
-        let worn = wear.run_to_kappa(&unworn, plan.kappa).map_err(|e| e.to_string())?;
+        let worn = wear.run_to_kappa(&unworn, plan.kappa)?;
         let seconds = t.elapsed().as_secs_f64();
         let fine = if plan.wear_resolution_check {
             let t = Instant::now();
             let mut s = WearSettings::for_set(set);
             s.positions = 800;
             s.profile_points = 200;
-            let m = WearModel::new(set, s).map_err(|e| e.to_string())?;
-            let w = m.run_to_kappa(&m.unworn(), plan.kappa).map_err(|e| e.to_string())?;
+            let m = WearModel::new(set, s)?;
+            let w = m.run_to_kappa(&m.unworn(), plan.kappa)?;
             Some((w, t.elapsed().as_secs_f64()))
         } else {
             None
@@ -688,7 +689,7 @@ impl SweepRun {
         models: [&PlanetaryDynamics; 2],
         kappa: u32,
         integrator: &str,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, StudyError> {
         match plan.forced {
             ForcedResponse::Continuation => continued::sweep_run(set, run, plan, models, kappa, integrator),
             ForcedResponse::Marching => {
@@ -707,7 +708,7 @@ impl SweepRun {
         model6: &PlanetaryDynamics,
         kappa: u32,
         integrator: &str,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, StudyError> {
         let t = Instant::now();
         let speeds: Vec<f64> = plan.speeds().into_iter().map(rpm_to_rad_per_s).collect();
         // The four sweeps in the order of `four`: κ = 0 up and down, the worn κ up and down.
@@ -718,14 +719,13 @@ impl SweepRun {
                           settings: &RunSettings,
                           grid: &[f64],
                           start: Option<&State>|
-         -> Result<Sweep, String> {
+         -> Result<Sweep, StudyError> {
             let mut m = models[k].clone();
             let mut grid = grid.to_vec();
             if directions[k] == Direction::Down {
                 grid.reverse();
             }
-            sweep_from(set, settings, &mut m, directions[k], &grid, &[], Window::Fixed, start, |_| {})
-                .map_err(|e| e.to_string())
+            Ok(sweep_from(set, settings, &mut m, directions[k], &grid, &[], Window::Fixed, start, |_| {})?)
         };
         let [a, b, c, d] = four(|k| sweep_over(k, run, &speeds, None));
         let firsts = [a?, b?, c?, d?];
@@ -747,15 +747,13 @@ impl SweepRun {
         let check_curves = match check_index {
             None => Vec::new(),
             Some(i) => {
-                let finer = run
-                    .with(|d| match d.integrator {
-                        IntegratorKind::Rk45 => d.relative_tolerance /= CHECK_REFINEMENT,
-                        IntegratorKind::GeneralizedAlpha => {
-                            d.steps_per_mesh_cycle =
-                                (d.steps_per_mesh_cycle as f64 * CHECK_REFINEMENT).ceil() as usize
-                        }
-                    })
-                    .map_err(|e| e.to_string())?;
+                let finer = run.with(|d| match d.integrator {
+                    IntegratorKind::Rk45 => d.relative_tolerance /= CHECK_REFINEMENT,
+                    IntegratorKind::GeneralizedAlpha => {
+                        d.steps_per_mesh_cycle =
+                            (d.steps_per_mesh_cycle as f64 * CHECK_REFINEMENT).ceil() as usize
+                    }
+                })?;
                 // The up sweeps enter the band from the first sweep's state at the
                 // speed below it; the down sweeps start at the top, as the first did.
                 let [a, b, c, d] = four(|k| {
@@ -813,24 +811,22 @@ impl OffResonance {
         plan: &ValidationPlan,
         models: [&PlanetaryDynamics; 2],
         integrator: &str,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, StudyError> {
         let t = Instant::now();
-        let tight = run
-            .with(|d| {
-                d.integrator = IntegratorKind::Rk45;
-                d.relative_tolerance = plan.reference_tolerance;
-            })
-            .map_err(|e| e.to_string())?;
+        let tight = run.with(|d| {
+            d.integrator = IntegratorKind::Rk45;
+            d.relative_tolerance = plan.reference_tolerance;
+        })?;
         // The sixteen steady states on rayon's threads.
         let figures = OFF_RESONANCE
             .par_iter()
             .map(|&rpm| {
                 let omega = rpm_to_rad_per_s(rpm);
-                let at = |r: &RunSettings, m: &PlanetaryDynamics| -> Result<(f64, f64), String> {
+                let at = |r: &RunSettings, m: &PlanetaryDynamics| -> Result<(f64, f64), StudyError> {
                     let mut m = m.clone();
                     steady_state(&mut m, set, r, omega, None)
                         .map(|ss| sun_planet(&ss))
-                        .map_err(|e| format!("{rpm} rpm: {e}"))
+                        .map_err(|e| StudyError::from(e).at(format!("{rpm} rpm")))
                 };
                 let ((a0, a6), (r0, r6)) = rayon::join(
                     || rayon::join(|| at(run, models[0]), || at(run, models[1])),
@@ -838,7 +834,7 @@ impl OffResonance {
                 );
                 Ok((rpm, a0?, a6?, r0?, r6?))
             })
-            .collect::<Result<Vec<_>, String>>()?;
+            .collect::<Result<Vec<_>, StudyError>>()?;
         let method = format!(
             "steady states from the static deflection at each speed; {integrator}; reference RK 5(4) at {:e}",
             plan.reference_tolerance
@@ -850,9 +846,9 @@ impl OffResonance {
 /// Runs the validation of `scene` (the built-in example) under `plan`:
 /// computes the modes, the wear, the sweeps and the steady states once, and
 /// lets each family of claims read its rows off them.
-pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, String> {
+pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, StudyError> {
     let started = Instant::now();
-    let (set, run) = scene.validate_with_run().map_err(|e| e.to_string())?;
+    let (set, run) = scene.validate_with_run()?;
     let mut rows = Rows::default();
     let integrator = integrator_words(&run);
     let contact = SetModel::new(&set);
@@ -863,8 +859,8 @@ pub fn validate(scene: &Scene, plan: &ValidationPlan) -> Result<Validation, Stri
     rows::wear_rows(&mut rows, plan, &wear);
     rows::wear_shape_rows(&mut rows, &wear);
 
-    let model0 = PlanetaryDynamics::new(&set, wear.unworn.set_model(&set)).map_err(|e| e.to_string())?;
-    let model6 = PlanetaryDynamics::new(&set, wear.worn.set_model(&set)).map_err(|e| e.to_string())?;
+    let model0 = PlanetaryDynamics::new(&set, wear.unworn.set_model(&set))?;
+    let model6 = PlanetaryDynamics::new(&set, wear.worn.set_model(&set))?;
     // The off-resonance steady states beside the curves (a core is idle on
     // the curves' sequential stretches).
     let (sweeps, off) = rayon::join(

@@ -4,6 +4,7 @@
 //! Each reads the computations [`super::validate`] made once and pushes its
 //! rows with their label ([`Evidence`]).
 
+use crate::analysis::study::StudyError;
 use std::time::Instant;
 
 use super::rules::{
@@ -885,14 +886,13 @@ pub(super) fn phasing_row(
     run: &RunSettings,
     model0: &PlanetaryDynamics,
     integrator: &str,
-) -> Result<(), String> {
+) -> Result<(), StudyError> {
     let t = Instant::now();
     let mut m = model0.clone();
-    let ss = steady_state(&mut m, set, run, rpm_to_rad_per_s(3000.0), None).map_err(|e| e.to_string())?;
+    let ss = steady_state(&mut m, set, run, rpm_to_rad_per_s(3000.0), None)?;
     let n = set.planet_angles().len();
-    let phases: Vec<Vec<f64>> = (0..n)
-        .map(|p| mesh_phases(&ss.mesh_force[2 * p], ss.cycles, 6).map_err(|e| e.to_string()))
-        .collect::<Result<_, _>>()?;
+    let phases: Vec<Vec<f64>> =
+        (0..n).map(|p| mesh_phases(&ss.mesh_force[2 * p], ss.cycles, 6)).collect::<Result<_, _>>()?;
     let amps = &ss.meshes[0].harmonics.amplitude;
     let top = amps.iter().cloned().fold(0.0, f64::max);
     let wrap =
