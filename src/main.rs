@@ -128,21 +128,37 @@ enum SceneAction {
     Check(SceneCheckArgs),
 }
 
-/// Natural frequencies and mode shapes of the mean-stiffness linear model.
+/// The gear set a command works on: a scene and, optionally, the worn
+/// flanks of a worn-profile state.
 #[derive(clap::Args)]
-struct ModesArgs {
-    /// A built-in scene (example-2004, lumped-benchmark) or a scene file.
+struct SetArgs {
+    /// A built-in scene name (example-2004, …; `modes` also takes lumped-benchmark) or a scene
+    /// file (TOML).
     #[arg(long)]
     scene: String,
     /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
     #[arg(long)]
     wear_state: Option<PathBuf>,
+    #[command(flatten)]
+    accept: AcceptArgs,
+}
+
+/// Which differences of a worn-profile state's gear set are accepted.
+#[derive(clap::Args)]
+struct AcceptArgs {
     /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
     /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
     /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
     /// Each accepted difference is printed as a warning (and recorded by `wear step`).
     #[arg(long, value_name = "KINDS")]
     accept_state_difference: Option<String>,
+}
+
+/// Natural frequencies and mode shapes of the mean-stiffness linear model.
+#[derive(clap::Args)]
+struct ModesArgs {
+    #[command(flatten)]
+    set: SetArgs,
     /// Print the full result as JSON (SI units, frequencies in Hz).
     #[arg(long)]
     json: bool,
@@ -151,18 +167,8 @@ struct ModesArgs {
 /// Time-domain run from the start, printing outputs at every communication point (JSON lines).
 #[derive(clap::Args)]
 struct SimulateArgs {
-    /// A built-in scene name or a scene file.
-    #[arg(long)]
-    scene: String,
-    /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
-    #[arg(long)]
-    wear_state: Option<PathBuf>,
-    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
-    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
-    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
-    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
-    #[arg(long, value_name = "KINDS")]
-    accept_state_difference: Option<String>,
+    #[command(flatten)]
+    set: SetArgs,
     /// End time [s].
     #[arg(long)]
     stop: f64,
@@ -187,18 +193,8 @@ struct SimulateArgs {
 /// Steady-state dynamic response at one input speed.
 #[derive(clap::Args)]
 struct RunArgs {
-    /// A built-in scene name or a scene file.
-    #[arg(long)]
-    scene: String,
-    /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
-    #[arg(long)]
-    wear_state: Option<PathBuf>,
-    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
-    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
-    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
-    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
-    #[arg(long, value_name = "KINDS")]
-    accept_state_difference: Option<String>,
+    #[command(flatten)]
+    set: SetArgs,
     /// Input speed [rpm]; default: the scene's dynamics.input_speed_rpm.
     #[arg(long)]
     speed: Option<f64>,
@@ -227,18 +223,8 @@ struct RunArgs {
 /// Speed sweep with continuation: forced-response curves, CSV, plots.
 #[derive(clap::Args)]
 struct SweepArgs {
-    /// A built-in scene name or a scene file.
-    #[arg(long)]
-    scene: String,
-    /// Worn-profile state file (from `planetwear wear`): the flanks carry its wear.
-    #[arg(long)]
-    wear_state: Option<PathBuf>,
-    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
-    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
-    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
-    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
-    #[arg(long, value_name = "KINDS")]
-    accept_state_difference: Option<String>,
+    #[command(flatten)]
+    set: SetArgs,
     /// First speed [rpm].
     #[arg(long)]
     from: f64,
@@ -367,19 +353,8 @@ struct ValidateArgs {
 /// Quasi-static loaded tooth contact analysis of both meshes and of the whole set.
 #[derive(clap::Args)]
 struct LtcaArgs {
-    /// A built-in scene name (example-2004) or a scene file (TOML).
-    #[arg(long)]
-    scene: String,
-    /// Worn-profile state file (from `planetwear wear`): load sharing and loaded
-    /// transmission error of the worn set.
-    #[arg(long)]
-    wear_state: Option<PathBuf>,
-    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
-    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
-    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
-    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
-    #[arg(long, value_name = "KINDS")]
-    accept_state_difference: Option<String>,
+    #[command(flatten)]
+    set: SetArgs,
     /// Input torque [N·m], overriding the scene's.
     #[arg(long)]
     torque: Option<f64>,
@@ -407,12 +382,8 @@ struct WearStepArgs {
     /// The state to advance; default: the unworn set (κ = 0).
     #[arg(long)]
     state: Option<PathBuf>,
-    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
-    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
-    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
-    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
-    #[arg(long, value_name = "KINDS")]
-    accept_state_difference: Option<String>,
+    #[command(flatten)]
+    accept: AcceptArgs,
     /// Where to write the new state (atomically).
     #[arg(long)]
     out: PathBuf,
@@ -457,12 +428,8 @@ struct WearCompareArgs {
     /// The worn-profile state to compare on; default: the unworn set.
     #[arg(long)]
     state: Option<PathBuf>,
-    /// Accept a worn-profile state whose gear set differs from this one only in these kinds,
-    /// comma-separated: material (E, ν), mesh_stiffness (the scene's stiffness corrections).
-    /// Geometry is never accepted; the load and speeds are not part of a state's gear set.
-    /// Each accepted difference is printed as a warning (and recorded by `wear step`).
-    #[arg(long, value_name = "KINDS")]
-    accept_state_difference: Option<String>,
+    #[command(flatten)]
+    accept: AcceptArgs,
     /// Input speeds [rpm].
     #[arg(long, value_delimiter = ',', required = true)]
     speeds: Vec<f64>,

@@ -36,9 +36,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 pub(crate) fn sweep_continuation(
     SweepArgs {
-        scene,
-        wear_state,
-        accept_state_difference,
+        set: SetArgs { scene, wear_state, accept: AcceptArgs { accept_state_difference } },
         from,
         to,
         step,

@@ -8,9 +8,7 @@ use planetwear::model::gear::Damping;
 
 pub(crate) fn simulate_command(
     SimulateArgs {
-        scene,
-        wear_state,
-        accept_state_difference,
+        set: SetArgs { scene, wear_state, accept: AcceptArgs { accept_state_difference } },
         stop,
         step,
         duty_cycle,
@@ -147,7 +145,14 @@ fn duty_bins(
 const MAX_COMMUNICATION_POINTS: f64 = 1e7;
 
 pub(crate) fn run_command(
-    RunArgs { scene, wear_state, accept_state_difference, speed, json, plots, method, balance }: RunArgs,
+    RunArgs {
+        set: SetArgs { scene, wear_state, accept: AcceptArgs { accept_state_difference } },
+        speed,
+        json,
+        plots,
+        method,
+        balance,
+    }: RunArgs,
 ) -> Result<()> {
     if !["march", "shooting", "harmonic-balance"].contains(&method.as_str()) {
         bail!("--method {method}: allowed are march, shooting, harmonic-balance");
@@ -392,9 +397,7 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         other => bail!("--method {other}: allowed are march, continuation"),
     }
     let SweepArgs {
-        scene,
-        wear_state,
-        accept_state_difference,
+        set: SetArgs { scene, wear_state, accept: AcceptArgs { accept_state_difference } },
         from,
         to,
         step,
@@ -521,7 +524,7 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
 }
 
 pub(crate) fn modes_command(
-    ModesArgs { scene, wear_state, accept_state_difference, json }: ModesArgs,
+    ModesArgs { set: SetArgs { scene, wear_state, accept: AcceptArgs { accept_state_difference } }, json }: ModesArgs,
 ) -> Result<()> {
     let (name, lumped, frame, damping) = match load_any(&scene)? {
         AnyScene::Gear(s) => {
@@ -550,7 +553,14 @@ pub(crate) fn modes_command(
 }
 
 pub(crate) fn ltca_command(
-    LtcaArgs { scene, wear_state, accept_state_difference, torque, samples, json, out, plots }: LtcaArgs,
+    LtcaArgs {
+        set: SetArgs { scene, wear_state, accept: AcceptArgs { accept_state_difference } },
+        torque,
+        samples,
+        json,
+        out,
+        plots,
+    }: LtcaArgs,
 ) -> Result<()> {
     let mut scene = load_scene(&scene)?;
     if let Some(t) = torque {

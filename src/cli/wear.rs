@@ -199,7 +199,7 @@ pub(crate) fn wear_run_command(
 }
 
 pub(crate) fn wear_compare_command(
-    WearCompareArgs { scene, state, accept_state_difference, speeds, json }: WearCompareArgs,
+    WearCompareArgs { scene, state, accept: AcceptArgs { accept_state_difference }, speeds, json }: WearCompareArgs,
 ) -> Result<()> {
     let (set, run) = validated_with_run(&load_scene(&scene)?)?;
     let model = wear_model(&set, &run, false, None, None)?;
@@ -305,7 +305,7 @@ pub(crate) fn wear_step_command(
     WearStepArgs {
         scene,
         state,
-        accept_state_difference,
+        accept: AcceptArgs { accept_state_difference },
         out,
         threshold,
         revolutions,
