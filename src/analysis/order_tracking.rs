@@ -77,11 +77,41 @@ pub fn order_tracked_windows(
     samples_per_cycle: usize,
     ends: &[usize],
 ) -> Result<TrackedRun, ResponseError> {
-    let invalid = |name: &str, value: String, reason: &str| ResponseError::InvalidRequest {
-        name: name.into(),
-        value,
-        reason: reason.into(),
-    };
+    let fm = check_request(run, model, omega, (window_cycles, samples_per_cycle), ends)?;
+    let period = 1.0 / fm;
+    let err = |source| ResponseError::Integration { speed: omega, source };
+    let (mut rk, travel_start) = fmu_start(set, run, model, omega, period)?;
+    let mut sorted: Vec<usize> = ends.to_vec();
+    sorted.sort_unstable();
+    sorted.dedup();
+    let ends_at: Vec<f64> = sorted.iter().map(|e| *e as f64 * period).collect();
+    // Keep only the samples the windows can need.
+    let first_kept = (sorted[0] - window_cycles) as f64 * period;
+    let spacing = set.sun().base_pitch() / samples_per_cycle as f64;
+    let samples = track(model, &mut rk, travel_start, &ends_at, (first_kept, spacing)).map_err(err)?;
+    let mut windows = Vec::with_capacity(ends.len());
+    for &end in ends {
+        windows.push(window_measure(&samples, end, period, (window_cycles, samples_per_cycle), omega)?);
+    }
+    Ok(TrackedRun { windows, work: Work::from(*rk.stats()) })
+}
+
+/// A refused request: `name` = `value`, and why.
+fn invalid(name: &str, value: String, reason: &str) -> ResponseError {
+    ResponseError::InvalidRequest { name: name.into(), value, reason: reason.into() }
+}
+
+/// Refuses a request the tracking cannot serve: another integrator than RK 5(4), a speed
+/// that is not positive, samples per mesh cycle (`sizes`: window cycles and samples per
+/// cycle) outside 16 ..= 10000, no window end or one shorter than a window, no planet.
+/// The mesh frequency \[Hz\].
+fn check_request(
+    run: &RunSettings,
+    model: &PlanetaryDynamics,
+    omega: f64,
+    (window_cycles, samples_per_cycle): (usize, usize),
+    ends: &[usize],
+) -> Result<f64, ResponseError> {
     if run.integrator() != IntegratorKind::Rk45 {
         return Err(invalid(
             "integrator",
@@ -114,9 +144,20 @@ pub fn order_tracked_windows(
     if model.mesh_count() < 2 {
         return Err(invalid("planets", "0".into(), "planet 1's meshes are tracked: need a planet"));
     }
-    let period = 1.0 / fm;
+    Ok(fm)
+}
+
+/// The FMU's start (`Simulation::new`): the static deflection at `omega` [rad/s] under the
+/// balanced torques, the adaptive method initialized there for the mesh period `period`
+/// \[s\]; with the sun mesh's travel at t = 0.
+fn fmu_start(
+    set: &GearSet,
+    run: &RunSettings,
+    model: &mut PlanetaryDynamics,
+    omega: f64,
+    period: f64,
+) -> Result<(Box<Rk45>, f64), ResponseError> {
     let err = |source| ResponseError::Integration { speed: omega, source };
-    // The FMU's start (Simulation::new): static deflection, balanced torques.
     let start = static_state(model, omega);
     let torques = set.balanced_torques();
     model.set_torques(torques[0], torques[1], torques[2]);
@@ -129,33 +170,45 @@ pub fn order_tracked_windows(
         }
     };
     rk.init(model, 0.0, &start.q, &start.v).map_err(err)?;
+    let mut scratch = vec![0.0; model.dim()];
+    let travel = travel(model, 0.0, &start.q, &start.v, &mut scratch).0;
+    Ok((rk, travel))
+}
 
-    let spacing = set.sun().base_pitch() / samples_per_cycle as f64;
+/// The sun mesh's travel of planet 1 and its two mesh forces at (t, q, v).
+#[inline]
+fn travel(model: &mut PlanetaryDynamics, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) -> Sample {
+    model.force(t, q, v, f);
+    (model.meshes[0].position, model.meshes[0].force, model.meshes[1].force)
+}
+
+/// The run to the last of the window ends `ends_at` \[s\] (increasing; each step ends no
+/// later than the next end), from the sun mesh's travel `travel_start` at t = 0: every
+/// travel crossing of a multiple of `spacing` inside a step ending at or after
+/// `first_kept` \[s\], located on the dense output, as a sample.
+fn track(
+    model: &mut PlanetaryDynamics,
+    rk: &mut Rk45,
+    travel_start: f64,
+    ends_at: &[f64],
+    (first_kept, spacing): (f64, f64),
+) -> Result<Vec<Sample>, SolverError> {
     let n = model.dim();
     let mut scratch = vec![0.0; n];
     let (mut q, mut v) = (vec![0.0; n], vec![0.0; n]);
-    let mut sorted: Vec<usize> = ends.to_vec();
-    sorted.sort_unstable();
-    sorted.dedup();
-    let last_end = sorted[sorted.len() - 1] as f64 * period;
-    // Keep only the samples the windows can need.
-    let first_kept = (sorted[0] - window_cycles) as f64 * period;
+    let last_end = ends_at[ends_at.len() - 1];
     let mut samples: Vec<Sample> = Vec::new();
-    let travel = |model: &mut PlanetaryDynamics, t: f64, q: &[f64], v: &[f64], f: &mut [f64]| {
-        model.force(t, q, v, f);
-        (model.meshes[0].position, model.meshes[0].force, model.meshes[1].force)
-    };
-    let (mut t_a, mut s_a) = (0.0, travel(model, 0.0, &start.q, &start.v, &mut scratch).0);
+    let (mut t_a, mut s_a) = (0.0, travel_start);
     let mut next_end = 0;
     while rk.time() < last_end {
-        while (sorted[next_end] as f64) * period <= rk.time() {
+        while ends_at[next_end] <= rk.time() {
             next_end += 1;
         }
-        rk.step(model, sorted[next_end] as f64 * period).map_err(err)?;
+        rk.step(model, ends_at[next_end])?;
         let t_b = rk.time();
         let (s_b, _, _) = travel(model, t_b, rk.q(), rk.v(), &mut scratch);
         if !s_b.is_finite() {
-            return Err(err(SolverError::NonFiniteState { t: t_b, index: 0 }));
+            return Err(SolverError::NonFiniteState { t: t_b, index: 0 });
         }
         if t_b >= first_kept && s_b > s_a {
             let first = (s_a / spacing).floor() as i64 + 1;
@@ -163,41 +216,49 @@ pub fn order_tracked_windows(
             for m in first..=last {
                 let g = m as f64 * spacing;
                 let sample =
-                    crossing(model, &rk, (t_a, s_a - g), (t_b, s_b - g), g, &mut q, &mut v, &mut scratch)
-                        .map_err(err)?;
+                    crossing(model, rk, (t_a, s_a - g), (t_b, s_b - g), g, &mut q, &mut v, &mut scratch)?;
                 samples.push(sample);
             }
         }
         (t_a, s_a) = (t_b, s_b);
     }
-    let mut windows = Vec::with_capacity(ends.len());
-    for &end in ends {
-        let t_end = end as f64 * period;
-        let count = samples.partition_point(|s| s.0 <= t_end);
-        let needed = window_cycles * samples_per_cycle;
-        if count < needed {
-            return Err(invalid(
-                "window ends",
-                format!("{end} mesh cycles"),
-                "the travel did not cover the window (the set does not turn at the input speed)",
-            ));
-        }
-        let window = &samples[count - needed..count];
-        let sun: Vec<f64> = window.iter().map(|s| s.1).collect();
-        let ring: Vec<f64> = window.iter().map(|s| s.2).collect();
-        let harmonics = |f: &[f64]| {
-            mesh_harmonics(f, window_cycles, HARMONICS)
-                .map_err(|source| ResponseError::Spectrum { speed: omega, source })
-        };
-        windows.push(WindowMeasure {
-            end_cycle: end,
-            sun: harmonics(&sun)?,
-            sun_separation: separation_fraction(&sun),
-            ring: harmonics(&ring)?,
-            ring_separation: separation_fraction(&ring),
-        });
+    Ok(samples)
+}
+
+/// The measures of the window of `sizes` (mesh cycles, samples per cycle) that ends
+/// `end` mesh cycles (of `period` \[s\]) after the start: its last samples no later than
+/// the end.
+fn window_measure(
+    samples: &[Sample],
+    end: usize,
+    period: f64,
+    (window_cycles, samples_per_cycle): (usize, usize),
+    omega: f64,
+) -> Result<WindowMeasure, ResponseError> {
+    let t_end = end as f64 * period;
+    let count = samples.partition_point(|s| s.0 <= t_end);
+    let needed = window_cycles * samples_per_cycle;
+    if count < needed {
+        return Err(invalid(
+            "window ends",
+            format!("{end} mesh cycles"),
+            "the travel did not cover the window (the set does not turn at the input speed)",
+        ));
     }
-    Ok(TrackedRun { windows, work: Work::from(*rk.stats()) })
+    let window = &samples[count - needed..count];
+    let sun: Vec<f64> = window.iter().map(|s| s.1).collect();
+    let ring: Vec<f64> = window.iter().map(|s| s.2).collect();
+    let harmonics = |f: &[f64]| {
+        mesh_harmonics(f, window_cycles, HARMONICS)
+            .map_err(|source| ResponseError::Spectrum { speed: omega, source })
+    };
+    Ok(WindowMeasure {
+        end_cycle: end,
+        sun: harmonics(&sun)?,
+        sun_separation: separation_fraction(&sun),
+        ring: harmonics(&ring)?,
+        ring_separation: separation_fraction(&ring),
+    })
 }
 
 /// The sample at the travel crossing s(t*) = `g` inside the last accepted

@@ -2,8 +2,10 @@
 //! `modes` and `ltca`, with the printing of their results.
 
 use crate::*;
-use planetwear::analysis::modes::rayleigh_rule;
+use planetwear::analysis::modes::{rayleigh_rule, Mode};
 use planetwear::analysis::plausibility;
+use planetwear::analysis::study::peaks::Peak;
+use planetwear::dynamics::response::Sweep;
 use planetwear::model::gear::Damping;
 
 pub(crate) fn simulate_command(
@@ -425,56 +427,16 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         contact_model(&set, wear_state.as_deref(), accept_state_difference.as_deref())?,
     )?;
     let modes = natural_modes(&model.lumped);
-    let bar = progress_bar((speeds.len() * dirs.len()) as u64);
     let started = std::time::Instant::now();
     // The core takes rad/s; the report shows each point's speed in rpm as
     // given (rad_per_s_to_rpm returns a speed written in rpm exactly).
     let histories: Vec<f64> = histories.into_iter().map(rpm_to_rad_per_s).collect();
-    let run = |d: Direction| {
-        let mut m = model.clone();
-        let mut grid: Vec<f64> = speeds.iter().copied().map(rpm_to_rad_per_s).collect();
-        if d == Direction::Down {
-            grid.reverse();
-        }
-        sweep(&set, &run_settings, &mut m, d, &grid, &histories, |_| bar.inc(1))
-    };
-    let results: Vec<_> = if dirs.len() == 2 {
-        let (a, b) = rayon::join(|| run(Direction::Up), || run(Direction::Down));
-        vec![a?, b?]
-    } else {
-        vec![run(dirs[0])?]
-    };
-    bar.finish_and_clear();
-    // Each condition once per direction, at the first speed that sets it off.
-    for sw in &results {
-        let mut said = std::collections::BTreeSet::new();
-        for p in &sw.points {
-            for f in plausibility::steady_state(&set, p) {
-                if said.insert(f.condition.clone()) {
-                    eprintln!(
-                        "warning: sweep {:?}, from {:.1} rpm: {}",
-                        sw.direction,
-                        rad_per_s_to_rpm(p.input_speed),
-                        f.message
-                    );
-                }
-            }
-        }
-    }
+    let results = march_sweeps(&model, (&set, &run_settings), &speeds, &dirs, &histories)?;
+    warn_implausible(&results, &set);
     let wall = started.elapsed().as_secs_f64();
     let width_mm = set.sun().face_width * 1e3;
-    let mut files = Vec::new();
-    for sw in &results {
-        let name = if sw.direction == Direction::Up { "sweep_up.csv" } else { "sweep_down.csv" };
-        let path = out.join(name);
-        write_csv(&path, &sweep_csv(sw, width_mm))?;
-        files.push(path);
-        for p in sw.points.iter().filter(|p| !p.time.is_empty()) {
-            files.extend(write_steady_state(p, &set, &out)?);
-        }
-    }
-    files.extend(write_forced_response(&results, &set, &modes, &out)?);
-    let peaks: Vec<_> = results
+    let files = write_sweeps(&results, &set, &modes, &out)?;
+    let peaks: Vec<Peak> = results
         .iter()
         .flat_map(|sw| {
             let mut v = find_peaks(sw, 0, width_mm, &modes, &set);
@@ -496,31 +458,99 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
     write_atomic(&out.join("sweep.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     if json {
         outln!("{}", serde_json::to_string_pretty(&summary)?)?;
-    } else {
+        return Ok(());
+    }
+    outln!(
+        "swept {} speeds × {} directions in {wall:.2} s ({steps} steps, {:.0} steps/s); {} files in {}",
+        speeds.len(),
+        dirs.len(),
+        steps as f64 / wall,
+        files.len(),
+        out.display()
+    )?;
+    for p in &peaks {
         outln!(
-            "swept {} speeds × {} directions in {wall:.2} s ({steps} steps, {:.0} steps/s); {} files in {}",
-            speeds.len(),
-            dirs.len(),
-            steps as f64 / wall,
-            files.len(),
-            out.display()
+            "  peak {:?} {} at {:.0} rpm: F(rms) {:.1} N/mm; {}×f_m = {:.0} Hz ≈ {:?} mode at {:.0} Hz ({:.1} %)",
+            p.direction,
+            p.mesh.name(),
+            rad_per_s_to_rpm(p.speed),
+            p.rms_n_per_mm,
+            p.harmonic,
+            f64::from(p.harmonic) * p.mesh_frequency,
+            p.family,
+            p.natural_frequency,
+            100.0 * p.mismatch
         )?;
-        for p in &peaks {
-            outln!(
-                "  peak {:?} {} at {:.0} rpm: F(rms) {:.1} N/mm; {}×f_m = {:.0} Hz ≈ {:?} mode at {:.0} Hz ({:.1} %)",
-                p.direction,
-                p.mesh.name(),
-                rad_per_s_to_rpm(p.speed),
-                p.rms_n_per_mm,
-                p.harmonic,
-                f64::from(p.harmonic) * p.mesh_frequency,
-                p.family,
-                p.natural_frequency,
-                100.0 * p.mismatch
-            )?;
-        }
     }
     Ok(())
+}
+
+/// The marching sweeps over `speeds` [rpm] in each direction of `dirs` (both side by
+/// side), each from the static state with its own copy of `model`, under the gear set and
+/// run settings `scene`; time histories kept at `histories` [rad/s]. A progress bar over
+/// all points.
+fn march_sweeps(
+    model: &PlanetaryDynamics,
+    (set, run_settings): (&GearSet, &RunSettings),
+    speeds: &[f64],
+    dirs: &[Direction],
+    histories: &[f64],
+) -> Result<Vec<Sweep>> {
+    let bar = progress_bar((speeds.len() * dirs.len()) as u64);
+    let run = |d: Direction| {
+        let mut m = model.clone();
+        let mut grid: Vec<f64> = speeds.iter().copied().map(rpm_to_rad_per_s).collect();
+        if d == Direction::Down {
+            grid.reverse();
+        }
+        sweep(set, run_settings, &mut m, d, &grid, histories, |_| bar.inc(1))
+    };
+    let results: Vec<_> = if dirs.len() == 2 {
+        let (a, b) = rayon::join(|| run(Direction::Up), || run(Direction::Down));
+        vec![a?, b?]
+    } else {
+        vec![run(dirs[0])?]
+    };
+    bar.finish_and_clear();
+    Ok(results)
+}
+
+/// Warns of each implausible condition once per direction, at the first speed that sets
+/// it off.
+fn warn_implausible(results: &[Sweep], set: &GearSet) {
+    for sw in results {
+        let mut said = std::collections::BTreeSet::new();
+        for p in &sw.points {
+            for f in plausibility::steady_state(set, p) {
+                if said.insert(f.condition.clone()) {
+                    eprintln!(
+                        "warning: sweep {:?}, from {:.1} rpm: {}",
+                        sw.direction,
+                        rad_per_s_to_rpm(p.input_speed),
+                        f.message
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Each sweep's CSV and kept time histories, and the forced-response charts, written into
+/// `out`: the files written.
+fn write_sweeps(results: &[Sweep], set: &GearSet, modes: &[Mode], out: &Path) -> Result<Vec<PathBuf>> {
+    let width_mm = set.sun().face_width * 1e3;
+    let mut files = Vec::new();
+    for sw in results {
+        let name = if sw.direction == Direction::Up { "sweep_up.csv" } else { "sweep_down.csv" };
+        let path = out.join(name);
+        write_csv(&path, &sweep_csv(sw, width_mm))?;
+        files.push(path);
+        for p in sw.points.iter().filter(|p| !p.time.is_empty()) {
+            files.extend(write_steady_state(p, set, out)?);
+        }
+    }
+    files.extend(write_forced_response(results, set, modes, out)?);
+    Ok(files)
 }
 
 pub(crate) fn modes_command(

@@ -19,7 +19,7 @@ use crate::dynamics::solver::{
 };
 use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics, SpectrumError};
 use crate::model::gear::{GearSet, IntegratorKind, MeshKind};
-use crate::model::run::RunSettings;
+use crate::model::run::{RunSettings, RunValues};
 use crate::scene::units::rad_per_s_to_rpm;
 
 /// Integrator work of a run (a copy of the solver's counters).
@@ -369,15 +369,75 @@ pub fn steady_state_windowed(
             reason: "must be non-zero and finite: the steady state is measured over mesh cycles".into(),
         });
     }
-    let d = run.values();
-    let period = 1.0 / fm;
-    let cycles_per_rev = model.mesh_frequency_per_input_speed * 2.0 * std::f64::consts::PI;
-    let run_in_cycles = (d.run_in_revolutions * cycles_per_rev).ceil() as u64;
-    let mut cycles = ((d.measured_revolutions * cycles_per_rev).round() as usize).max(1);
-    let samples = d.samples_per_mesh_cycle;
-    let steps_per_sample = (d.steps_per_mesh_cycle as u64).div_ceil(samples as u64).max(1);
+    let schedule = Schedule::new(model, run.values(), fm);
     let err = |source| ResponseError::Integration { speed: omega, source };
-    let (q0, v0) = match start {
+    let (q0, v0) = initial_state(model, omega, start);
+    model.set_drive_speed(omega);
+    model.rebase_drive(&q0);
+    let mut stepper = Stepper::new(run, schedule.period).map_err(err)?;
+    stepper.init(model, 0.0, &q0, &v0).map_err(err)?;
+    let (t_run, cycles) = run_in(model, &mut stepper, set, run.values(), &schedule, window).map_err(err)?;
+    let input_start = stepper.state().0[model.input_index];
+    let t_end = t_run + cycles as f64 * schedule.period;
+    let (time, force) =
+        sample_window(model, &mut stepper, &schedule, (t_run, cycles), &mut observe).map_err(err)?;
+    // Close the window so the end state is one full cycle set later.
+    if stepper.time() < t_end {
+        stepper.advance(model, t_end, schedule.steps_per_sample).map_err(err)?;
+    }
+    let (q, v) = stepper.state();
+    let end = State { input_speed: omega, q: q.to_vec(), v: v.to_vec() };
+    let mean_input_speed = (end.q[model.input_index] - input_start) / (t_end - t_run) / model.input_lever;
+    let meshes = mesh_responses(model, &force, cycles)
+        .map_err(|source| ResponseError::Spectrum { speed: omega, source })?;
+    Ok(SteadyState {
+        input_speed: omega,
+        mesh_frequency: fm,
+        mean_input_speed,
+        cycles,
+        time,
+        mesh_force: force,
+        meshes,
+        stats: stepper.stats(),
+        end,
+    })
+}
+
+/// The time grid of a steady state at mesh frequency `fm` \[Hz\] under the run settings:
+/// the mesh period, the run-in and the window in mesh cycles, and the samples.
+struct Schedule {
+    /// The mesh period \[s\].
+    period: f64,
+    /// Most mesh cycles of run-in.
+    run_in_cycles: u64,
+    /// Mesh cycles of the run settings' window.
+    cycles: usize,
+    /// Samples per mesh cycle.
+    samples: usize,
+    /// Fixed steps per mesh cycle, and per sample.
+    steps_per_mesh_cycle: u64,
+    steps_per_sample: u64,
+}
+
+impl Schedule {
+    fn new(model: &PlanetaryDynamics, d: &RunValues, fm: f64) -> Self {
+        let cycles_per_rev = model.mesh_frequency_per_input_speed * 2.0 * std::f64::consts::PI;
+        let samples = d.samples_per_mesh_cycle;
+        Self {
+            period: 1.0 / fm,
+            run_in_cycles: (d.run_in_revolutions * cycles_per_rev).ceil() as u64,
+            cycles: ((d.measured_revolutions * cycles_per_rev).round() as usize).max(1),
+            samples,
+            steps_per_mesh_cycle: d.steps_per_mesh_cycle as u64,
+            steps_per_sample: (d.steps_per_mesh_cycle as u64).div_ceil(samples as u64).max(1),
+        }
+    }
+}
+
+/// The state a steady state at `omega` [rad/s] starts from: `start` with its rigid-body
+/// speed changed to `omega`, or the static deflection.
+fn initial_state(model: &PlanetaryDynamics, omega: f64, start: Option<&State>) -> (Vec<f64>, Vec<f64>) {
+    match start {
         Some(s) => {
             let dv = omega - s.input_speed;
             let v: Vec<f64> = s.v.iter().zip(&model.rigid_velocity).map(|(v, r)| v + r * dv).collect();
@@ -387,19 +447,27 @@ pub fn steady_state_windowed(
             let s = static_state(model, omega);
             (s.q, s.v)
         }
-    };
-    model.set_drive_speed(omega);
-    model.rebase_drive(&q0);
-    let mut stepper = Stepper::new(run, period).map_err(err)?;
-    stepper.init(model, 0.0, &q0, &v0).map_err(err)?;
-    // Run-in, one mesh cycle at a time. The excitation repeats every mesh
-    // cycle, so the steady state does too: the run-in ends once the mesh
-    // forces and their rates (scaled to forces by the mean stiffness over a
-    // mesh period) at two successive cycle boundaries agree to
-    // `steady_tolerance` of the mean tooth force, or after the set number of
-    // revolutions (a response that is not periodic in one mesh cycle, such as
-    // a subharmonic one, runs the whole run-in).
-    let n_mesh = model.mesh_count();
+    }
+}
+
+/// Run-in, one mesh cycle at a time. The excitation repeats every mesh cycle, so the
+/// steady state does too: the run-in ends once the mesh forces and their rates (scaled to
+/// forces by the mean stiffness over a mesh period) at two successive cycle boundaries
+/// agree to `steady_tolerance` of the mean tooth force, or after the set number of
+/// revolutions (a response that is not periodic in one mesh cycle, such as a subharmonic
+/// one, runs the whole run-in). The time the run-in ended, and the window's mesh cycles:
+/// the run settings', or the periodic window's where `window` asks for it and the forces
+/// settled.
+fn run_in(
+    model: &mut PlanetaryDynamics,
+    stepper: &mut Stepper,
+    set: &GearSet,
+    d: &RunValues,
+    schedule: &Schedule,
+    window: Window,
+) -> Result<(f64, usize), SolverError> {
+    let period = schedule.period;
+    let mut cycles = schedule.cycles;
     let mut scratch = vec![0.0; model.dim()];
     let tolerance = d.steady_tolerance * set.mesh_load_per_planet().max(f64::MIN_POSITIVE);
     let rate_scale =
@@ -408,9 +476,9 @@ pub fn steady_state_windowed(
     let mut agreeing = 0;
     let mut forces_agreeing = 0;
     let mut t_run = 0.0;
-    for c in 1..=run_in_cycles {
+    for c in 1..=schedule.run_in_cycles {
         t_run = c as f64 * period;
-        stepper.advance(model, t_run, d.steps_per_mesh_cycle as u64).map_err(err)?;
+        stepper.advance(model, t_run, schedule.steps_per_mesh_cycle)?;
         if d.steady_tolerance <= 0.0 {
             continue;
         }
@@ -439,35 +507,49 @@ pub fn steady_state_windowed(
             break;
         }
     }
+    Ok((t_run, cycles))
+}
+
+/// The window of `cycles` mesh cycles from `t_run`, sampled at the schedule's samples per
+/// cycle: the times and each mesh's force, `observe(k, model)` called at every sample k
+/// with the model evaluated there.
+fn sample_window(
+    model: &mut PlanetaryDynamics,
+    stepper: &mut Stepper,
+    schedule: &Schedule,
+    (t_run, cycles): (f64, usize),
+    observe: &mut impl FnMut(usize, &PlanetaryDynamics),
+) -> Result<(Vec<f64>, Vec<Vec<f64>>), SolverError> {
+    let (period, samples) = (schedule.period, schedule.samples);
     let total = cycles * samples;
     let mut time = Vec::with_capacity(total);
-    let mut force = vec![Vec::with_capacity(total); n_mesh];
-    let input_start = stepper.state().0[model.input_index];
+    let mut force = vec![Vec::with_capacity(total); model.mesh_count()];
     let t_end = t_run + cycles as f64 * period;
     let n = model.dim();
+    let mut scratch = vec![0.0; n];
     let (mut q_dense, mut v_dense) = (vec![0.0; n], vec![0.0; n]);
     for k in 0..total {
         let t = t_run + (k as f64) * period / samples as f64;
-        let (q, v): (&[f64], &[f64]) = match &mut stepper {
+        let (q, v): (&[f64], &[f64]) = match &mut *stepper {
             // The adaptive method takes its own steps and the samples come
             // from its dense output (docs/ACCURACY.md measures it so).
             Stepper::Rk(r) if k > 0 => {
                 while r.time() < t {
-                    r.step(model, t_end).map_err(err)?;
+                    r.step(model, t_end)?;
                 }
-                r.dense_at(t, &mut q_dense, &mut v_dense).map_err(err)?;
+                r.dense_at(t, &mut q_dense, &mut v_dense)?;
                 (&q_dense, &v_dense)
             }
             _ => {
                 if k > 0 {
-                    stepper.advance(model, t, steps_per_sample).map_err(err)?;
+                    stepper.advance(model, t, schedule.steps_per_sample)?;
                 }
                 stepper.state()
             }
         };
         model.force(t, q, v, &mut scratch);
         if let Some(i) = scratch.iter().position(|x| !x.is_finite()) {
-            return Err(err(SolverError::NonFiniteState { t, index: i }));
+            return Err(SolverError::NonFiniteState { t, index: i });
         }
         time.push(t);
         for (m, state) in model.meshes.iter().enumerate() {
@@ -475,26 +557,7 @@ pub fn steady_state_windowed(
         }
         observe(k, model);
     }
-    // Close the window so the end state is one full cycle set later.
-    if stepper.time() < t_end {
-        stepper.advance(model, t_end, steps_per_sample).map_err(err)?;
-    }
-    let (q, v) = stepper.state();
-    let end = State { input_speed: omega, q: q.to_vec(), v: v.to_vec() };
-    let mean_input_speed = (end.q[model.input_index] - input_start) / (t_end - t_run) / model.input_lever;
-    let meshes = mesh_responses(model, &force, cycles)
-        .map_err(|source| ResponseError::Spectrum { speed: omega, source })?;
-    Ok(SteadyState {
-        input_speed: omega,
-        mesh_frequency: fm,
-        mean_input_speed,
-        cycles,
-        time,
-        mesh_force: force,
-        meshes,
-        stats: stepper.stats(),
-        end,
-    })
+    Ok((time, force))
 }
 
 /// A sweep's direction.

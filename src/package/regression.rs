@@ -30,7 +30,8 @@ use crate::analysis::order_tracking::{order_tracked_windows, WindowMeasure, HARM
 use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::response::Work;
 use crate::fmi::variables::GUID;
-use crate::model::gear::IntegratorKind;
+use crate::model::gear::{GearSet, IntegratorKind};
+use crate::model::run::RunSettings;
 use crate::scene::Scene;
 use crate::wear::state::WornState;
 
@@ -281,67 +282,97 @@ pub fn scene_references(
     scene.dynamics.relative_tolerance = rtol;
     let (set, run_settings) = scene.validate_with_run().map_err(|e| ReferenceError::Setup(e.to_string()))?;
     let samples = run_settings.samples_per_mesh_cycle();
-    let allowed_drift = 0.25 * (INTEGRATOR_ERROR + WINDOW_INTERPOLATION_ERROR);
     let computed: Vec<Case> = cases
         .par_iter()
-        .map(|&(kappa, rpm)| -> Result<Case, ReferenceError> {
-            let name = format!("kappa-{kappa}/{rpm:.0}rpm");
-            let run_error = |reason: String| ReferenceError::Run { case: name.clone(), reason };
-            let text = states.get(kappa).ok_or_else(|| {
-                run_error(format!(
-                    "κ = {kappa}: only states 0..{} are shipped",
-                    states.len().saturating_sub(1)
-                ))
-            })?;
-            let state = WornState::from_json(text, &set).map_err(|e| run_error(e.to_string()))?;
-            let mut model =
-                PlanetaryDynamics::new(&set, state.set_model(&set)).map_err(|e| run_error(e.to_string()))?;
-            let omega = crate::scene::units::rpm_to_rad_per_s(rpm);
-            let end = RUN_IN_CYCLES + WINDOW_CYCLES;
-            let run = order_tracked_windows(
-                &set,
-                &run_settings,
-                &mut model,
-                omega,
-                WINDOW_CYCLES,
-                samples,
-                &[end, end - DRIFT_CYCLES],
-            )
-            .map_err(|e| run_error(e.to_string()))?;
-            let (window, later) = (&run.windows[0], &run.windows[1]);
-            let drift = window_error(window, later);
-            if drift > allowed_drift {
-                return Err(ReferenceError::Unsettled { case: name, drift, allowed: allowed_drift });
-            }
-            let fraction = round_up(MARGIN * (INTEGRATOR_ERROR + WINDOW_INTERPOLATION_ERROR + drift));
-            let (mut values, mut tolerance) = (BTreeMap::new(), BTreeMap::new());
-            for mesh in ["sun", "ring"] {
-                put(&mut values, &mut tolerance, mesh, window, fraction, samples);
-            }
-            let fm = model.mesh_frequency_per_input_speed * omega;
-            let mut parameters = BTreeMap::new();
-            parameters.insert("initialSpeed".to_string(), omega.into());
-            parameters.insert("wearStateFile".to_string(), format!("{state_dir}/kappa-{kappa}.json").into());
-            Ok(Case {
-                name,
-                kappa,
-                speed_rpm: rpm,
-                mesh_frequency_hz: fm,
-                communication_step_s: 1.0 / fm,
-                parameters,
-                values,
-                tolerance,
-                budget: Budget {
-                    integrator: INTEGRATOR_ERROR,
-                    window_interpolation: WINDOW_INTERPOLATION_ERROR,
-                    drift,
-                    margin: MARGIN,
-                    fraction_of_f1: fraction,
-                },
-                work: run.work,
-            })
-        })
+        .map(|&case| reference_case((&set, &run_settings), (state_dir, states), case))
         .collect::<Result<_, _>>()?;
+    Ok(References {
+        format: FORMAT.into(),
+        fmu_guid: GUID.into(),
+        planetwear_version: env!("CARGO_PKG_VERSION").into(),
+        scene: set.name().to_string(),
+        protocol: protocol(&set, samples),
+        reference: ReferenceMethod {
+            description: "The same initial-value problem (balanced torques), integrated by RK 5(4) at a tight \
+                          tolerance; each sample taken at the exact crossing of the sun mesh's travel with the \
+                          window's grid on the dense output (no interpolation between grid points): the value \
+                          the FMU's window converges to as stepsPerMeshCycle grows."
+                .into(),
+            integrator: "rk45".into(),
+            relative_tolerance: rtol,
+        },
+        cases: computed,
+    })
+}
+
+/// The reference of one case (κ, rpm) of the gear set under its run settings (`setup`),
+/// its worn-profile state from `states` as the FMU ships them in `state_dir`: the
+/// order-tracked window after the run-in, refused where the window still drifts; its
+/// values and tolerances from the error budget.
+fn reference_case(
+    (set, run_settings): (&GearSet, &RunSettings),
+    (state_dir, states): (&str, &[String]),
+    (kappa, rpm): (usize, f64),
+) -> Result<Case, ReferenceError> {
+    let samples = run_settings.samples_per_mesh_cycle();
+    let allowed_drift = 0.25 * (INTEGRATOR_ERROR + WINDOW_INTERPOLATION_ERROR);
+    let name = format!("kappa-{kappa}/{rpm:.0}rpm");
+    let run_error = |reason: String| ReferenceError::Run { case: name.clone(), reason };
+    let text = states.get(kappa).ok_or_else(|| {
+        run_error(format!("κ = {kappa}: only states 0..{} are shipped", states.len().saturating_sub(1)))
+    })?;
+    let state = WornState::from_json(text, set).map_err(|e| run_error(e.to_string()))?;
+    let mut model =
+        PlanetaryDynamics::new(set, state.set_model(set)).map_err(|e| run_error(e.to_string()))?;
+    let omega = crate::scene::units::rpm_to_rad_per_s(rpm);
+    let end = RUN_IN_CYCLES + WINDOW_CYCLES;
+    let run = order_tracked_windows(
+        set,
+        run_settings,
+        &mut model,
+        omega,
+        WINDOW_CYCLES,
+        samples,
+        &[end, end - DRIFT_CYCLES],
+    )
+    .map_err(|e| run_error(e.to_string()))?;
+    let (window, later) = (&run.windows[0], &run.windows[1]);
+    let drift = window_error(window, later);
+    if drift > allowed_drift {
+        return Err(ReferenceError::Unsettled { case: name, drift, allowed: allowed_drift });
+    }
+    let fraction = round_up(MARGIN * (INTEGRATOR_ERROR + WINDOW_INTERPOLATION_ERROR + drift));
+    let (mut values, mut tolerance) = (BTreeMap::new(), BTreeMap::new());
+    for mesh in ["sun", "ring"] {
+        put(&mut values, &mut tolerance, mesh, window, fraction, samples);
+    }
+    let fm = model.mesh_frequency_per_input_speed * omega;
+    let mut parameters = BTreeMap::new();
+    parameters.insert("initialSpeed".to_string(), omega.into());
+    parameters.insert("wearStateFile".to_string(), format!("{state_dir}/kappa-{kappa}.json").into());
+    Ok(Case {
+        name,
+        kappa,
+        speed_rpm: rpm,
+        mesh_frequency_hz: fm,
+        communication_step_s: 1.0 / fm,
+        parameters,
+        values,
+        tolerance,
+        budget: Budget {
+            integrator: INTEGRATOR_ERROR,
+            window_interpolation: WINDOW_INTERPOLATION_ERROR,
+            drift,
+            margin: MARGIN,
+            fraction_of_f1: fraction,
+        },
+        work: run.work,
+    })
+}
+
+/// The protocol the references hold for the FMU with the default `set`: its parameters
+/// (`samples` per mesh cycle), the inputs at the set's balanced torques, and the steps.
+fn protocol(set: &GearSet, samples: usize) -> Protocol {
     let mut parameters = BTreeMap::new();
     parameters.insert("driveMode".to_string(), 0.into());
     parameters.insert("integrator".to_string(), 1.into());
@@ -356,40 +387,24 @@ pub fn scene_references(
     {
         inputs.insert(name.to_string(), torque);
     }
-    Ok(References {
-        format: FORMAT.into(),
-        fmu_guid: GUID.into(),
-        planetwear_version: env!("CARGO_PKG_VERSION").into(),
-        scene: set.name().to_string(),
-        protocol: Protocol {
-            description: format!(
-                "The FMU with its default parameters (the {} set) and the protocol's and the case's \
-                 parameters, instantiated, set up at t = 0 and initialized (the set starts from the static \
-                 deflection at initialSpeed); the inputs held at the values given; doStep of one mesh period \
-                 of the case's speed, {} times ({RUN_IN_CYCLES} cycles of run-in, then the {WINDOW_CYCLES}-cycle \
-                 window); then the window.* outputs are read.",
-                set.name(),
-                RUN_IN_CYCLES + WINDOW_CYCLES
-            ),
-            parameters,
-            inputs,
-            start_time: 0.0,
-            communication_step_cycles: 1,
-            run_in_cycles: RUN_IN_CYCLES,
-            window_cycles: WINDOW_CYCLES,
-            total_cycles: RUN_IN_CYCLES + WINDOW_CYCLES,
-        },
-        reference: ReferenceMethod {
-            description: "The same initial-value problem (balanced torques), integrated by RK 5(4) at a tight \
-                          tolerance; each sample taken at the exact crossing of the sun mesh's travel with the \
-                          window's grid on the dense output (no interpolation between grid points): the value \
-                          the FMU's window converges to as stepsPerMeshCycle grows."
-                .into(),
-            integrator: "rk45".into(),
-            relative_tolerance: rtol,
-        },
-        cases: computed,
-    })
+    Protocol {
+        description: format!(
+            "The FMU with its default parameters (the {} set) and the protocol's and the case's \
+             parameters, instantiated, set up at t = 0 and initialized (the set starts from the static \
+             deflection at initialSpeed); the inputs held at the values given; doStep of one mesh period \
+             of the case's speed, {} times ({RUN_IN_CYCLES} cycles of run-in, then the {WINDOW_CYCLES}-cycle \
+             window); then the window.* outputs are read.",
+            set.name(),
+            RUN_IN_CYCLES + WINDOW_CYCLES
+        ),
+        parameters,
+        inputs,
+        start_time: 0.0,
+        communication_step_cycles: 1,
+        run_in_cycles: RUN_IN_CYCLES,
+        window_cycles: WINDOW_CYCLES,
+        total_cycles: RUN_IN_CYCLES + WINDOW_CYCLES,
+    }
 }
 
 #[cfg(test)]

@@ -550,11 +550,7 @@ impl GeneralizedAlpha {
             // Nothing to solve (and nalgebra's LU does not accept an empty matrix).
             return Ok(());
         }
-        for i in 0..n {
-            self.q_pred[i] = self.q[i] + h * self.v[i] + h2 * (0.5 - beta) * self.a[i];
-            self.v_pred[i] = self.v[i] + h * (1.0 - gamma) * self.a[i];
-            self.a_new[i] = self.a[i];
-        }
+        self.predict(h);
         let mut lu: Option<LU<f64, Dyn, Dyn>> = None;
         let mut low_rank_factored = false;
         let max_iterations = self.settings.max_iterations;
@@ -565,117 +561,187 @@ impl GeneralizedAlpha {
             solver.prepare(&self.mass, 1.0 - alpha_m, ckn, ccn).map_err(|_| Failure::Singular)?;
         }
         for iteration in 0..=max_iterations {
-            for i in 0..n {
-                self.q_new[i] = self.q_pred[i] + beta * h2 * self.a_new[i];
-                self.v_new[i] = self.v_pred[i] + gamma * h * self.a_new[i];
-            }
-            if let Some(index) = first_non_finite(&self.q_new) {
-                return Err(Failure::NonFiniteState { t: t1, index });
-            }
-            if let Some(index) = first_non_finite(&self.v_new) {
-                return Err(Failure::NonFiniteState { t: t1, index: n + index });
-            }
-            sys.force(t1, &self.q_new, &self.v_new, &mut self.f_new);
-            self.stats.rhs_evaluations += 1;
-            if let Some(index) = first_non_finite(&self.f_new) {
-                return Err(Failure::NonFiniteForce { t: t1, index });
-            }
-            if alpha_m == alpha_f {
-                // M a_n − f_n vanishes up to rounding; dropping it removes the neutral parasitic root
-                // −α_m/(1 − α_m) = −1 of ρ∞ = 1 through which rounding errors would accumulate.
-                for i in 0..n {
-                    self.rhs[i] = -(1.0 - alpha_m) * (self.mass[i] * self.a_new[i] - self.f_new[i]);
-                }
-            } else {
-                for i in 0..n {
-                    self.rhs[i] = -(self.mass[i] * ((1.0 - alpha_m) * self.a_new[i] + alpha_m * self.a[i])
-                        - (1.0 - alpha_f) * self.f_new[i]
-                        - alpha_f * self.f[i]);
-                }
-            }
-            if let (Some(solver), true) = (&mut self.low_rank, low_rank_factored) {
-                // Size of the next correction, estimated with the last iteration matrix.
-                self.estimate.copy_from(&self.rhs);
-                solver.solve(self.estimate.as_mut_slice());
-                if first_non_finite(self.estimate.as_slice()).is_none() {
-                    let next = self.wrms((0..n).map(|i| h2 * self.estimate[i]));
-                    if next <= 1.0 {
-                        return Ok(());
-                    }
-                }
-            } else if let Some(lu) = &lu {
-                // Size of the next correction, estimated with the last iteration matrix.
-                self.estimate.copy_from(&self.rhs);
-                if lu.solve_mut(&mut self.estimate) {
-                    let next = self.wrms((0..n).map(|i| h2 * self.estimate[i]));
-                    if next <= 1.0 {
-                        return Ok(());
-                    }
-                }
+            self.correct(sys, t1, h)?;
+            self.residual();
+            if self.next_correction_small(lu.as_ref(), low_rank_factored, h2) {
+                return Ok(());
             }
             if iteration == max_iterations {
                 break;
             }
-            if let Some(solver) = &mut self.low_rank {
-                sys.jacobian_coefficients(t1, &self.q_new, &self.v_new, &mut self.coefficients);
-                self.stats.jacobian_evaluations += 1;
-                if let Some(m) = self
-                    .coefficients
-                    .iter()
-                    .position(|c| !(c.stiffness.is_finite() && c.damping.is_finite() && c.cross.is_finite()))
-                {
-                    return Err(Failure::NonFiniteJacobian { t: t1, row: m, col: m });
-                }
-                // The rank-one part uses the actual step; only the constant part is built for the
-                // nominal one.
-                solver.factor(&self.coefficients, ck, cc).map_err(|_| Failure::Singular)?;
-                self.stats.lu_factorizations += 1;
-                solver.solve(self.rhs.as_mut_slice());
-                self.stats.newton_iterations += 1;
-                if let Some(index) = first_non_finite(self.rhs.as_slice()) {
-                    return Err(Failure::NonFiniteState { t: t1, index: 2 * n + index });
-                }
-                for i in 0..n {
-                    self.a_new[i] += self.rhs[i];
-                }
+            if self.low_rank.is_some() {
+                self.low_rank_correction(sys, t1, (ck, cc))?;
                 low_rank_factored = true;
                 continue;
             }
-            self.k.as_mut_slice().fill(0.0);
-            self.c.as_mut_slice().fill(0.0);
-            sys.jacobian(t1, &self.q_new, &self.v_new, &mut self.k, &mut self.c);
-            self.stats.jacobian_evaluations += 1;
-            if self.k.shape() != (n, n) || self.c.shape() != (n, n) {
-                // A Jacobian of the wrong shape cannot be used; treat it like a singular matrix.
-                self.k = DMatrix::zeros(n, n);
-                self.c = DMatrix::zeros(n, n);
-                return Err(Failure::Singular);
-            }
-            // Column-major storage: entry (row, col) sits at col·n + row.
-            let (kd, cd) = (self.k.as_slice(), self.c.as_slice());
-            if let Some(p) = kd.iter().zip(cd).position(|(kv, cv)| !(kv.is_finite() && cv.is_finite())) {
-                return Err(Failure::NonFiniteJacobian { t: t1, row: p % n, col: p / n });
-            }
-            let data: Vec<f64> = kd.iter().zip(cd).map(|(kv, cv)| ck * kv + cc * cv).collect();
-            let mut s = DMatrix::from_vec(n, n, data);
-            for (i, m) in self.mass.iter().enumerate() {
-                s[(i, i)] += (1.0 - alpha_m) * m;
-            }
-            let factor = s.lu();
-            self.stats.lu_factorizations += 1;
-            if !factor.solve_mut(&mut self.rhs) {
-                return Err(Failure::Singular);
-            }
-            self.stats.newton_iterations += 1;
-            if let Some(index) = first_non_finite(self.rhs.as_slice()) {
-                return Err(Failure::NonFiniteState { t: t1, index: 2 * n + index });
-            }
-            for i in 0..n {
-                self.a_new[i] += self.rhs[i];
-            }
-            lu = Some(factor);
+            lu = Some(self.dense_correction(sys, t1, (ck, cc))?);
         }
         Err(Failure::Newton { iterations: max_iterations })
+    }
+
+    /// The predictor of a step of length `h` from the committed state: q and v into
+    /// `q_pred`, `v_pred`, and a_new = a.
+    #[inline]
+    fn predict(&mut self, h: f64) {
+        let AlphaParameters { gamma, beta, .. } = self.settings.parameters;
+        let h2 = h * h;
+        for i in 0..self.n {
+            self.q_pred[i] = self.q[i] + h * self.v[i] + h2 * (0.5 - beta) * self.a[i];
+            self.v_pred[i] = self.v[i] + h * (1.0 - gamma) * self.a[i];
+            self.a_new[i] = self.a[i];
+        }
+    }
+
+    /// The corrected state at `t1` of the step of length `h` from the iterate a_new (q =
+    /// q_pred + βh² a_new, v = v_pred + γh a_new) and the force there into `f_new`; the
+    /// failure where either is not finite.
+    #[inline]
+    fn correct<S: TangentSystem + ?Sized>(&mut self, sys: &mut S, t1: f64, h: f64) -> Result<(), Failure> {
+        let AlphaParameters { gamma, beta, .. } = self.settings.parameters;
+        let (n, h2) = (self.n, h * h);
+        for i in 0..n {
+            self.q_new[i] = self.q_pred[i] + beta * h2 * self.a_new[i];
+            self.v_new[i] = self.v_pred[i] + gamma * h * self.a_new[i];
+        }
+        if let Some(index) = first_non_finite(&self.q_new) {
+            return Err(Failure::NonFiniteState { t: t1, index });
+        }
+        if let Some(index) = first_non_finite(&self.v_new) {
+            return Err(Failure::NonFiniteState { t: t1, index: n + index });
+        }
+        sys.force(t1, &self.q_new, &self.v_new, &mut self.f_new);
+        self.stats.rhs_evaluations += 1;
+        if let Some(index) = first_non_finite(&self.f_new) {
+            return Err(Failure::NonFiniteForce { t: t1, index });
+        }
+        Ok(())
+    }
+
+    /// The Newton residual at the corrected state into `rhs`:
+    /// −(M((1 − α_m) a_new + α_m a) − (1 − α_f) f_new − α_f f).
+    #[inline]
+    fn residual(&mut self) {
+        let AlphaParameters { alpha_m, alpha_f, .. } = self.settings.parameters;
+        if alpha_m == alpha_f {
+            // M a_n − f_n vanishes up to rounding; dropping it removes the neutral parasitic root
+            // −α_m/(1 − α_m) = −1 of ρ∞ = 1 through which rounding errors would accumulate.
+            for i in 0..self.n {
+                self.rhs[i] = -(1.0 - alpha_m) * (self.mass[i] * self.a_new[i] - self.f_new[i]);
+            }
+        } else {
+            for i in 0..self.n {
+                self.rhs[i] = -(self.mass[i] * ((1.0 - alpha_m) * self.a_new[i] + alpha_m * self.a[i])
+                    - (1.0 - alpha_f) * self.f_new[i]
+                    - alpha_f * self.f[i]);
+            }
+        }
+    }
+
+    /// Whether the next correction, estimated with the last iteration matrix (the low-rank
+    /// solver's once factorised, else the dense `lu`; none before the first), is small
+    /// enough to accept the iterate: the weighted RMS of h²·Δa (`h2` = h²) at most 1.
+    #[inline]
+    fn next_correction_small(
+        &mut self,
+        lu: Option<&LU<f64, Dyn, Dyn>>,
+        low_rank_factored: bool,
+        h2: f64,
+    ) -> bool {
+        let n = self.n;
+        if let (Some(solver), true) = (&mut self.low_rank, low_rank_factored) {
+            self.estimate.copy_from(&self.rhs);
+            solver.solve(self.estimate.as_mut_slice());
+            first_non_finite(self.estimate.as_slice()).is_none()
+                && self.wrms((0..n).map(|i| h2 * self.estimate[i])) <= 1.0
+        } else if let Some(lu) = lu {
+            self.estimate.copy_from(&self.rhs);
+            lu.solve_mut(&mut self.estimate) && self.wrms((0..n).map(|i| h2 * self.estimate[i])) <= 1.0
+        } else {
+            false
+        }
+    }
+
+    /// One Newton correction with the low-rank solver: the Jacobian's coefficients at the
+    /// corrected state, the iteration matrix factorised (`ck`, `cc` the stiffness and damping
+    /// factors: its rank-one part uses the actual step; only the constant part is built for
+    /// the nominal one), the residual solved and added to a_new.
+    #[inline]
+    fn low_rank_correction<S: TangentSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t1: f64,
+        (ck, cc): (f64, f64),
+    ) -> Result<(), Failure> {
+        sys.jacobian_coefficients(t1, &self.q_new, &self.v_new, &mut self.coefficients);
+        self.stats.jacobian_evaluations += 1;
+        if let Some(m) = self
+            .coefficients
+            .iter()
+            .position(|c| !(c.stiffness.is_finite() && c.damping.is_finite() && c.cross.is_finite()))
+        {
+            return Err(Failure::NonFiniteJacobian { t: t1, row: m, col: m });
+        }
+        if let Some(solver) = &mut self.low_rank {
+            solver.factor(&self.coefficients, ck, cc).map_err(|_| Failure::Singular)?;
+            self.stats.lu_factorizations += 1;
+            solver.solve(self.rhs.as_mut_slice());
+        }
+        self.apply_correction(t1)
+    }
+
+    /// One Newton correction with the dense iteration matrix (1 − α_m) M + c_k K + c_c C
+    /// (`ck`, `cc`) at the corrected state: the Jacobian evaluated and checked, the matrix
+    /// factorised, the residual solved and added to a_new. The factorisation, for the next
+    /// correction's estimate.
+    fn dense_correction<S: TangentSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t1: f64,
+        (ck, cc): (f64, f64),
+    ) -> Result<LU<f64, Dyn, Dyn>, Failure> {
+        let (n, alpha_m) = (self.n, self.settings.parameters.alpha_m);
+        self.k.as_mut_slice().fill(0.0);
+        self.c.as_mut_slice().fill(0.0);
+        sys.jacobian(t1, &self.q_new, &self.v_new, &mut self.k, &mut self.c);
+        self.stats.jacobian_evaluations += 1;
+        if self.k.shape() != (n, n) || self.c.shape() != (n, n) {
+            // A Jacobian of the wrong shape cannot be used; treat it like a singular matrix.
+            self.k = DMatrix::zeros(n, n);
+            self.c = DMatrix::zeros(n, n);
+            return Err(Failure::Singular);
+        }
+        // Column-major storage: entry (row, col) sits at col·n + row.
+        let (kd, cd) = (self.k.as_slice(), self.c.as_slice());
+        if let Some(p) = kd.iter().zip(cd).position(|(kv, cv)| !(kv.is_finite() && cv.is_finite())) {
+            return Err(Failure::NonFiniteJacobian { t: t1, row: p % n, col: p / n });
+        }
+        let data: Vec<f64> = kd.iter().zip(cd).map(|(kv, cv)| ck * kv + cc * cv).collect();
+        let mut s = DMatrix::from_vec(n, n, data);
+        for (i, m) in self.mass.iter().enumerate() {
+            s[(i, i)] += (1.0 - alpha_m) * m;
+        }
+        let factor = s.lu();
+        self.stats.lu_factorizations += 1;
+        if !factor.solve_mut(&mut self.rhs) {
+            return Err(Failure::Singular);
+        }
+        self.apply_correction(t1)?;
+        Ok(factor)
+    }
+
+    /// Adds the solved correction in `rhs` to a_new (one Newton iteration); the failure
+    /// where it is not finite.
+    #[inline]
+    fn apply_correction(&mut self, t1: f64) -> Result<(), Failure> {
+        let n = self.n;
+        self.stats.newton_iterations += 1;
+        if let Some(index) = first_non_finite(self.rhs.as_slice()) {
+            return Err(Failure::NonFiniteState { t: t1, index: 2 * n + index });
+        }
+        for i in 0..n {
+            self.a_new[i] += self.rhs[i];
+        }
+        Ok(())
     }
 
     /// Current time \[s\].

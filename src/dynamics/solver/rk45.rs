@@ -296,6 +296,14 @@ struct Pending {
     h_after: f64,
 }
 
+/// One attempted step: from `t` to `t_new` \[s\], of length `h` = `t_new` − `t`.
+#[derive(Debug, Clone, Copy)]
+struct Span {
+    t: f64,
+    t_new: f64,
+    h: f64,
+}
+
 /// The Dormand–Prince 5(4) integrator (see the module documentation for the equations).
 ///
 /// Typical use: [`Rk45::new`], [`Rk45::init`], then repeated [`Rk45::advance_to`] calls, reading
@@ -894,174 +902,250 @@ impl Rk45 {
             }
             attempts += 1;
             let t = self.t;
-            let (t_new, h_proposed) = match &pending {
-                Some(p) => (p.t_event, p.h_after),
-                None => {
-                    let h = self.h_next.min(s.max_step);
-                    if t + 1.01 * h >= t_end {
-                        (t_end, h)
-                    } else {
-                        (t + h, h)
-                    }
-                }
-            };
-            let h = t_new - t;
+            let (t_new, h_proposed) = self.step_end(pending.as_ref(), t_end);
+            let span = Span { t, t_new, h: t_new - t };
             let tiny = 4.0 * f64::EPSILON * t.abs();
-            if h.is_nan() || h <= tiny || (pending.is_none() && t_new < t_end && h < s.min_step) {
-                return Err(SolverError::StepTooSmall { t, h });
+            if span.h.is_nan()
+                || span.h <= tiny
+                || (pending.is_none() && t_new < t_end && span.h < s.min_step)
+            {
+                return Err(SolverError::StepTooSmall { t, h: span.h });
             }
             // A retake that ends on a located event (`pending`) and fails the error test is not
             // re-aimed at the crossing: that would propose the step that found it again, and
             // when the crossing lies within 1 % of `t_end` that step reaches `t_end` and the two
             // alternate for ever. The controller's shorter step ends before the crossing.
             let landing = pending.is_some();
-            let err = match self.attempt(sys, h, t_new) {
+            let err = match self.attempt(sys, span.h, t_new) {
                 Err(failure) => {
-                    self.stats.rejected_steps += 1;
                     pending = None;
                     aimed = false;
-                    self.rejected_last = true;
-                    self.h_next = h * s.min_ratio;
-                    if self.h_next < s.min_step.max(tiny) {
-                        return Err(failure.into_error());
-                    }
+                    self.reject_failed(span.h, tiny, failure)?;
                     continue;
                 }
                 Ok(err) if err > 1.0 => {
-                    self.stats.rejected_steps += 1;
                     pending = None;
-                    self.rejected_last = true;
-                    self.h_next = h * (s.safety * err.powf(-0.2)).max(s.min_ratio);
-                    if self.n_events > 0 && !aimed && !landing {
-                        // A switch inside the step (a kink in the force) is the likely cause of the
-                        // rejection: aim the next attempt at the crossing, roughly located on the
-                        // rejected step; if that attempt fails too, the controller takes over.
-                        if let Some(tc) = self.rough_crossing(sys, h, t_new)? {
-                            if tc - t > tiny {
-                                self.h_next = tc - t;
-                                aimed = true;
-                            }
-                        }
-                    } else {
-                        aimed = false;
-                    }
-                    if self.h_next < s.min_step.max(tiny) {
-                        return Err(SolverError::StepTooSmall { t, h: self.h_next });
-                    }
+                    aimed = self.reject_inaccurate(sys, span, err, tiny, !aimed && !landing)?;
                     continue;
                 }
                 Ok(err) => err,
             };
             // The step passes the error test: propose the next step size.
             aimed = false;
-            let mut fac = if err == 0.0 {
-                s.max_ratio
-            } else {
-                match s.controller {
-                    StepController::Standard => s.safety * err.powf(-0.2),
-                    StepController::PI { beta } => {
-                        s.safety * err.powf(-(0.2 - 0.75 * beta)) * self.err_old.powf(beta)
-                    }
-                }
-            };
-            fac = fac.clamp(s.min_ratio, s.max_ratio);
-            if self.rejected_last {
-                fac = fac.min(1.0);
-            }
-            let mut h_next = h * fac;
-            if t_new == t_end && h < h_proposed {
+            let mut h_next = self.next_step_size(span.h, err);
+            if t_new == t_end && span.h < h_proposed {
                 h_next = h_next.max(h_proposed);
             }
-            self.prepare_dense(h);
-            if self.n_events == 0 {
-                self.commit(t_new, err);
-                self.h_next = h_next;
-                if single {
-                    break;
-                }
-                continue;
-            }
-            let mut g_new = std::mem::take(&mut self.g_new);
-            let ev = eval_events(sys, self.n, Some(self.n_events), t_new, &self.y_new, &mut g_new);
-            self.g_new = g_new;
-            ev?;
-            if let Some(p) = pending.take() {
-                // Landing on a located event.
-                self.commit(t_new, err);
-                self.h_next = p.h_after;
-                for i in 0..self.n_events {
-                    if let Some(&(_, te, post)) = p.components.iter().find(|c| c.0 == i) {
-                        self.record(te, i, post);
-                        self.g_ref[i] = post;
-                    } else {
-                        let gi = self.g_new[i];
-                        if negative(gi) != negative(self.g_ref[i]) {
-                            self.record(t_new, i, gi);
-                        }
-                        self.g_ref[i] = gi;
-                    }
-                }
-                if single {
-                    break;
-                }
-                continue;
-            }
-            let tol_theta = s.event_tolerance * t.abs().max(t_new.abs()).max(h) / h;
-            let mut crossings: Vec<(usize, f64)> = Vec::new();
-            for i in 0..self.n_events {
-                let (fa, fb) = (self.g_ref[i], self.g_new[i]);
-                if negative(fa) != negative(fb) {
-                    let te = self.locate(sys, i, fa, fb, t_new, tol_theta)?;
-                    crossings.push((i, te));
-                }
-            }
-            let tol_t = s.event_tolerance * t.abs().max(t_new.abs()).max(h);
-            let mut interior: Option<Pending> = None;
-            while !crossings.is_empty() {
-                let t_star = crossings.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
-                if t_star <= t + tol_t {
-                    // Crossings at the start of the step: nothing to retake for them.
-                    let mut k = 0;
-                    while k < crossings.len() {
-                        let (i, te) = crossings[k];
-                        if te <= t + tol_t {
-                            let post = self.g_new[i];
-                            self.record(te, i, post);
-                            self.g_ref[i] = post;
-                            crossings.swap_remove(k);
-                        } else {
-                            k += 1;
-                        }
-                    }
-                } else if t_star >= t_new - tol_t {
-                    // Crossings at the end of the step: the step already ends there.
-                    for &(i, te) in &crossings {
-                        self.record(te, i, self.g_new[i]);
-                    }
-                    break;
-                } else {
-                    let components = crossings
-                        .iter()
-                        .filter(|c| c.1 <= t_star + tol_t)
-                        .map(|&(i, te)| (i, te, self.g_new[i]))
-                        .collect();
-                    interior = Some(Pending { t_event: t_star, components, h_after: h_next });
-                    break;
-                }
-            }
-            if interior.is_some() {
-                // Retake the step so that it ends on the event.
-                pending = interior;
-                continue;
-            }
-            self.commit(t_new, err);
-            self.h_next = h_next;
-            self.g_ref.copy_from_slice(&self.g_new);
-            if single {
+            self.prepare_dense(span.h);
+            pending = self.accept(sys, span, err, h_next, pending.take())?;
+            if pending.is_none() && single {
                 break;
             }
         }
         Ok(())
+    }
+
+    /// Where the next attempt ends, and the step the controller proposes: at the pending
+    /// event, or the proposed step (at most the largest allowed), stretched to `t_end` when
+    /// that lies within 1 % beyond it.
+    #[inline]
+    fn step_end(&self, pending: Option<&Pending>, t_end: f64) -> (f64, f64) {
+        match pending {
+            Some(p) => (p.t_event, p.h_after),
+            None => {
+                let h = self.h_next.min(self.settings.max_step);
+                if self.t + 1.01 * h >= t_end {
+                    (t_end, h)
+                } else {
+                    (self.t + h, h)
+                }
+            }
+        }
+    }
+
+    /// Rejects an attempt of length `h` whose stages failed (a state or force not finite):
+    /// the next attempt is shorter by the least ratio; the failure is the error where that
+    /// falls below the least step (or `tiny`, the rounding of the time).
+    #[inline]
+    fn reject_failed(&mut self, h: f64, tiny: f64, failure: StageFailure) -> Result<(), SolverError> {
+        let s = self.settings;
+        self.stats.rejected_steps += 1;
+        self.rejected_last = true;
+        self.h_next = h * s.min_ratio;
+        if self.h_next < s.min_step.max(tiny) {
+            return Err(failure.into_error());
+        }
+        Ok(())
+    }
+
+    /// Rejects the attempt `span` whose error norm `err` exceeds 1: the controller's shorter
+    /// step next, or, where `may_aim` (the attempt neither aimed at a crossing nor landing on
+    /// one) and the model has events, a step aimed at a crossing roughly located on the
+    /// rejected step: a switch inside the step (a kink in the force) is the likely cause of
+    /// the rejection; if the aimed attempt fails too, the controller takes over. Whether the
+    /// next attempt is aimed.
+    #[inline]
+    fn reject_inaccurate<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        span: Span,
+        err: f64,
+        tiny: f64,
+        may_aim: bool,
+    ) -> Result<bool, SolverError> {
+        let s = self.settings;
+        self.stats.rejected_steps += 1;
+        self.rejected_last = true;
+        self.h_next = span.h * (s.safety * err.powf(-0.2)).max(s.min_ratio);
+        let mut aimed = false;
+        if self.n_events > 0 && may_aim {
+            if let Some(tc) = self.rough_crossing(sys, span.h, span.t_new)? {
+                if tc - span.t > tiny {
+                    self.h_next = tc - span.t;
+                    aimed = true;
+                }
+            }
+        }
+        if self.h_next < s.min_step.max(tiny) {
+            return Err(SolverError::StepTooSmall { t: span.t, h: self.h_next });
+        }
+        Ok(aimed)
+    }
+
+    /// The step after an accepted step of length `h` with error norm `err`: the
+    /// controller's factor within the allowed ratios, not growing right after a rejection.
+    #[inline]
+    fn next_step_size(&self, h: f64, err: f64) -> f64 {
+        let s = self.settings;
+        let mut fac = if err == 0.0 {
+            s.max_ratio
+        } else {
+            match s.controller {
+                StepController::Standard => s.safety * err.powf(-0.2),
+                StepController::PI { beta } => {
+                    s.safety * err.powf(-(0.2 - 0.75 * beta)) * self.err_old.powf(beta)
+                }
+            }
+        };
+        fac = fac.clamp(s.min_ratio, s.max_ratio);
+        if self.rejected_last {
+            fac = fac.min(1.0);
+        }
+        h * fac
+    }
+
+    /// Accepts the attempt `span` that passed the error test (its dense output prepared),
+    /// `h_next` the step after it: committed where the model has no events, or where it
+    /// lands on the `pending` event, or where no event crosses inside it. Otherwise the
+    /// event to retake the step onto.
+    #[inline]
+    fn accept<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        span: Span,
+        err: f64,
+        h_next: f64,
+        pending: Option<Pending>,
+    ) -> Result<Option<Pending>, SolverError> {
+        if self.n_events == 0 {
+            self.commit(span.t_new, err);
+            self.h_next = h_next;
+            return Ok(None);
+        }
+        let mut g_new = std::mem::take(&mut self.g_new);
+        let ev = eval_events(sys, self.n, Some(self.n_events), span.t_new, &self.y_new, &mut g_new);
+        self.g_new = g_new;
+        ev?;
+        if let Some(p) = pending {
+            self.land(p, span.t_new, err);
+            return Ok(None);
+        }
+        let interior = self.interior_event(sys, span, h_next)?;
+        if interior.is_some() {
+            // Retake the step so that it ends on the event.
+            return Ok(interior);
+        }
+        self.commit(span.t_new, err);
+        self.h_next = h_next;
+        self.g_ref.copy_from_slice(&self.g_new);
+        Ok(None)
+    }
+
+    /// Commits the retaken step that lands on its located event `p` at `t_new`: the event's
+    /// components recorded at their located times with their values past the crossing, any
+    /// other sign change at the step's end.
+    #[inline]
+    fn land(&mut self, p: Pending, t_new: f64, err: f64) {
+        self.commit(t_new, err);
+        self.h_next = p.h_after;
+        for i in 0..self.n_events {
+            if let Some(&(_, te, post)) = p.components.iter().find(|c| c.0 == i) {
+                self.record(te, i, post);
+                self.g_ref[i] = post;
+            } else {
+                let gi = self.g_new[i];
+                if negative(gi) != negative(self.g_ref[i]) {
+                    self.record(t_new, i, gi);
+                }
+                self.g_ref[i] = gi;
+            }
+        }
+    }
+
+    /// The event functions whose sign changes over the accepted attempt `span`, each
+    /// located: crossings at the step's start are recorded (nothing to retake for them),
+    /// crossings at its end too (the step already ends there); otherwise the earliest
+    /// crossing inside the step, with those within the tolerance of it, as the event to
+    /// retake the step onto, `h_next` the step after it.
+    #[inline]
+    fn interior_event<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        span: Span,
+        h_next: f64,
+    ) -> Result<Option<Pending>, SolverError> {
+        let Span { t, t_new, h } = span;
+        let s = self.settings;
+        let tol_theta = s.event_tolerance * t.abs().max(t_new.abs()).max(h) / h;
+        let mut crossings: Vec<(usize, f64)> = Vec::new();
+        for i in 0..self.n_events {
+            let (fa, fb) = (self.g_ref[i], self.g_new[i]);
+            if negative(fa) != negative(fb) {
+                let te = self.locate(sys, i, fa, fb, t_new, tol_theta)?;
+                crossings.push((i, te));
+            }
+        }
+        let tol_t = s.event_tolerance * t.abs().max(t_new.abs()).max(h);
+        while !crossings.is_empty() {
+            let t_star = crossings.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
+            if t_star <= t + tol_t {
+                let mut k = 0;
+                while k < crossings.len() {
+                    let (i, te) = crossings[k];
+                    if te <= t + tol_t {
+                        let post = self.g_new[i];
+                        self.record(te, i, post);
+                        self.g_ref[i] = post;
+                        crossings.swap_remove(k);
+                    } else {
+                        k += 1;
+                    }
+                }
+            } else if t_star >= t_new - tol_t {
+                for &(i, te) in &crossings {
+                    self.record(te, i, self.g_new[i]);
+                }
+                break;
+            } else {
+                let components = crossings
+                    .iter()
+                    .filter(|c| c.1 <= t_star + tol_t)
+                    .map(|&(i, te)| (i, te, self.g_new[i]))
+                    .collect();
+                return Ok(Some(Pending { t_event: t_star, components, h_after: h_next }));
+            }
+        }
+        Ok(None)
     }
 
     /// Writes the dense-output displacements [m or rad] and velocities [m/s or rad/s] at time

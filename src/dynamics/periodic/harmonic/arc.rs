@@ -18,7 +18,9 @@
 //! bordered system's inverse by Broyden's formula between linearizations
 //! ([`HarmonicBalance::arc_correct`]).
 
+use super::jacobian::{newton_remainder, Newton};
 use super::*;
+use crate::dynamics::periodic::max_abs;
 
 /// Relative change of the speed in the forward difference of ∂R/∂λ.
 pub const SPEED_DIFFERENCE: f64 = 1e-6;

@@ -40,9 +40,8 @@ use faer::linalg::solvers::Solve;
 use rustfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
 
-use super::{
-    newton_remainder, pair_entries, DenseLu, HarmonicBalance, HarmonicOrbit, HarmonicSettings, PairSpectrum,
-};
+use super::jacobian::{newton_remainder, pair_entries, DenseLu, Newton, PairSpectrum};
+use super::{HarmonicBalance, HarmonicOrbit, HarmonicSettings};
 use crate::dynamics::equations::{MeshCoordinates, PlanetaryDynamics};
 use crate::dynamics::periodic::series::derivative_coefficient;
 use crate::dynamics::periodic::switches::{add_back, illinois, subtract, time_terms, Switch};
@@ -907,7 +906,7 @@ impl CondensedBalance {
     ) -> Result<(HarmonicOrbit, CondensedReport), PeriodicError> {
         match self.solve_here(omega, guess) {
             Err(PeriodicError::NotConverged { .. }) if guess.is_none() => {
-                let mut newton = super::Newton::default();
+                let mut newton = Newton::default();
                 let y = self.balance.marched_start(omega, &mut newton)?;
                 let marched = self.series(omega, y);
                 let start = self.coordinates_of(&marched)?;
@@ -1499,8 +1498,8 @@ mod tests_support {
 
 #[cfg(test)]
 mod tests {
-    use super::super::Newton;
     use super::tests_support::condensed;
+    use super::Newton;
     use super::*;
     use crate::dynamics::rigid_frame::RigidFrame;
     use crate::scene::Fidelity;

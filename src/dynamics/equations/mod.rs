@@ -21,7 +21,7 @@
 //! (or a torsional shaft from a source at constant speed) and the balancing
 //! torque on the output member, both as generalised forces on u.
 //!
-//! Rayleigh damping (`dynamics.damping = "rayleigh"`, [`Damping::Rayleigh`])
+//! Rayleigh damping (`dynamics.damping = "rayleigh"`, [`Damping::Rayleigh`](crate::model::gear::Damping::Rayleigh))
 //! replaces the damping ratios by C = μ M_v + η K (Chopra,
 //! Dynamics of Structures, §11.4.1): each mesh's damping
 //! is η ∂F/∂δ, its current tangent stiffness (zero out of contact, and
@@ -39,23 +39,24 @@
 //! speed drive's shaft and the load balance keep their own damping: they
 //! are a test bench's, not the gear set's structure.
 
+mod assembly;
+
+pub use assembly::{rigid_speeds, BALANCE_DAMPING, BALANCE_FREQUENCY};
+
 use nalgebra::DMatrix;
 
 use std::sync::Arc;
 
 use crate::contact::deformable::set::DeformableSet;
 use crate::contact::ltca::MeshLaw;
-use crate::contact::ltca::{CycleStats, MeshModel, SetModel};
+use crate::contact::ltca::{MeshModel, SetModel};
 use crate::contact::mesh_law::MeshContact;
 use crate::dynamics::solver::{
     LowRankJacobian, RankOneTerm, SecondOrderSystem, TangentSystem, TermCoefficients,
 };
 use crate::model::carrier_frame::CarrierFrame;
-use crate::model::gear::{Damping, Drive, GearSet, Member, MeshKind};
-use crate::model::lumped::{
-    add_outer, full_index, planet_bearing_vectors, ring_mesh_vector, sun_mesh_vector, Coordinate, Fidelity,
-    LumpedSet, Reduction,
-};
+use crate::model::gear::MeshKind;
+use crate::model::lumped::{LumpedSet, Reduction};
 
 /// One mesh of one planet in the dynamic model.
 #[derive(Clone, Debug)]
@@ -118,7 +119,7 @@ pub struct PlanetaryDynamics {
     /// The contact models and phasing.
     pub contact: SetModel,
     /// The deformable law of both meshes when the set asks for it
-    /// ([`GearSet::contact_model`]); the pair models of `contact` then serve
+    /// ([`GearSet::contact_model`](crate::model::gear::GearSet::contact_model)); the pair models of `contact` then serve
     /// only the phasing and the quasi-static start.
     deformable: Option<Arc<DeformableSet>>,
     /// The mean-stiffness linear model (masses, supports).
@@ -134,7 +135,7 @@ pub struct PlanetaryDynamics {
     f_ext: Vec<f64>,
     speed_drive: Option<SpeedDrive>,
     /// The load balance: a speed controller on the output member
-    /// ([`GearSet::load_balance`]), with the index of the output's rotation.
+    /// ([`GearSet::load_balance`](crate::model::gear::GearSet::load_balance)), with the index of the output's rotation.
     balance: Option<(usize, SpeedDrive)>,
     /// The held member's reaction ([`Self::reaction_torque`]).
     reaction: Reaction,
@@ -232,368 +233,7 @@ pub enum DynamicsError {
     Contact(String),
 }
 
-/// Speeds of sun, ring and carrier [rad/s] for a unit input speed, the held
-/// member at rest (Willis: ω_s − ω_c = R (ω_r − ω_c), R = −Z_r/Z_s).
-pub fn rigid_speeds(set: &GearSet) -> (f64, f64, f64) {
-    let r = -f64::from(set.ring().teeth) / f64::from(set.sun().teeth);
-    match (set.held(), set.input()) {
-        (Member::Carrier, Member::Sun) => (1.0, 1.0 / r, 0.0),
-        (Member::Carrier, Member::Ring) => (r, 1.0, 0.0),
-        (Member::Ring, Member::Sun) => (1.0, 0.0, 1.0 / (1.0 - r)),
-        (Member::Ring, Member::Carrier) => (1.0 - r, 0.0, 1.0),
-        (Member::Sun, Member::Ring) => (0.0, 1.0, r / (r - 1.0)),
-        (Member::Sun, Member::Carrier) => (0.0, (r - 1.0) / r, 1.0),
-        // Validation refuses held == input.
-        _ => (0.0, 0.0, 0.0),
-    }
-}
-
-/// Natural frequency of the load balance's controlled rigid-body mode \[Hz\].
-pub const BALANCE_FREQUENCY: f64 = 50.0;
-/// Damping ratio of the load balance's controlled rigid-body mode [-].
-pub const BALANCE_DAMPING: f64 = 1.0;
-
-fn lever(set: &GearSet, m: Member) -> f64 {
-    match m {
-        Member::Sun => set.sun().base_radius(),
-        Member::Ring => set.ring().base_radius(),
-        Member::Carrier => set.centre_distance(),
-    }
-}
-
-/// The mean tangent stiffness of a mesh over one cycle at `load` \[N\] [N/m]
-/// (64 positions): the stiffness the damping ratio and the linear model read.
-fn mean_stiffness(mesh: MeshContact<'_>, load: f64) -> Result<f64, DynamicsError> {
-    let p = mesh.path().clone();
-    let mut samples = Vec::with_capacity(64);
-    for i in 0..64 {
-        let s = p.start + p.base_pitch * f64::from(i) / 64.0;
-        samples.push(match mesh {
-            MeshContact::Pair(m) => m.force(s, m.approach_for(s, load), None).1,
-            MeshContact::Deformable(t) => {
-                let solved = t.mesh.approach_for(s, load).and_then(|d| t.mesh.solve(s, d));
-                solved.map_err(|e| DynamicsError::Contact(e.to_string()))?.law.approach_stiffness
-            }
-        });
-    }
-    Ok(CycleStats::of(&samples).mean)
-}
-
-/// The deformable law (when the set asks for it) and the mean tangent
-/// stiffnesses of the sun–planet and ring–planet meshes [N/m].
-type ContactLaws = (Option<Arc<DeformableSet>>, f64, f64);
-
-/// The deformable law when the set asks for it, and the mean tangent
-/// stiffness of the sun–planet and ring–planet meshes on the law read.
-fn contact_laws(set: &GearSet, contact: &SetModel) -> Result<ContactLaws, DynamicsError> {
-    let load = set.mesh_load_per_planet().max(1.0);
-    let deformable =
-        DeformableSet::of_set_model(set, contact).map_err(|e| DynamicsError::Contact(e.to_string()))?;
-    let view = |kind: MeshKind| MeshContact::of(contact, deformable.as_deref(), kind);
-    let k_sp = mean_stiffness(view(MeshKind::SunPlanet), load)?;
-    let k_rp = mean_stiffness(view(MeshKind::RingPlanet), load)?;
-    Ok((deformable, k_sp, k_rp))
-}
-
 impl PlanetaryDynamics {
-    /// The dynamic model of a validated gear set with its contact models.
-    pub fn new(set: &GearSet, contact: SetModel) -> Result<Self, DynamicsError> {
-        let alpha_s = set.operating_pressure_angle(MeshKind::SunPlanet);
-        let alpha_r = set.operating_pressure_angle(MeshKind::RingPlanet);
-        let (deformable, k_sp, k_rp) = contact_laws(set, &contact)?;
-        let b = &set.bodies();
-        let (rbs, rbr, rbp, a) = (
-            set.sun().base_radius(),
-            set.ring().base_radius(),
-            set.planet().base_radius(),
-            set.centre_distance(),
-        );
-        let lumped = LumpedSet {
-            central_mass: [b.carrier.mass, b.ring.mass, b.sun.mass],
-            central_rotational_mass: [
-                b.carrier.inertia / (a * a),
-                b.ring.inertia / (rbr * rbr),
-                b.sun.inertia / (rbs * rbs),
-            ],
-            planet_mass: b.planet.mass,
-            planet_rotational_mass: b.planet.inertia / (rbp * rbp),
-            central_bearing: [
-                set.supports().carrier_radial,
-                set.supports().ring_radial,
-                set.supports().sun_radial,
-            ],
-            central_torsional: [0.0; 3],
-            planet_bearing: set.supports().planet_bearing,
-            planet_bearings: set.supports().planet_bearings.clone(),
-            sun_mesh: k_sp,
-            ring_mesh: k_rp,
-            sun_pressure_angle: alpha_s,
-            ring_pressure_angle: alpha_r,
-            planet_angles: set.planet_angles().to_vec(),
-            held: Some(set.held()),
-            fidelity: set.fidelity(),
-        };
-        let reduction = lumped.reduction();
-        let mass = lumped.mass();
-        let dim = reduction.dim();
-        let k_support = lumped.support_stiffness();
-        // Bearing damping: c = 2ζ√(k m) of each body on its own bearing, with
-        // the damping ratio of that member (carrier, ring, sun, planets).
-        let mut c_support = DMatrix::zeros(dim, dim);
-        let zeta = set.supports().damping_ratios;
-        let members = [Member::Carrier, Member::Ring, Member::Sun];
-        for (j, m) in members.iter().enumerate() {
-            let c = 2.0 * zeta[j] * (lumped.central_bearing[j] * lumped.central_mass[j]).sqrt();
-            for coord in [Coordinate::X(*m), Coordinate::Y(*m)] {
-                if let Some(i) = reduction.position(coord) {
-                    c_support[(i, i)] += c;
-                }
-            }
-        }
-        let n = set.planet_angles().len();
-        for (p, psi) in set.planet_angles().iter().enumerate() {
-            let cp = 2.0 * zeta[3] * (lumped.planet_bearing_of(p) * lumped.planet_mass).sqrt();
-            for bv in crate::model::lumped::planet_bearing_vectors(n, p, *psi) {
-                add_outer(&mut c_support, &reduction.reduce_vector(&bv), cp);
-            }
-        }
-        let u = |m: Member| reduction.position(Coordinate::U(m));
-        let (zeta_m, eta) = match set.damping() {
-            Damping::Ratio => (set.mesh_damping_ratio(), 0.0),
-            Damping::Rayleigh { stiffness, .. } => (0.0, stiffness),
-        };
-        let m_rot = |x: f64, y: f64| x * y / (x + y);
-        let c_sp = 2.0
-            * zeta_m
-            * (k_sp * m_rot(lumped.central_rotational_mass[2], lumped.planet_rotational_mass)).sqrt();
-        let c_rp = 2.0
-            * zeta_m
-            * (k_rp * m_rot(lumped.central_rotational_mass[1], lumped.planet_rotational_mass)).sqrt();
-        let mut links = Vec::new();
-        for (p, (bs, br)) in lumped.mesh_vectors().into_iter().enumerate() {
-            let psi = set.planet_angles()[p];
-            let nz =
-                |v: &[f64]| v.iter().enumerate().filter(|(_, x)| **x != 0.0).map(|(i, x)| (i, *x)).collect();
-            let mut ps = Vec::new();
-            if let Some(i) = u(Member::Sun) {
-                ps.push((i, 1.0));
-            }
-            if let Some(i) = u(Member::Carrier) {
-                ps.push((i, -rbs / a));
-            }
-            let mut pr = Vec::new();
-            if let Some(i) = u(Member::Ring) {
-                pr.push((i, -1.0));
-            }
-            if let Some(i) = u(Member::Carrier) {
-                pr.push((i, rbr / a));
-            }
-            links.push(Link {
-                planet: p,
-                kind: MeshKind::SunPlanet,
-                b_nz: nz(&bs),
-                p_nz: ps,
-                s0: -rbs * psi,
-                damping: c_sp,
-            });
-            links.push(Link {
-                planet: p,
-                kind: MeshKind::RingPlanet,
-                b_nz: nz(&br),
-                p_nz: pr,
-                s0: -rbs * psi + contact.ring_shift,
-                damping: c_rp,
-            });
-        }
-        // External torques: the set's balance ([`GearSet::balanced_torques`]),
-        // applied through `set_torques` once the model stands.
-        let torques = set.balanced_torques();
-        let input_index = u(set.input()).ok_or_else(|| DynamicsError::InvalidParameter {
-            name: "operation.input".into(),
-            value: set.input().name().into(),
-            reason: "the input member cannot be the held member".into(),
-        })?;
-        let input_lever = lever(set, set.input());
-        // Rigid-body velocity at unit input speed. Willis: (ω_s − ω_c) =
-        // R (ω_r − ω_c) with R = −Z_r/Z_s; the held member at rest.
-        let (ws, wr, wc) = rigid_speeds(set);
-        let mut rigid = vec![0.0; dim];
-        if let Some(i) = u(Member::Sun) {
-            rigid[i] = ws * rbs;
-        }
-        if let Some(i) = u(Member::Ring) {
-            rigid[i] = wr * rbr;
-        }
-        if let Some(i) = u(Member::Carrier) {
-            rigid[i] = wc * a;
-        }
-        for p in 0..set.planet_angles().len() {
-            // δ_sn = u_s + u_n − η_n cos α_s = 0 with η_n = u_c for rigid motion.
-            if let Some(i) = reduction.position(Coordinate::PlanetU(p)) {
-                rigid[i] = -ws * rbs + wc * a * alpha_s.cos();
-            }
-            if let Some(i) = reduction.position(Coordinate::Eta(p)) {
-                rigid[i] = wc * a;
-            }
-        }
-        let mesh_frequency_per_input_speed =
-            ((ws - wc) * f64::from(set.sun().teeth) / (2.0 * std::f64::consts::PI)).abs();
-        let rotations = [(u(Member::Carrier), a), (u(Member::Ring), rbr), (u(Member::Sun), rbs)];
-        let speed_drive = match set.drive() {
-            Drive::Torque | Drive::SpeedSteps => None,
-            Drive::Speed => {
-                // The speed-driven member (the input member unless the scene
-                // names another), preloaded with its balanced torque. Shaft
-                // stiffness on u: k_θ / lever²; damping ratio 0.05 of the
-                // driven body on the shaft.
-                let driven = set.speed_driven_member();
-                let index = u(driven).ok_or_else(|| DynamicsError::InvalidParameter {
-                    name: "dynamics.speed_driven_member".into(),
-                    value: driven.name().into(),
-                    reason: "the held member cannot be speed-driven".into(),
-                })?;
-                let driven_lever = lever(set, driven);
-                let torque = match driven {
-                    Member::Sun => torques[0],
-                    Member::Ring => torques[1],
-                    Member::Carrier => torques[2],
-                };
-                let k = set.shaft_stiffness() / (driven_lever * driven_lever);
-                let c = 2.0 * 0.05 * (k * mass[index]).sqrt();
-                Some(SpeedDrive {
-                    index,
-                    lever: driven_lever,
-                    rate: rigid[index],
-                    stiffness: k,
-                    damping: c,
-                    speed: 0.0,
-                    offset: torque / driven_lever / k,
-                    preload: torque / driven_lever,
-                })
-            }
-        };
-        // The held member's rotation in full coordinates: its u, and in the
-        // torsional model with the carrier held the planets' η pinned to it.
-        let held = set.held();
-        let mut d = vec![0.0; reduction.full];
-        d[full_index(Coordinate::U(held))] = 1.0;
-        if set.fidelity() == Fidelity::Torsional && held == Member::Carrier {
-            for p in 0..n {
-                d[full_index(Coordinate::Eta(p))] = 1.0;
-            }
-        }
-        let dot = |b: &[f64]| b.iter().zip(&d).map(|(x, y)| x * y).sum::<f64>();
-        let mut reaction = Reaction { lever: lever(set, held), links: Vec::new(), bearings: Vec::new() };
-        for (p, psi) in set.planet_angles().iter().enumerate() {
-            reaction.links.push(dot(&sun_mesh_vector(n, p, *psi, alpha_s)));
-            reaction.links.push(dot(&ring_mesh_vector(n, p, *psi, alpha_r)));
-            let kp = lumped.planet_bearing_of(p);
-            let cp = match set.damping() {
-                Damping::Ratio => 2.0 * zeta[3] * (kp * lumped.planet_mass).sqrt(),
-                Damping::Rayleigh { stiffness, .. } => stiffness * kp,
-            };
-            for bv in planet_bearing_vectors(n, p, *psi) {
-                let e = dot(&bv);
-                let reduced: Vec<(usize, f64)> =
-                    reduction.reduce_vector(&bv).into_iter().enumerate().filter(|(_, x)| *x != 0.0).collect();
-                if e != 0.0 && !reduced.is_empty() {
-                    reaction.bearings.push(ReactionBearing {
-                        share: e,
-                        vector: reduced,
-                        stiffness: kp,
-                        damping: cp,
-                    });
-                }
-            }
-        }
-        // The load balance: a torsional spring and damper from a source
-        // turning at the output's kinematic speed, a PI controller of the
-        // output's speed (the spring the integral, the damper the
-        // proportional part), tuned to [`BALANCE_FREQUENCY`] and
-        // [`BALANCE_DAMPING`] on the rigid-body inertia reduced to the
-        // output, and preloaded with the set's balancing torque.
-        let balance = match (set.load_balance(), u(set.output())) {
-            (true, Some(o)) => {
-                let out_lever = lever(set, set.output());
-                let r_out = rigid[o];
-                let inertia: f64 = if r_out != 0.0 {
-                    mass.iter().zip(&rigid).map(|(m, r)| m * (r / r_out) * (r / r_out)).sum()
-                } else {
-                    mass[o]
-                };
-                let w = 2.0 * std::f64::consts::PI * BALANCE_FREQUENCY;
-                let k = inertia * w * w;
-                let output_torque = match set.output() {
-                    Member::Sun => torques[0],
-                    Member::Ring => torques[1],
-                    Member::Carrier => torques[2],
-                };
-                Some((
-                    o,
-                    SpeedDrive {
-                        index: o,
-                        lever: out_lever,
-                        rate: r_out,
-                        stiffness: k,
-                        damping: 2.0 * BALANCE_DAMPING * inertia * w,
-                        speed: 0.0,
-                        offset: output_torque / out_lever / k,
-                        preload: output_torque / out_lever,
-                    },
-                ))
-            }
-            _ => None,
-        };
-        if let Damping::Rayleigh { mass: mu, stiffness } = set.damping() {
-            c_support = rayleigh_support_damping(&mass, &rigid, &k_support, mu, stiffness);
-        }
-        // The deformable law has one event per flank and mesh: where the mesh starts or stops carrying load.
-        let slots = deformable.as_ref().map_or_else(
-            || vec![contact.sun_planet.event_slots(), contact.ring_planet.event_slots()],
-            |_| vec![1, 1],
-        );
-        let mut support_nz = Vec::new();
-        for i in 0..dim {
-            for j in 0..dim {
-                let (k, c) = (k_support[(i, j)], c_support[(i, j)]);
-                if k != 0.0 || c != 0.0 {
-                    support_nz.push((i, j, k, c));
-                }
-            }
-        }
-        let meshes = vec![MeshState::default(); links.len()];
-        let frame = CarrierFrame::new(&lumped, a, &rigid, wc);
-        let mut model = Self {
-            contact,
-            deformable,
-            lumped,
-            reduction,
-            mass,
-            k_support,
-            c_support,
-            support_nz,
-            links,
-            f_ext: vec![0.0; dim],
-            speed_drive,
-            balance,
-            reaction,
-            input_index,
-            input_lever,
-            rigid_velocity: rigid,
-            mesh_frequency_per_input_speed,
-            rotations,
-            meshes,
-            slots,
-            events_scratch: Vec::new(),
-            cache: None,
-            frame,
-            mesh_stiffness_damping: eta,
-            touch_stiffness: vec![0.0; 2 * n],
-        };
-        model.set_torques(torques[0], torques[1], torques[2]);
-        Ok(model)
-    }
-
     /// The constant external generalised forces: the input torque (or the
     /// mean torque the speed drive's shaft carries) and the output's
     /// balancing torque.
@@ -717,7 +357,7 @@ impl PlanetaryDynamics {
     }
 
     /// Torque of the speed drive's shaft on the speed-driven member
-    /// ([`GearSet::speed_driven_member`], the input member by default)
+    /// ([`GearSet::speed_driven_member`](crate::model::gear::GearSet::speed_driven_member), the input member by default)
     /// [N·m], counter-clockwise positive, under the speed drive.
     pub fn shaft_torque(&self, t: f64, q: &[f64], v: &[f64]) -> Option<f64> {
         self.speed_drive.map(|d| {
@@ -1220,33 +860,4 @@ impl TangentSystem for PlanetaryDynamics {
             };
         }
     }
-}
-
-/// The support damping of Rayleigh's model, η K_b + μ M_v with
-/// M_v = M − M r rᵀ M / (rᵀ M r) (module docs): `mass` the diagonal of M
-/// \[kg\], `rigid` the rigid-body velocity pattern r, `k_support` the supports'
-/// stiffness K_b [N/m], `mu` \[1/s\] and `eta` \[s\] the coefficients.
-fn rayleigh_support_damping(
-    mass: &[f64],
-    rigid: &[f64],
-    k_support: &DMatrix<f64>,
-    mu: f64,
-    eta: f64,
-) -> DMatrix<f64> {
-    let mut c = k_support * eta;
-    let mr: Vec<f64> = mass.iter().zip(rigid).map(|(m, r)| m * r).collect();
-    let rmr: f64 = mr.iter().zip(rigid).map(|(a, r)| a * r).sum();
-    for (i, m) in mass.iter().enumerate() {
-        c[(i, i)] += mu * m;
-    }
-    // A model without a rigid-body motion (all velocities zero at unit
-    // input speed cannot happen for a valid set) would keep μM whole.
-    if rmr > 0.0 {
-        for (i, a) in mr.iter().enumerate() {
-            for (j, b) in mr.iter().enumerate() {
-                c[(i, j)] -= mu * a * b / rmr;
-            }
-        }
-    }
-    c
 }
