@@ -5,9 +5,9 @@
 
 use planetwear::analysis::condensed_branch::CondensedBranch;
 use planetwear::analysis::continuation::{
-    branch_events, continue_branch, follow_branch, follow_joining, marching_jumps, nearest_event,
-    on_one_stable_branch, BalanceBranch, BifurcationKind, Branch, BranchEvent, BranchPoint,
-    ContinuationSettings, CurvePoint, GapKind,
+    branch_events, follow_branch, follow_joining, marching_jumps, nearest_event, on_one_stable_branch,
+    BalanceBranch, BifurcationKind, Branch, BranchEvent, BranchPoint, BranchSolver, ContinuationSettings,
+    CurvePoint, GapKind,
 };
 use planetwear::dynamics::periodic::{
     CondensedBalance, HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings, Symmetry,
@@ -116,9 +116,7 @@ pub(crate) fn sweep_continuation(
         "jumps": jumps.as_ref().map(|rows| rows.iter().map(JumpRow::json).collect::<Vec<_>>()),
         "files": files,
     });
-    write_atomic(&out.join("sweep.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
-    if json {
-        outln!("{}", serde_json::to_string_pretty(&summary)?)?;
+    if write_sweep_summary(&out, &summary, json)? {
         return Ok(());
     }
     outln!(
@@ -224,6 +222,19 @@ impl Follow<'_> {
     }
 }
 
+/// The branch `solver` follows, joining `other`'s branch when given.
+fn follow_with<S: BranchSolver>(
+    solver: &mut S,
+    settings: &ContinuationSettings,
+    other: Option<&Branch>,
+    progress: impl FnMut(&BranchPoint),
+) -> Result<Branch> {
+    Ok(match other {
+        Some(o) => follow_joining(solver, settings, o, progress)?,
+        None => follow_branch(solver, settings, progress)?,
+    })
+}
+
 /// A run by the condensed balance (with `broken_symmetry`, along a branch that breaks the
 /// planets' symmetry where a restart lands on one).
 fn condensed_run(
@@ -237,10 +248,7 @@ fn condensed_run(
     let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
     let mut solver = CondensedBranch::new(&mut cb);
     solver.follow_broken_symmetry(broken_symmetry);
-    let branch = match other {
-        Some(o) => follow_joining(&mut solver, settings, o, progress)?,
-        None => follow_branch(&mut solver, settings, progress)?,
-    };
+    let branch = follow_with(&mut solver, settings, other, progress)?;
     let orbits = std::mem::take(&mut solver.orbits);
     let (mut states, mut held) = (Vec::new(), None);
     for orbit in &orbits {
@@ -263,10 +271,7 @@ fn balance_run(
 ) -> Result<Followed> {
     let mut hb = HarmonicBalance::new(problem, HarmonicSettings::default())?;
     let mut solver = BalanceBranch::new(&mut hb);
-    let branch = match other {
-        Some(o) => follow_joining(&mut solver, settings, o, progress)?,
-        None => follow_branch(&mut solver, settings, progress)?,
-    };
+    let branch = follow_with(&mut solver, settings, other, progress)?;
     let orbits = std::mem::take(&mut solver.orbits);
     let (mut states, mut held) = (Vec::new(), None);
     for orbit in &orbits {
@@ -287,10 +292,7 @@ fn shooting_run(
     other: Option<&Branch>,
     progress: impl FnMut(&BranchPoint),
 ) -> Result<Followed> {
-    let branch = match other {
-        Some(o) => follow_joining(&mut problem, settings, o, progress)?,
-        None => continue_branch(&mut problem, settings, progress)?,
-    };
+    let branch = follow_with(&mut problem, settings, other, progress)?;
     let mut states = Vec::new();
     for p in &branch.points {
         states.push(problem.steady_state(&p.orbit)?);

@@ -455,9 +455,7 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         "peaks": peaks,
         "files": files,
     });
-    write_atomic(&out.join("sweep.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
-    if json {
-        outln!("{}", serde_json::to_string_pretty(&summary)?)?;
+    if write_sweep_summary(&out, &summary, json)? {
         return Ok(());
     }
     outln!(
@@ -483,6 +481,16 @@ pub(crate) fn sweep_command(args: SweepArgs) -> Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// Writes a sweep's `summary` to sweep.json in `out`, and prints it when `json`: whether
+/// it was printed (the text report then is not).
+pub(crate) fn write_sweep_summary(out: &Path, summary: &serde_json::Value, json: bool) -> Result<bool> {
+    write_atomic(&out.join("sweep.json"), serde_json::to_string_pretty(summary)?.as_bytes())?;
+    if json {
+        outln!("{}", serde_json::to_string_pretty(summary)?)?;
+    }
+    Ok(json)
 }
 
 /// The marching sweeps over `speeds` [rpm] in each direction of `dirs` (both side by
