@@ -113,7 +113,10 @@ class WearState:
 
 @dataclass
 class Scene:
-    """The scene the campaign's FMU instances and the wear stepper use."""
+    """The scene the campaign's FMU instances and the wear stepper use, with
+    its gear set's kinematics as the Rust side computes them
+    (`planetwear scene show --json`, or the packed FMU's
+    resources/<scene>.kinematics.json)."""
 
     # The campaign file's value: a built-in name or a path.
     spec: str
@@ -123,33 +126,30 @@ class Scene:
     cli_value: str
     # The scene's TOML text.
     text: str
-    sun_teeth: int
-    ring_teeth: int
-    # Face width of the sun [m].
-    face_width: float
-    # Base radii of sun and ring [m] (the balancing torque of the output member).
-    sun_base_radius: float
-    ring_base_radius: float
-    held: str
-    input: str
+    # The gear set's kinematics (model::kinematics::Kinematics, SI).
+    kinematics: dict
+
+    @property
+    def face_width(self):
+        """Face width of the sun [m]."""
+        return self.kinematics["face_width"]
+
+    @property
+    def held(self):
+        return self.kinematics["held"]
+
+    @property
+    def input(self):
+        return self.kinematics["input"]
 
     def mesh_cycles_per_revolution(self):
-        """Mesh cycles per revolution of the input member (the sun): Z_sun with
-        the carrier held; Z_sun·Z_ring/(Z_sun + Z_ring) with the ring held
-        (Willis: the carrier turns at Z_sun/(Z_sun + Z_ring) of the sun)."""
-        if self.held == "carrier":
-            return float(self.sun_teeth)
-        return self.sun_teeth * self.ring_teeth / (self.sun_teeth + self.ring_teeth)
+        """Mesh cycles per revolution of the input member."""
+        return self.kinematics["mesh_cycles_per_input_revolution"]
 
-    def balanced_torques(self, sun_torque):
-        """(sun, ring, carrier) external torques [N·m] balancing `sun_torque`
-        on the sun: T_ring = T_sun r_b,ring/r_b,sun, T_carrier =
-        −T_sun (r_b,sun + r_b,ring)/r_b,sun; the held member's is ignored by
-        the FMU and set to zero."""
-        f = sun_torque / self.sun_base_radius
-        ring = 0.0 if self.held == "ring" else f * self.ring_base_radius
-        carrier = 0.0 if self.held == "carrier" else -f * (self.sun_base_radius + self.ring_base_radius)
-        return sun_torque, ring, carrier
+    def balanced_torques(self, input_torque):
+        """(sun, ring, carrier) external torques [N·m] balancing `input_torque`
+        on the input member; the held member's is zero."""
+        return tuple(k * input_torque for k in self.kinematics["balanced_torques_per_input_torque"])
 
 
 @dataclass
@@ -288,47 +288,57 @@ def model_variables(fmu_path):
     return outputs, names
 
 
+def _kinematics_from_bin(exe, scene_arg):
+    """The scene's TOML text and kinematics from `planetwear scene show --json`;
+    raises ValueError with the binary's reason."""
+    out = subprocess.run([exe, "scene", "show", scene_arg, "--json"], capture_output=True, text=True)
+    if out.returncode != 0:
+        raise ValueError(f"{exe} scene show: {out.stderr.strip()}")
+    doc = json.loads(out.stdout)
+    return doc["toml"], doc["kinematics"]
+
+
 def _scene_text(spec, base, fmu_path, bin_value):
-    """The scene's TOML text and what the FMU and the wear stepper are given;
-    raises ValueError with the reason."""
+    """The scene's TOML text, what the FMU and the wear stepper are given, and
+    its kinematics from the Rust side; raises ValueError with the reason."""
     p = Path(spec)
     if not p.is_absolute():
         p = base / p
+    exe = find_planetwear_bin(bin_value, base)
     if p.exists():
-        return read_input(p, "scene").decode(), str(p), str(p)
+        text = read_input(p, "scene").decode()
+        _check_gear_tables(text)
+        if not exe:
+            raise ValueError("a scene file's kinematics come from the planetwear binary: set planetwear_bin or "
+                             "PLANETWEAR_BIN, or name a scene the FMU ships")
+        return text, str(p), str(p), _kinematics_from_bin(exe, str(p))[1]
     if spec in BUILT_IN_SCENES or not spec.endswith(".toml"):
-        exe = find_planetwear_bin(bin_value, base)
+        fmu_value = "" if spec == "example-2004" else f"{spec}.toml"
         if exe:
-            out = subprocess.run([exe, "scene", "show", spec], capture_output=True, text=True)
-            if out.returncode == 0:
-                fmu_value = "" if spec == "example-2004" else f"{spec}.toml"
-                return out.stdout, fmu_value, spec
-            raise ValueError(f"neither a file nor a built-in scene ({exe} scene show: {out.stderr.strip()})")
-        # No binary: the FMU ships the built-in scenes in resources/.
+            try:
+                text, kinematics = _kinematics_from_bin(exe, spec)
+            except ValueError as e:
+                raise ValueError(f"neither a file nor a built-in scene ({e})") from None
+            return text, fmu_value, spec, kinematics
+        # No binary: the FMU ships the built-in scenes and their kinematics in resources/.
         with zipfile.ZipFile(fmu_path) as z:
             name = f"resources/{spec}.toml"
             if name in z.namelist():
-                fmu_value = "" if spec == "example-2004" else f"{spec}.toml"
-                return z.read(name).decode(), fmu_value, spec
+                kin = f"resources/{spec}.kinematics.json"
+                if kin not in z.namelist():
+                    raise ValueError(f"the FMU ships no {kin}: pack it with this version's planetwear fmu pack, "
+                                     "or set planetwear_bin")
+                return z.read(name).decode(), fmu_value, spec, json.loads(z.read(kin))
     raise ValueError(f"no such file (relative to the campaign file) and not a built-in scene "
                      f"({', '.join(BUILT_IN_SCENES)})")
 
 
-def _parse_scene(spec, text, fmu_value, cli_value):
+def _check_gear_tables(text):
+    """Raises ValueError unless the TOML text has the three gear tables."""
     s = tomllib.loads(text)
     missing = [t for t in ("sun", "planet", "ring") if not isinstance(s.get(t), dict)]
     if missing:
         raise ValueError(f"not a planetary gear set scene (no [{'], ['.join(missing)}] table)")
-
-    def base_radius(gear):
-        g = s[gear]
-        return g["module_mm"] * 1e-3 * g["teeth"] * math.cos(math.radians(g["pressure_angle_deg"])) / 2
-
-    op = s.get("operation", {})
-    return Scene(spec=spec, fmu_value=fmu_value, cli_value=cli_value, text=text, sun_teeth=int(s["sun"]["teeth"]),
-                 ring_teeth=int(s["ring"]["teeth"]), face_width=s["sun"]["face_width_mm"] * 1e-3,
-                 sun_base_radius=base_radius("sun"), ring_base_radius=base_radius("ring"),
-                 held=op.get("held", "carrier"), input=op.get("input", "sun"))
 
 
 def _resolve_state(entry, base, fmu_path, fmu_names):
@@ -372,7 +382,14 @@ def load(path, output_dir=None, *, probe):
 
 def from_dict(raw, source, output_dir=None, *, probe):
     """Checks a campaign given as a dict (as read from TOML); relative paths
-    are taken relative to the directory of `source`. `probe` as in `load`."""
+    are taken relative to the directory of `source`. `probe` as in `load`.
+
+    The checks run in a fixed order, so the problems are listed in it: the
+    keys and tables, fmu, planetwear_bin, scene, output_dir, [speeds],
+    [load], [timing], [integrator], [outputs], [loop], [wear], and last the
+    FMU's verdict (`probe`). Each step is a function below; a step that
+    needs an earlier one's result (the FMU, the scene) skips what it cannot
+    check without it."""
     source = Path(source).resolve()
     base = source.parent
     problems = []
@@ -380,6 +397,33 @@ def from_dict(raw, source, output_dir=None, *, probe):
     def bad(key, value, allowed):
         problems.append(Problem(key, value, allowed))
 
+    tab = _check_keys(raw, bad)
+    fmu, fmu_names, outputs_md = _check_fmu(raw, base, bad)
+    bin_value = _check_planetwear_bin(raw, base, bad)
+    scene = _check_scene(raw, base, fmu, bin_value, bad)
+    out = _check_output_dir(raw, base, output_dir, bad)
+    speeds, directions = _check_speeds(raw, tab["speeds"], bad)
+    torques = _check_torques(raw, tab["load"], bad)
+    step, cycles = _check_timing(tab["timing"], bad)
+    integ = _check_integrator(tab["integrator"], bad)
+    outputs, output_types = _check_outputs(tab["outputs"], outputs_md, bad)
+    lp = _check_loop(tab["loop"], bad)
+    wv, states, state_index = _check_wear(raw, tab["wear"], base, fmu, fmu_names, bad)
+    problems += _probe_problems(probe, fmu, scene, integ, cycles, speeds, torques, wv, state_index)
+    if problems:
+        raise CampaignError(source, problems)
+    return Campaign(source=source, fmu=fmu, fmu_sha256=sha256_file(fmu), scene=scene, output_dir=out,
+                    planetwear_bin=bin_value, states=states, speeds=speeds, directions=directions,
+                    torques=torques, communication_step=step, run_in_cycles=cycles["run_in_cycles"],
+                    window_cycles=cycles["window_cycles"], integrator=integ, outputs=outputs,
+                    output_types=output_types, loop=lp, raw=raw)
+
+
+def _check_keys(raw, bad):
+    """The keys of the campaign file: no unknown key at the top or in a
+    table of TABLE_KEYS, each of those tables a table, and the [wear],
+    [speeds] and [load] tables present. Returns every table of TABLE_KEYS
+    as a dict ({} when it is missing or not a table)."""
     for k in raw:
         if k not in TOP_KEYS:
             bad(k, raw[k], f"unknown key; allowed are {', '.join(TOP_KEYS)}")
@@ -394,9 +438,15 @@ def from_dict(raw, source, output_dir=None, *, probe):
     for table in ("wear", "speeds", "load"):
         if table not in raw:
             bad(table, "(missing)", f"the [{table}] table is required")
-    tab = {t: raw.get(t) if isinstance(raw.get(t), dict) else {} for t in TABLE_KEYS}
+    return {t: raw.get(t) if isinstance(raw.get(t), dict) else {} for t in TABLE_KEYS}
 
-    # The FMU.
+
+def _check_fmu(raw, base, bad):
+    """fmu (required): an existing file, relative to the campaign file's
+    directory, that is a zip archive with a model description declaring
+    every variable a task sets (TASK_VARIABLES). Returns (the FMU's absolute
+    path or None when it is unusable, the names in the archive, {output
+    name: type} of the model description)."""
     fmu = None
     fmu_names = set()
     outputs_md = {}
@@ -423,21 +473,34 @@ def from_dict(raw, source, output_dir=None, *, probe):
                 if missing:
                     bad("fmu", raw["fmu"], f"not the planetwear FMU (it has no {', '.join(missing)})")
                     fmu, outputs_md = None, {}
+    return fmu, fmu_names, outputs_md
 
+
+def _check_planetwear_bin(raw, base, bad):
+    """planetwear_bin (optional): the path of an executable file, relative
+    to the campaign file's directory. Returns the value as given, or None
+    when it is missing or bad."""
     bin_value = raw.get("planetwear_bin")
     if bin_value is not None and (not isinstance(bin_value, str) or not find_planetwear_bin(bin_value, base)):
         bad("planetwear_bin", bin_value, "must be the path of the planetwear binary (an executable file)")
         bin_value = None
+    return bin_value
 
-    # The scene.
+
+def _check_scene(raw, base, fmu, bin_value, bad):
+    """scene (default example-2004): a built-in scene name or a scene file
+    that can be read as a planetary gear set whose input member is the sun
+    (the campaign's torque levels are sun torques). Read only when the FMU
+    is usable, since without the binary the built-in scenes come from the
+    FMU's resources. Returns the `Scene`, or None."""
     scene = None
     spec = raw.get("scene", "example-2004")
     if not isinstance(spec, str) or not spec:
         bad("scene", spec, f"must be a built-in scene name ({', '.join(BUILT_IN_SCENES)}) or a scene file")
     elif fmu is not None:
         try:
-            text, fmu_value, cli_value = _scene_text(spec, base, fmu, bin_value)
-            scene = _parse_scene(spec, text, fmu_value, cli_value)
+            text, fmu_value, cli_value, kinematics = _scene_text(spec, base, fmu, bin_value)
+            scene = Scene(spec=spec, fmu_value=fmu_value, cli_value=cli_value, text=text, kinematics=kinematics)
         except KeyError as e:
             bad("scene", spec, f"cannot be read: the key {e} is missing")
         except (ValueError, tomllib.TOMLDecodeError) as e:
@@ -446,8 +509,15 @@ def from_dict(raw, source, output_dir=None, *, probe):
             bad("scene", spec, f"operation.input = {scene.input}: the campaign's torque levels are sun torques, "
                                "so the scene's input member must be the sun")
             scene = None
+    return scene
 
-    # The output directory.
+
+def _check_output_dir(raw, base, output_dir, bad):
+    """output_dir (required; the `output_dir` argument takes the place of
+    the file's key): a directory one may write in, or a path that can be
+    created (its nearest existing ancestor is a directory one may write
+    in). Returns the absolute path, the path as given when it is a bad
+    directory, or None when it is missing or not a path."""
     out = output_dir if output_dir is not None else raw.get("output_dir")
     if out is None:
         bad("output_dir", "(missing)", "required: the directory of the results")
@@ -471,44 +541,22 @@ def from_dict(raw, source, output_dir=None, *, probe):
                 bad("output_dir", str(out), f"cannot be created: no permission to write in {anc}")
         elif not os.access(out, os.W_OK | os.X_OK):
             bad("output_dir", str(out), "is a directory without permission to write in it")
+    return out
 
-    # The speed grid.
-    sp = tab["speeds"]
+
+def _check_speeds(raw, sp, bad):
+    """[speeds]: either values_rpm or from_rpm/to_rpm/step_rpm (not both),
+    and directions: up, down, both (the default) or a list of up/down
+    without repeats. Returns (the speeds [rpm], increasing, [] when bad;
+    the directions, [] when bad)."""
     speeds = []
     grid_keys = [k for k in ("from_rpm", "to_rpm", "step_rpm") if k in sp]
     if "values_rpm" in sp and grid_keys:
         bad("speeds", "values_rpm and " + ", ".join(grid_keys), "give either values_rpm or from_rpm/to_rpm/step_rpm")
     elif "values_rpm" in sp:
-        v = sp["values_rpm"]
-        if not isinstance(v, list) or not v:
-            bad("speeds.values_rpm", v, "must be a non-empty list of speeds [rpm]")
-        else:
-            fine = True
-            for i, x in enumerate(v):
-                if not _number(x) or not math.isfinite(x) or x <= 0:
-                    bad(f"speeds.values_rpm[{i}]", x, "must be a positive finite speed [rpm]")
-                    fine = False
-            if fine and any(b <= a for a, b in zip(v, v[1:])):
-                bad("speeds.values_rpm", v, "must be strictly increasing (directions set the sweep order)")
-            elif fine:
-                speeds = [float(x) for x in v]
+        speeds = _speed_values(sp["values_rpm"], bad)
     elif "speeds" in raw:
-        ok = True
-        for k in ("from_rpm", "to_rpm", "step_rpm"):
-            x = sp.get(k)
-            if x is None:
-                bad(f"speeds.{k}", "(missing)", "required with from_rpm/to_rpm/step_rpm (or give values_rpm)")
-                ok = False
-            elif not _number(x) or not math.isfinite(x) or x <= 0:
-                bad(f"speeds.{k}", x, "must be a positive finite number [rpm]")
-                ok = False
-        if ok:
-            if sp["to_rpm"] < sp["from_rpm"]:
-                bad("speeds.to_rpm", sp["to_rpm"], f"is below from_rpm = {sp['from_rpm']}: the grid would be empty")
-            elif (sp["to_rpm"] - sp["from_rpm"]) / sp["step_rpm"] + 1 > MAX_SPEEDS:
-                bad("speeds.step_rpm", sp["step_rpm"], f"gives more than {MAX_SPEEDS} speeds")
-            else:
-                speeds = speed_grid(float(sp["from_rpm"]), float(sp["to_rpm"]), float(sp["step_rpm"]))
+        speeds = _speed_range(sp, bad)
     d = sp.get("directions", "both")
     directions = {"up": ["up"], "down": ["down"], "both": ["up", "down"]}.get(d) if isinstance(d, str) else None
     if isinstance(d, list) and d and all(x in ("up", "down") for x in d) and len(set(d)) == len(d):
@@ -516,27 +564,82 @@ def from_dict(raw, source, output_dir=None, *, probe):
     if directions is None:
         bad("speeds.directions", d, "allowed are up, down, both (or a list of up/down)")
         directions = []
+    return speeds, directions
 
-    # Torques.
-    torques = []
-    tq = tab["load"].get("sun_torque_nm")
-    if "load" in raw:
-        if isinstance(tq, (int, float)) and not isinstance(tq, bool):
-            tq = [tq]
-        if not isinstance(tq, list) or not tq:
-            bad("load.sun_torque_nm", tq, "must be a non-empty list of sun torques [N·m]")
-        else:
-            for i, x in enumerate(tq):
-                if not _number(x) or not math.isfinite(x) or x == 0:
-                    bad(f"load.sun_torque_nm[{i}]", x, "must be a non-zero finite torque [N·m]")
-            if all(_number(x) and math.isfinite(x) and x != 0 for x in tq):
-                if len(set(tq)) != len(tq):
-                    bad("load.sun_torque_nm", tq, "must not repeat a torque")
-                else:
-                    torques = [float(x) for x in tq]
 
-    # Timing.
-    tm = tab["timing"]
+def _speed_values(v, bad):
+    """speeds.values_rpm: a non-empty, strictly increasing list of positive
+    finite speeds [rpm] (each bad element named by its index). Returns the
+    speeds as floats, or [] when any is bad."""
+    if not isinstance(v, list) or not v:
+        bad("speeds.values_rpm", v, "must be a non-empty list of speeds [rpm]")
+        return []
+    fine = True
+    for i, x in enumerate(v):
+        if not _number(x) or not math.isfinite(x) or x <= 0:
+            bad(f"speeds.values_rpm[{i}]", x, "must be a positive finite speed [rpm]")
+            fine = False
+    if not fine:
+        return []
+    if any(b <= a for a, b in zip(v, v[1:])):
+        bad("speeds.values_rpm", v, "must be strictly increasing (directions set the sweep order)")
+        return []
+    return [float(x) for x in v]
+
+
+def _speed_range(sp, bad):
+    """speeds.from_rpm, to_rpm and step_rpm: all three positive finite
+    numbers [rpm], to_rpm not below from_rpm and at most MAX_SPEEDS speeds
+    in the grid. Returns the grid (`speed_grid`), or [] when any is bad."""
+    ok = True
+    for k in ("from_rpm", "to_rpm", "step_rpm"):
+        x = sp.get(k)
+        if x is None:
+            bad(f"speeds.{k}", "(missing)", "required with from_rpm/to_rpm/step_rpm (or give values_rpm)")
+            ok = False
+        elif not _number(x) or not math.isfinite(x) or x <= 0:
+            bad(f"speeds.{k}", x, "must be a positive finite number [rpm]")
+            ok = False
+    if not ok:
+        return []
+    if sp["to_rpm"] < sp["from_rpm"]:
+        bad("speeds.to_rpm", sp["to_rpm"], f"is below from_rpm = {sp['from_rpm']}: the grid would be empty")
+        return []
+    if (sp["to_rpm"] - sp["from_rpm"]) / sp["step_rpm"] + 1 > MAX_SPEEDS:
+        bad("speeds.step_rpm", sp["step_rpm"], f"gives more than {MAX_SPEEDS} speeds")
+        return []
+    return speed_grid(float(sp["from_rpm"]), float(sp["to_rpm"]), float(sp["step_rpm"]))
+
+
+def _check_torques(raw, ld, bad):
+    """load.sun_torque_nm (checked when [load] is given): a sun torque
+    [N·m] or a non-empty list of them, each non-zero and finite, none
+    repeated. Returns the torques as floats, or [] when any is bad."""
+    if "load" not in raw:
+        return []
+    tq = ld.get("sun_torque_nm")
+    if isinstance(tq, (int, float)) and not isinstance(tq, bool):
+        tq = [tq]
+    if not isinstance(tq, list) or not tq:
+        bad("load.sun_torque_nm", tq, "must be a non-empty list of sun torques [N·m]")
+        return []
+    for i, x in enumerate(tq):
+        if not _number(x) or not math.isfinite(x) or x == 0:
+            bad(f"load.sun_torque_nm[{i}]", x, "must be a non-zero finite torque [N·m]")
+    if not all(_number(x) and math.isfinite(x) and x != 0 for x in tq):
+        return []
+    if len(set(tq)) != len(tq):
+        bad("load.sun_torque_nm", tq, "must not repeat a torque")
+        return []
+    return [float(x) for x in tq]
+
+
+def _check_timing(tm, bad):
+    """[timing]: communication_step "mesh cycle" (the default) or a positive
+    step [s]; run_in_cycles (default 34, at least 0) and window_cycles
+    (default 68, at least 1) whole numbers of mesh cycles up to 1 000 000.
+    Returns (the step, None for one mesh cycle or when bad; {key: value as
+    given} of the two cycle counts)."""
     h = tm.get("communication_step", "mesh cycle")
     step = None
     if isinstance(h, str):
@@ -552,10 +655,17 @@ def from_dict(raw, source, output_dir=None, *, probe):
         if not isinstance(x, int) or isinstance(x, bool) or x < least or x > 1_000_000:
             bad(f"timing.{k}", x, f"must be a whole number of mesh cycles, at least {least}")
         cycles[k] = x
+    return step, cycles
 
-    # Integrator settings (the FMU checks them once more).
+
+def _check_integrator(ig, bad):
+    """[integrator] (the FMU checks the settings once more): integrator 0
+    (generalized-α) or 1 (Runge-Kutta 5(4)); steps_per_mesh_cycle and
+    samples_per_mesh_cycle whole numbers ≥ 1; rho_infinity in [0, 1];
+    relative_tolerance in (0, 1). Returns {FMU parameter name: value} of
+    the good settings, in the table's order."""
     integ = {}
-    for k, x in tab["integrator"].items():
+    for k, x in ig.items():
         if k not in INTEGRATOR_PARAMETERS:
             continue
         name = INTEGRATOR_PARAMETERS[k]
@@ -576,9 +686,16 @@ def from_dict(raw, source, output_dir=None, *, probe):
                 bad("integrator.relative_tolerance", x, "must be in (0, 1)")
                 continue
         integ[name] = x
+    return integ
 
-    # Outputs.
-    keep = tab["outputs"].get("keep", list(DEFAULT_OUTPUTS))
+
+def _check_outputs(op, outputs_md, bad):
+    """outputs.keep (default DEFAULT_OUTPUTS): a list of names of Real or
+    Integer outputs of the FMU's model description (checked against it
+    when the FMU is usable; a name not found comes with the outputs
+    starting alike). Returns (the kept outputs followed by REQUIRED_OUTPUTS,
+    each once, in that order; {name: "Real" | "Integer"})."""
+    keep = op.get("keep", list(DEFAULT_OUTPUTS))
     outputs, output_types = [], {}
     if not isinstance(keep, list) or not all(isinstance(x, str) for x in keep):
         bad("outputs.keep", keep, "must be a list of FMU output names")
@@ -594,9 +711,17 @@ def from_dict(raw, source, output_dir=None, *, probe):
             if name in outputs_md and outputs_md[name] in ("Real", "Integer") and name not in outputs:
                 outputs.append(name)
                 output_types[name] = outputs_md[name]
+    return outputs, output_types
 
-    # Wear-stepper settings of `campaign loop`.
-    lp = dict(tab["loop"])
+
+def _check_loop(table, bad):
+    """[loop], the wear stepper's settings of `campaign loop`: threshold_um
+    a positive wear depth below 1000 µm, ring true or false,
+    dynamic_speed_rpm a positive speed, hours_per_stage a positive number
+    of operating hours below 10⁶ (and not given with dynamic_speed_rpm: the
+    stage's duty cycle sets the loads and speeds). Returns a copy of the
+    table."""
+    lp = dict(table)
     if "threshold_um" in lp and (not _number(lp["threshold_um"]) or not 0 < lp["threshold_um"] < 1000):
         bad("loop.threshold_um", lp["threshold_um"], "must be a positive wear depth below 1000 µm")
     if "ring" in lp and not isinstance(lp["ring"], bool):
@@ -609,61 +734,88 @@ def from_dict(raw, source, output_dir=None, *, probe):
         elif "dynamic_speed_rpm" in lp:
             bad("loop.dynamic_speed_rpm", lp["dynamic_speed_rpm"],
                 "cannot be given with loop.hours_per_stage: the stage's duty cycle sets the loads and speeds")
+    return lp
 
-    # Wear states: the JSON structure here, the FMU's verdict below.
+
+def _check_wear(raw, wt, base, fmu, fmu_names, bad):
+    """[wear] (checked when given): states a non-empty list of state files
+    or FMU resource names ('' for the unworn set), labels (optional) one
+    file-name safe label per state. Each state is read and its JSON
+    structure checked when the FMU is usable (the FMU's verdict comes
+    later, from `probe`); no two states may share a label. Returns
+    (wear.states as given, [] when bad; the `WearState`s read; {index in
+    wear.states: its WearState})."""
     states = []
-    state_index = {}  # index in wear.states → WearState read from a file or resource
-    wv = tab["wear"].get("states")
-    labels = tab["wear"].get("labels")
-    if "wear" in raw:
-        if not isinstance(wv, list) or not wv or not all(isinstance(x, str) for x in wv):
-            bad("wear.states", wv, "must be a non-empty list of state files or FMU resource names "
-                                   "('' for the unworn set)")
-            wv = []
-        if labels is not None and (not isinstance(labels, list) or len(labels) != len(wv)
-                                   or not all(isinstance(x, str) and LABEL.match(x) for x in labels)):
-            bad("wear.labels", labels, f"must be a list of {len(wv)} labels of letters, digits, '.', '_', '+', '-'")
-            labels = None
-        for i, entry in enumerate(wv if fmu is not None else []):
-            key = f"wear.states[{i}]"
-            try:
-                p, fmu_value, data = _resolve_state(entry, base, fmu, fmu_names)
-            except ValueError as e:
-                bad(key, entry, str(e))
-                continue
-            if data is None:
-                states.append(WearState("", 0, labels[i] if labels else "unworn", "", 0.0, None))
-                state_index[i] = states[-1]
-                continue
-            content, reason = check_state_document(data.decode("utf-8", errors="replace"))
-            if reason:
-                bad(key, entry, f"not a usable worn-profile state: {reason}")
-                continue
-            label = labels[i] if labels else f"kappa-{content['kappa']}"
-            states.append(WearState(fmu_value, content["kappa"], label, hashlib.sha256(data).hexdigest(),
-                                    max_wear_depth(content), p))
-            state_index[i] = states[-1]
-        seen = {}
-        for i, s in state_index.items():
-            if s.label in seen:
-                j = seen[s.label]
-                bad(f"wear.states[{i}]", wv[i], f"its label {s.label} is also that of wear.states[{j}] = {wv[j]}: "
-                                                "give wear.labels to tell them apart")
-            seen.setdefault(s.label, i)
+    state_index = {}
+    wv = wt.get("states")
+    labels = wt.get("labels")
+    if "wear" not in raw:
+        return wv, states, state_index
+    if not isinstance(wv, list) or not wv or not all(isinstance(x, str) for x in wv):
+        bad("wear.states", wv, "must be a non-empty list of state files or FMU resource names "
+                               "('' for the unworn set)")
+        wv = []
+    if labels is not None and (not isinstance(labels, list) or len(labels) != len(wv)
+                               or not all(isinstance(x, str) and LABEL.match(x) for x in labels)):
+        bad("wear.labels", labels, f"must be a list of {len(wv)} labels of letters, digits, '.', '_', '+', '-'")
+        labels = None
+    for i, entry in enumerate(wv if fmu is not None else []):
+        state = _read_wear_state(f"wear.states[{i}]", entry, labels[i] if labels else None, base, fmu,
+                                 fmu_names, bad)
+        if state is not None:
+            states.append(state)
+            state_index[i] = state
+    _check_wear_labels(wv, state_index, bad)
+    return wv, states, state_index
 
-    # The FMU's verdict on the settings and on each state that passed the checks above.
-    if probe and fmu is not None and scene is not None:
-        problems += probe(fmu, scene, integ, cycles["window_cycles"] if isinstance(
-            cycles["window_cycles"], int) and cycles["window_cycles"] >= 1 else 68,
-            speeds[0] if speeds else 3000.0, torques[0] if torques else 750.0,
-            [(i, wv[i], s) for i, s in state_index.items()])
-    if problems:
-        raise CampaignError(source, problems)
-    return Campaign(source=source, fmu=fmu, fmu_sha256=sha256_file(fmu), scene=scene, output_dir=out,
-                    planetwear_bin=bin_value, states=states, speeds=speeds, directions=directions,
-                    torques=torques, communication_step=step, run_in_cycles=cycles["run_in_cycles"],
-                    window_cycles=cycles["window_cycles"], integrator=integ, outputs=outputs,
-                    output_types=output_types, loop=lp, raw=raw)
+
+def _read_wear_state(key, entry, label, base, fmu, fmu_names, bad):
+    """One wear.states entry (`key` names it): a state file or a resource
+    of the FMU whose JSON structure is a worn-profile state, or '' for the
+    unworn set. Its label is `label`, or when None "unworn" or
+    kappa-<κ>. Returns the `WearState`, or None when it is bad."""
+    try:
+        p, fmu_value, data = _resolve_state(entry, base, fmu, fmu_names)
+    except ValueError as e:
+        bad(key, entry, str(e))
+        return None
+    if data is None:
+        return WearState("", 0, label if label is not None else "unworn", "", 0.0, None)
+    content, reason = check_state_document(data.decode("utf-8", errors="replace"))
+    if reason:
+        bad(key, entry, f"not a usable worn-profile state: {reason}")
+        return None
+    if label is None:
+        label = f"kappa-{content['kappa']}"
+    return WearState(fmu_value, content["kappa"], label, hashlib.sha256(data).hexdigest(),
+                     max_wear_depth(content), p)
+
+
+def _check_wear_labels(wv, state_index, bad):
+    """No two wear states read share a label (each later one is named,
+    with the first state of that label)."""
+    seen = {}
+    for i, s in state_index.items():
+        if s.label in seen:
+            j = seen[s.label]
+            bad(f"wear.states[{i}]", wv[i], f"its label {s.label} is also that of wear.states[{j}] = {wv[j]}: "
+                                            "give wear.labels to tell them apart")
+        seen.setdefault(s.label, i)
+
+
+def _probe_problems(probe, fmu, scene, integ, cycles, speeds, torques, wv, state_index):
+    """The FMU's verdict (`probe`) on the integrator settings and on each
+    wear state that passed the checks above, asked at the campaign's window
+    (68 mesh cycles when window_cycles is bad), first speed (3000 rpm when
+    there is none) and first torque (750 N·m when there is none). Returns
+    its problems; [] without a probe or when the FMU or the scene is
+    unusable."""
+    if not (probe and fmu is not None and scene is not None):
+        return []
+    window = cycles["window_cycles"]
+    return probe(fmu, scene, integ, window if isinstance(window, int) and window >= 1 else 68,
+                 speeds[0] if speeds else 3000.0, torques[0] if torques else 750.0,
+                 [(i, wv[i], s) for i, s in state_index.items()])
 
 
 def dumps_toml(data):
