@@ -17,6 +17,7 @@ use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::response::{steady_state, sweep, Direction, SteadyState};
 use planetwear::files::InputKind;
 use planetwear::model::gear::GearSet;
+use planetwear::model::kinematics::Kinematics;
 use planetwear::model::lumped::LumpedSet;
 use planetwear::model::run::RunSettings;
 use planetwear::report::ltca::LtcaStudy;
@@ -528,6 +529,11 @@ struct FmuXmlArgs {
 struct SceneShowArgs {
     /// Built-in name or file.
     scene: String,
+    /// Print JSON instead: the scene's TOML text (`toml`) and the gear set's kinematics
+    /// (`kinematics`: teeth, members, the balanced torques per unit input torque, mesh cycles
+    /// per input revolution, face width and base radii, SI), which the Python package reads.
+    #[arg(long)]
+    json: bool,
 }
 
 /// Validate a scene and list every problem.
@@ -665,10 +671,20 @@ fn check_outputs(command: &Command) -> Result<()> {
 fn run(cli: Cli) -> Result<()> {
     check_outputs(&cli.command)?;
     match cli.command {
-        Command::Scene { action: SceneAction::Show(SceneShowArgs { scene }) } => match load_any(&scene)? {
-            AnyScene::Gear(s) => out!("{}", s.to_toml())?,
-            AnyScene::Lumped(s) => out!("{}", s.to_toml())?,
-        },
+        Command::Scene { action: SceneAction::Show(SceneShowArgs { scene, json }) } => {
+            match load_any(&scene)? {
+                AnyScene::Gear(s) if json => {
+                    let kinematics = Kinematics::of(&validated(&s)?);
+                    let doc = serde_json::json!({ "toml": s.to_toml(), "kinematics": kinematics });
+                    outln!("{}", serde_json::to_string_pretty(&doc)?)?
+                }
+                AnyScene::Gear(s) => out!("{}", s.to_toml())?,
+                AnyScene::Lumped(_) if json => {
+                    bail!("--json: {scene} is a lumped-parameter scene, which has no gear kinematics")
+                }
+                AnyScene::Lumped(s) => out!("{}", s.to_toml())?,
+            }
+        }
         Command::Scene { action: SceneAction::Check(SceneCheckArgs { scene }) } => match load_any(&scene)? {
             AnyScene::Gear(s) => {
                 let set = validated(&s)?;

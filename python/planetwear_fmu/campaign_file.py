@@ -113,7 +113,10 @@ class WearState:
 
 @dataclass
 class Scene:
-    """The scene the campaign's FMU instances and the wear stepper use."""
+    """The scene the campaign's FMU instances and the wear stepper use, with
+    its gear set's kinematics as the Rust side computes them
+    (`planetwear scene show --json`, or the packed FMU's
+    resources/<scene>.kinematics.json)."""
 
     # The campaign file's value: a built-in name or a path.
     spec: str
@@ -123,33 +126,30 @@ class Scene:
     cli_value: str
     # The scene's TOML text.
     text: str
-    sun_teeth: int
-    ring_teeth: int
-    # Face width of the sun [m].
-    face_width: float
-    # Base radii of sun and ring [m] (the balancing torque of the output member).
-    sun_base_radius: float
-    ring_base_radius: float
-    held: str
-    input: str
+    # The gear set's kinematics (model::kinematics::Kinematics, SI).
+    kinematics: dict
+
+    @property
+    def face_width(self):
+        """Face width of the sun [m]."""
+        return self.kinematics["face_width"]
+
+    @property
+    def held(self):
+        return self.kinematics["held"]
+
+    @property
+    def input(self):
+        return self.kinematics["input"]
 
     def mesh_cycles_per_revolution(self):
-        """Mesh cycles per revolution of the input member (the sun): Z_sun with
-        the carrier held; Z_sun·Z_ring/(Z_sun + Z_ring) with the ring held
-        (Willis: the carrier turns at Z_sun/(Z_sun + Z_ring) of the sun)."""
-        if self.held == "carrier":
-            return float(self.sun_teeth)
-        return self.sun_teeth * self.ring_teeth / (self.sun_teeth + self.ring_teeth)
+        """Mesh cycles per revolution of the input member."""
+        return self.kinematics["mesh_cycles_per_input_revolution"]
 
-    def balanced_torques(self, sun_torque):
-        """(sun, ring, carrier) external torques [N·m] balancing `sun_torque`
-        on the sun: T_ring = T_sun r_b,ring/r_b,sun, T_carrier =
-        −T_sun (r_b,sun + r_b,ring)/r_b,sun; the held member's is ignored by
-        the FMU and set to zero."""
-        f = sun_torque / self.sun_base_radius
-        ring = 0.0 if self.held == "ring" else f * self.ring_base_radius
-        carrier = 0.0 if self.held == "carrier" else -f * (self.sun_base_radius + self.ring_base_radius)
-        return sun_torque, ring, carrier
+    def balanced_torques(self, input_torque):
+        """(sun, ring, carrier) external torques [N·m] balancing `input_torque`
+        on the input member; the held member's is zero."""
+        return tuple(k * input_torque for k in self.kinematics["balanced_torques_per_input_torque"])
 
 
 @dataclass
@@ -288,47 +288,57 @@ def model_variables(fmu_path):
     return outputs, names
 
 
+def _kinematics_from_bin(exe, scene_arg):
+    """The scene's TOML text and kinematics from `planetwear scene show --json`;
+    raises ValueError with the binary's reason."""
+    out = subprocess.run([exe, "scene", "show", scene_arg, "--json"], capture_output=True, text=True)
+    if out.returncode != 0:
+        raise ValueError(f"{exe} scene show: {out.stderr.strip()}")
+    doc = json.loads(out.stdout)
+    return doc["toml"], doc["kinematics"]
+
+
 def _scene_text(spec, base, fmu_path, bin_value):
-    """The scene's TOML text and what the FMU and the wear stepper are given;
-    raises ValueError with the reason."""
+    """The scene's TOML text, what the FMU and the wear stepper are given, and
+    its kinematics from the Rust side; raises ValueError with the reason."""
     p = Path(spec)
     if not p.is_absolute():
         p = base / p
+    exe = find_planetwear_bin(bin_value, base)
     if p.exists():
-        return read_input(p, "scene").decode(), str(p), str(p)
+        text = read_input(p, "scene").decode()
+        _check_gear_tables(text)
+        if not exe:
+            raise ValueError("a scene file's kinematics come from the planetwear binary: set planetwear_bin or "
+                             "PLANETWEAR_BIN, or name a scene the FMU ships")
+        return text, str(p), str(p), _kinematics_from_bin(exe, str(p))[1]
     if spec in BUILT_IN_SCENES or not spec.endswith(".toml"):
-        exe = find_planetwear_bin(bin_value, base)
+        fmu_value = "" if spec == "example-2004" else f"{spec}.toml"
         if exe:
-            out = subprocess.run([exe, "scene", "show", spec], capture_output=True, text=True)
-            if out.returncode == 0:
-                fmu_value = "" if spec == "example-2004" else f"{spec}.toml"
-                return out.stdout, fmu_value, spec
-            raise ValueError(f"neither a file nor a built-in scene ({exe} scene show: {out.stderr.strip()})")
-        # No binary: the FMU ships the built-in scenes in resources/.
+            try:
+                text, kinematics = _kinematics_from_bin(exe, spec)
+            except ValueError as e:
+                raise ValueError(f"neither a file nor a built-in scene ({e})") from None
+            return text, fmu_value, spec, kinematics
+        # No binary: the FMU ships the built-in scenes and their kinematics in resources/.
         with zipfile.ZipFile(fmu_path) as z:
             name = f"resources/{spec}.toml"
             if name in z.namelist():
-                fmu_value = "" if spec == "example-2004" else f"{spec}.toml"
-                return z.read(name).decode(), fmu_value, spec
+                kin = f"resources/{spec}.kinematics.json"
+                if kin not in z.namelist():
+                    raise ValueError(f"the FMU ships no {kin}: pack it with this version's planetwear fmu pack, "
+                                     "or set planetwear_bin")
+                return z.read(name).decode(), fmu_value, spec, json.loads(z.read(kin))
     raise ValueError(f"no such file (relative to the campaign file) and not a built-in scene "
                      f"({', '.join(BUILT_IN_SCENES)})")
 
 
-def _parse_scene(spec, text, fmu_value, cli_value):
+def _check_gear_tables(text):
+    """Raises ValueError unless the TOML text has the three gear tables."""
     s = tomllib.loads(text)
     missing = [t for t in ("sun", "planet", "ring") if not isinstance(s.get(t), dict)]
     if missing:
         raise ValueError(f"not a planetary gear set scene (no [{'], ['.join(missing)}] table)")
-
-    def base_radius(gear):
-        g = s[gear]
-        return g["module_mm"] * 1e-3 * g["teeth"] * math.cos(math.radians(g["pressure_angle_deg"])) / 2
-
-    op = s.get("operation", {})
-    return Scene(spec=spec, fmu_value=fmu_value, cli_value=cli_value, text=text, sun_teeth=int(s["sun"]["teeth"]),
-                 ring_teeth=int(s["ring"]["teeth"]), face_width=s["sun"]["face_width_mm"] * 1e-3,
-                 sun_base_radius=base_radius("sun"), ring_base_radius=base_radius("ring"),
-                 held=op.get("held", "carrier"), input=op.get("input", "sun"))
 
 
 def _resolve_state(entry, base, fmu_path, fmu_names):
@@ -489,8 +499,8 @@ def _check_scene(raw, base, fmu, bin_value, bad):
         bad("scene", spec, f"must be a built-in scene name ({', '.join(BUILT_IN_SCENES)}) or a scene file")
     elif fmu is not None:
         try:
-            text, fmu_value, cli_value = _scene_text(spec, base, fmu, bin_value)
-            scene = _parse_scene(spec, text, fmu_value, cli_value)
+            text, fmu_value, cli_value, kinematics = _scene_text(spec, base, fmu, bin_value)
+            scene = Scene(spec=spec, fmu_value=fmu_value, cli_value=cli_value, text=text, kinematics=kinematics)
         except KeyError as e:
             bad("scene", spec, f"cannot be read: the key {e} is missing")
         except (ValueError, tomllib.TOMLDecodeError) as e:

@@ -25,6 +25,7 @@ import math
 import subprocess
 import sys
 import time
+import zipfile
 from pathlib import Path
 
 from .campaign_file import check_state_document, find_planetwear_bin, max_wear_depth
@@ -54,8 +55,16 @@ VEHICLE = {
 # The FMU's built-in set (its sceneFile left empty), which the wear stepper wears.
 SCENE = "example-2004"
 
-# The example set (sun 34, ring 70, carrier held): ring speed per sun speed.
-SET_RATIO = -34.0 / 70.0
+
+def set_ratio(fmu_path, scene=SCENE):
+    """The output member's speed per input speed of the FMU's scene (ring per sun for the
+    example, −34/70), from the kinematics the FMU ships beside the scene
+    (resources/<scene>.kinematics.json, written by `planetwear fmu pack`)."""
+    with zipfile.ZipFile(fmu_path) as z:
+        k = json.loads(z.read(f"resources/{scene}.kinematics.json"))
+    index = {"sun": 0, "ring": 1, "carrier": 2}
+    return k["rigid_speeds"][index[k["output"]]] / k["rigid_speeds"][index[k["input"]]]
+
 
 # The duty's bins: load torque 0 to 1100 N·m by 100 (regeneration, below 0, is outside
 # every bin: the coast flanks' wear is not modelled), sun speed 0 to 1300 rad/s by 100.
@@ -77,9 +86,10 @@ def read_cycle(path=CYCLE_FILE):
     return rows
 
 
-def traces(cycle, vehicle=VEHICLE, ratio=SET_RATIO):
+def traces(cycle, ratio, vehicle=VEHICLE):
     """Sun speed [rad/s] at each second and sun torque [N·m] over each second of `cycle`:
-    the speed from the wheel speed through the final drive and the set, the torque from the
+    the speed from the wheel speed through the final drive and the set (`ratio`, its output
+    speed per input speed: `set_ratio`), the torque from the
     road load and the acceleration over the second, through the efficiency (traction) or
     against it (regeneration), limited by the motor's torque and power; friction brakes take
     what regeneration does not."""
@@ -210,7 +220,7 @@ def run_loop(fmu_path, out_dir, *, to_kappa=6, hours_per_stage=50.0, seconds=Non
     from fmpy import extract
 
     out_dir = Path(out_dir)
-    speeds, torques = traces(read_cycle())
+    speeds, torques = traces(read_cycle(), set_ratio(fmu_path))
     unzipdir = extract(str(fmu_path))
     state, stages = "", []
     for n in range(64):

@@ -19,6 +19,8 @@
 //!   the operating pressure angle of shifted pairs, undercut and trochoid
 //!   interference limits.
 //! - [`involute`]: the involute function and its inverse relations.
+//! - [`kinematics`]: teeth, members, balanced torques per unit input torque
+//!   and mesh cycles per input revolution, for the front ends.
 //! - [`lumped`]: degrees of freedom, fidelity, the lumped (mean-stiffness) set.
 //! - [`mesh`]: the path of contact of one mesh along its line of action.
 //! - [`planet_bearing`]: a planet's support stiffness from its needle
@@ -32,6 +34,7 @@ pub mod cost;
 pub mod gear;
 pub mod gear_data;
 pub mod involute;
+pub mod kinematics;
 pub mod lumped;
 pub mod mesh;
 pub mod planet_bearing;

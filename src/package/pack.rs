@@ -236,9 +236,13 @@ pub fn pack_scene(
         add("modelDescription.xml", description.as_bytes())?;
         add(&format!("binaries/linux64/{MODEL_IDENTIFIER}.so"), &so)?;
         add("resources/example-2004.toml", Scene::example_2004().to_toml().as_bytes())?;
+        // The kinematics the Python package reads beside each gear scene.
+        add("resources/example-2004.kinematics.json", &kinematics_json(&Scene::example_2004())?)?;
         add("resources/lumped-benchmark.toml", LumpedScene::lumped_benchmark().to_toml().as_bytes())?;
         if scene.is_some() {
             add(&format!("resources/{DEFAULT_SCENE}"), base.to_toml().as_bytes())?;
+            let stem = DEFAULT_SCENE.trim_end_matches(".toml");
+            add(&format!("resources/{stem}.kinematics.json"), &kinematics_json(&base)?)?;
         }
         // The default set's worn-profile states κ = 0..6 (the wear model's
         // run, about 5 s for the example), for the wearStateFile parameter.
@@ -250,4 +254,12 @@ pub fn pack_scene(
         zip.finish()?;
         Ok(())
     })
+}
+
+/// The kinematics of a scene's gear set as the JSON the Python package reads
+/// from resources/ (`planetwear scene show --json` prints the same).
+fn kinematics_json(scene: &Scene) -> Result<Vec<u8>, PackError> {
+    let set = scene.validate().map_err(|e| PackError::Scene(e.to_string()))?;
+    let kinematics = crate::model::kinematics::Kinematics::of(&set);
+    serde_json::to_vec_pretty(&kinematics).map_err(|e| PackError::Scene(e.to_string()))
 }

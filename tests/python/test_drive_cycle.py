@@ -34,9 +34,9 @@ def test_the_cycle_is_wltc_class_3b():
 
 def test_the_traces_follow_the_vehicle():
     cycle = [(0.0, 50.0), (1.0, 50.0), (2.0, 53.6)]
-    speeds, torques = dc.traces(cycle)
+    speeds, torques = dc.traces(cycle, dc.set_ratio(FMU))
     v = dc.VEHICLE
-    gear = v["final_drive"] / abs(dc.SET_RATIO)
+    gear = v["final_drive"] / abs(dc.set_ratio(FMU))
     assert math.isclose(speeds[0], 50.0 / 3.6 / v["wheel_radius_m"] * gear, rel_tol=1e-12)
     # Cruise: the road load through the efficiency.
     u = 50.0 / 3.6
@@ -45,7 +45,7 @@ def test_the_traces_follow_the_vehicle():
     assert math.isclose(torques[0], road * v["wheel_radius_m"] / gear / v["efficiency"], rel_tol=1e-12)
     # 1 m/s² more: m k a r / (i η) more, within the motor's limits.
     assert torques[1] > torques[0] and torques[1] <= v["traction_limit_nm"]
-    speeds, torques = dc.traces(dc.read_cycle())
+    speeds, torques = dc.traces(dc.read_cycle(), dc.set_ratio(FMU))
     assert min(torques) >= v["regeneration_limit_nm"] and max(torques) <= v["traction_limit_nm"]
     assert all(s >= 0.0 for s in speeds)
 
@@ -87,7 +87,7 @@ def test_a_cycle_records_its_duty(fmu, tmp_path):
     """The first 40 s of the cycle: every output finite, the duty a valid document whose
     revolutions are the sun's (the integral of the trace's speed), regeneration outside
     the bins."""
-    speeds, torques = dc.traces(dc.read_cycle())
+    speeds, torques = dc.traces(dc.read_cycle(), dc.set_ratio(FMU))
     rec = dc.run_cycle(FMU, speeds, torques, seconds=40, duty_torque_edges=dc.DUTY_TORQUE_EDGES,
                        duty_speed_edges=dc.DUTY_SPEED_EDGES, unpack_dir=tmp_path / "fmu")
     assert rec["steps"] == 40000 and len(rec["time"]) == 400

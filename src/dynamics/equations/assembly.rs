@@ -18,21 +18,7 @@ use crate::model::lumped::{
     LumpedSet, Reduction,
 };
 
-/// Speeds of sun, ring and carrier [rad/s] for a unit input speed, the held
-/// member at rest (Willis: ω_s − ω_c = R (ω_r − ω_c), R = −Z_r/Z_s).
-pub fn rigid_speeds(set: &GearSet) -> (f64, f64, f64) {
-    let r = -f64::from(set.ring().teeth) / f64::from(set.sun().teeth);
-    match (set.held(), set.input()) {
-        (Member::Carrier, Member::Sun) => (1.0, 1.0 / r, 0.0),
-        (Member::Carrier, Member::Ring) => (r, 1.0, 0.0),
-        (Member::Ring, Member::Sun) => (1.0, 0.0, 1.0 / (1.0 - r)),
-        (Member::Ring, Member::Carrier) => (1.0 - r, 0.0, 1.0),
-        (Member::Sun, Member::Ring) => (0.0, 1.0, r / (r - 1.0)),
-        (Member::Sun, Member::Carrier) => (0.0, (r - 1.0) / r, 1.0),
-        // Validation refuses held == input.
-        _ => (0.0, 0.0, 0.0),
-    }
-}
+pub use crate::model::kinematics::rigid_speeds;
 
 /// Natural frequency of the load balance's controlled rigid-body mode \[Hz\].
 pub const BALANCE_FREQUENCY: f64 = 50.0;
