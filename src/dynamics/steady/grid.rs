@@ -11,7 +11,7 @@
 //! unresolved. Cells on the unloaded row (the low-load strip) and cells with a node whose
 //! march did not settle are interpolated without an estimate and counted apart.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use crate::dynamics::equations::PlanetaryDynamics;
@@ -127,7 +127,8 @@ pub struct SteadyGrid {
     /// Static mesh force per N·m of input torque \[N/(N·m)\].
     load_per_nm: f64,
     samples_per_cycle: usize,
-    nodes: HashMap<Node, Arc<SteadyPoint>>,
+    /// Ordered, so that what is read from them does not depend on a hash seed.
+    nodes: BTreeMap<Node, Arc<SteadyPoint>>,
     levels: HashMap<i64, TorqueLevel>,
     unloaded: HashMap<(i8, i64), Arc<SteadyPoint>>,
     stats: GridStats,
@@ -150,7 +151,7 @@ impl SteadyGrid {
             torques_per_nm,
             load_per_nm,
             samples_per_cycle,
-            nodes: HashMap::new(),
+            nodes: BTreeMap::new(),
             levels: HashMap::new(),
             unloaded: HashMap::new(),
             stats: GridStats::default(),
@@ -301,12 +302,7 @@ impl SteadyGrid {
             return Ok(p.clone());
         }
         let torque = j as f64 * self.finest().1;
-        let neighbour = self
-            .nodes
-            .iter()
-            .filter(|((s, _, jj), _)| *s == sign && *jj == j)
-            .min_by_key(|((_, ii, _), _)| (ii - i).abs())
-            .map(|(_, p)| p.clone());
+        let neighbour = nearest_in_row(&self.nodes, node);
         if !self.levels.contains_key(&j) {
             let torques = self.torques_per_nm.map(|t| t * torque);
             let level = TorqueLevel::new(
@@ -328,5 +324,35 @@ impl SteadyGrid {
         }
         self.nodes.insert(node, point.clone());
         Ok(point)
+    }
+}
+
+/// The cached node of `node`'s torque row and side nearest to it in speed: of two at the
+/// same distance the lower column, so that the same requests continue from the same node
+/// and give the same outputs, bit for bit, in every run.
+fn nearest_in_row<T: Clone>(nodes: &BTreeMap<Node, T>, (sign, i, j): Node) -> Option<T> {
+    nodes
+        .iter()
+        .filter(|((s, _, jj), _)| *s == sign && *jj == j)
+        .min_by_key(|((_, ii, _), _)| ((ii - i).abs(), *ii))
+        .map(|(_, p)| p.clone())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_nearest_node_of_a_tie_is_the_lower_column() {
+        let mut nodes = BTreeMap::new();
+        for (k, node) in [(1, 2, 5), (1, 6, 5), (1, 4, 7), (-1, 4, 5), (1, 9, 5)].into_iter().enumerate() {
+            nodes.insert(node, k);
+        }
+        // Columns 2 and 6 are both 2 from 4: the lower one.
+        assert_eq!(nearest_in_row(&nodes, (1, 4, 5)), Some(0));
+        assert_eq!(nearest_in_row(&nodes, (1, 8, 5)), Some(4));
+        assert_eq!(nearest_in_row(&nodes, (1, 4, 7)), Some(2));
+        assert_eq!(nearest_in_row(&nodes, (-1, 0, 5)), Some(3));
+        assert_eq!(nearest_in_row(&nodes, (1, 4, 6)), None);
     }
 }
