@@ -11,7 +11,7 @@
 
 use crate::contact::hertz::{contact_modulus, line_contact};
 use crate::dynamics::response::SteadyState;
-use crate::model::gear::{GearKind, GearSet, Member, MeshKind};
+use crate::model::gear::{GearKind, GearSet, MeshKind};
 use crate::scene::units::rad_per_s_to_rpm;
 
 /// Highest pitch-line velocity of the sun–planet mesh \[m/s\] (in the
@@ -88,12 +88,7 @@ pub fn rigid_body_ratios(set: &GearSet) -> [f64; 3] {
         set.ring().base_radius(),
         -(set.sun().base_radius() + set.ring().base_radius()),
     ];
-    let index = |m: Member| match m {
-        Member::Sun => 0,
-        Member::Ring => 1,
-        Member::Carrier => 2,
-    };
-    let (i, o) = (index(set.input()), index(set.output()));
+    let (i, o) = (set.input().index(), set.output().index());
     let mut u = [0.0; 3];
     u[i] = 1.0;
     u[o] = -a[i] / a[o];
@@ -285,12 +280,7 @@ mod tests {
         let u = rigid_body_ratios(&s);
         let (rs, rr) = (s.sun().base_radius(), s.ring().base_radius());
         assert!((rs * u[0] + rr * u[1] - (rs + rr) * u[2]).abs() < 1e-15);
-        let held = match s.held() {
-            Member::Sun => 0,
-            Member::Ring => 1,
-            Member::Carrier => 2,
-        };
-        assert_eq!(u[held], 0.0);
+        assert_eq!(u[s.held().index()], 0.0);
     }
 
     #[test]

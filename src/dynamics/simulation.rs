@@ -20,7 +20,7 @@ use crate::dynamics::spectrum::{mesh_harmonics, separation_fraction, Harmonics};
 use crate::dynamics::steady::point::MeshSummary;
 use crate::dynamics::steady::{DriveInputs, SteadyEngine};
 use crate::model::gear::{Drive, GearSet, IntegratorKind, Member, MeshKind};
-use crate::model::lumped::{full_index, planet_bearing_vectors, Coordinate, Fidelity};
+use crate::model::lumped::{central_index, full_index, planet_bearing_vectors, Coordinate, Fidelity};
 use crate::model::run::RunSettings;
 
 /// Why a simulation step or setting was refused.
@@ -943,11 +943,7 @@ impl Simulation {
                 if lumped.fidelity == Fidelity::Torsional {
                     return 0.0;
                 }
-                let j = match m {
-                    Member::Carrier => 0,
-                    Member::Ring => 1,
-                    Member::Sun => 2,
-                };
+                let j = central_index(m);
                 let (x, y) = (full[full_index(Coordinate::X(m))], full[full_index(Coordinate::Y(m))]);
                 lumped.central_bearing[j] * x.hypot(y)
             }
@@ -990,12 +986,7 @@ impl Simulation {
     }
 
     fn rotation(&self, m: Member, rate: bool) -> f64 {
-        let k = match m {
-            Member::Carrier => 0,
-            Member::Ring => 1,
-            Member::Sun => 2,
-        };
-        let (index, lever) = self.model.rotations[k];
+        let (index, lever) = self.model.rotations[central_index(m)];
         let (q, v) = self.state();
         index.map_or(0.0, |i| (if rate { v[i] } else { q[i] }) / lever)
     }

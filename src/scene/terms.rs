@@ -18,6 +18,18 @@ pub enum Member {
 }
 
 impl Member {
+    /// Sun, ring and carrier in the order of the per-member arrays (torques, speeds): 0, 1, 2.
+    pub const ALL: [Member; 3] = [Member::Sun, Member::Ring, Member::Carrier];
+
+    /// The member's place in the per-member arrays (torques, speeds): sun 0, ring 1, carrier 2.
+    pub fn index(self) -> usize {
+        match self {
+            Member::Sun => 0,
+            Member::Ring => 1,
+            Member::Carrier => 2,
+        }
+    }
+
     /// The name used in files and messages.
     pub fn name(self) -> &'static str {
         match self {

@@ -194,11 +194,7 @@ fn lumped_set(set: &GearSet, k: [f64; 2], alpha: [f64; 2]) -> LumpedSet {
 
 /// The balanced torque of member `m` among `torques` (sun, ring, carrier).
 fn torque_of(torques: [f64; 3], m: Member) -> f64 {
-    match m {
-        Member::Sun => torques[0],
-        Member::Ring => torques[1],
-        Member::Carrier => torques[2],
-    }
+    torques[m.index()]
 }
 
 /// The nonzero entries (i, j, k_ij, c_ij) of the support matrices.

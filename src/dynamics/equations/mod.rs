@@ -147,7 +147,7 @@ pub struct PlanetaryDynamics {
     pub rigid_velocity: Vec<f64>,
     /// Mesh frequency per rad/s of input speed [Hz·s/rad].
     pub mesh_frequency_per_input_speed: f64,
-    /// Index of the rotation u of carrier, ring, sun among the reduced
+    /// Index of the rotation u of carrier, ring, sun (`central_index` order) among the reduced
     /// coordinates (None when held) and its lever, u = lever·θ \[m\].
     pub rotations: [(Option<usize>, f64); 3],
     /// State of every mesh after the last force evaluation (planet-major: sun, ring).

@@ -20,6 +20,7 @@ use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::periodic::PeriodicError;
 use crate::dynamics::steady::grid::{Blend, GridStats, SteadyGrid};
 use crate::model::gear::{Drive, GearSet, Member};
+use crate::model::lumped::central_index;
 use crate::model::run::SteadyValues;
 
 /// Caches kept for later engines of the same model in this process, at most this many
@@ -43,15 +44,6 @@ fn shared(key: u64, make: impl FnOnce() -> SteadyGrid) -> Arc<Mutex<SteadyGrid>>
         caches.remove(0);
     }
     grid
-}
-
-/// Index of a member's torque in (sun, ring, carrier).
-fn torque_index(m: Member) -> usize {
-    match m {
-        Member::Sun => 0,
-        Member::Ring => 1,
-        Member::Carrier => 2,
-    }
 }
 
 /// The drive the rigid-body rotation follows over a step.
@@ -138,7 +130,7 @@ impl SteadyEngine {
             None => Arc::new(Mutex::new(make())),
         };
         let output = set.output();
-        let (index, lever) = model.rotations[2 - torque_index(output)];
+        let (index, lever) = model.rotations[central_index(output)];
         let output_ratio = index.map_or(0.0, |i| model.rigid_velocity[i] / lever);
         let n = model.rigid_velocity.len();
         let torque = set.input_torque();
@@ -188,7 +180,7 @@ impl SteadyEngine {
         let (omega0, t) = (self.speed, inputs.torques);
         let without = |m: Member| {
             let mut t = t;
-            t[torque_index(m)] = 0.0;
+            t[m.index()] = 0.0;
             model.rigid_torque(t)
         };
         let follows_reference = self.drive != Drive::Torque || self.load_balance;
@@ -199,10 +191,10 @@ impl SteadyEngine {
             (omega0 + alpha * h, alpha)
         };
         let (input_torque, balancing) = match (self.drive, self.load_balance) {
-            (Drive::Torque, false) => (t[torque_index(self.input)], 0.0),
+            (Drive::Torque, false) => (t[self.input.index()], 0.0),
             (Drive::Torque, true) => {
                 let ratio = if self.output_ratio != 0.0 { self.output_ratio } else { 1.0 };
-                (t[torque_index(self.input)], (self.inertia * alpha - without(self.output)) / ratio)
+                (t[self.input.index()], (self.inertia * alpha - without(self.output)) / ratio)
             }
             _ => (self.inertia * alpha - without(self.input), 0.0),
         };
@@ -258,10 +250,10 @@ impl SteadyEngine {
         self.angle = q[i] / lever;
         self.speed = v[i] / lever;
         let input_torque = match self.drive {
-            Drive::Torque => inputs.torques[torque_index(self.input)],
+            Drive::Torque => inputs.torques[self.input.index()],
             _ => {
                 let mut t = inputs.torques;
-                t[torque_index(self.input)] = 0.0;
+                t[self.input.index()] = 0.0;
                 -model.rigid_torque(t)
             }
         };
