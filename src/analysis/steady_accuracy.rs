@@ -95,7 +95,7 @@ fn steady_harmonics(
     let mut sim = Simulation::new(set, run, model, 0.0, speed).map_err(err)?;
     sim.use_steady(None).map_err(err)?;
     let seconds = started.elapsed().as_secs_f64();
-    let estimate = sim.steady().map_or(f64::NAN, |e| e.blend().spread);
+    let estimate = sim.steady().map_or(f64::NAN, |e| e.blend().estimate);
     let mut harmonics = Vec::new();
     let mut separation = [0.0; 2];
     for (k, mesh) in MeshKind::ALL.into_iter().enumerate() {

@@ -92,7 +92,7 @@ pub(crate) fn simulate_command(
             s.marched,
             s.cold,
             s.unresolved,
-            s.worst_spread
+            s.worst_estimate
         );
     }
     if let (Some(path), Some(duty)) = (duty_cycle, sim.duty()) {

@@ -34,8 +34,10 @@ pub struct Blend {
     pub torque: f64,
     /// Refinement level of the cell interpolated in (0 the coarsest).
     pub level: u32,
-    /// The largest difference of a normalised measure between the cell's corners [-].
-    pub spread: f64,
+    /// The interpolation's estimated error: the largest difference, normalised by the
+    /// static mesh load, between the cell's centre node and its corners' mean [-]; NaN
+    /// where there is no estimate (a low-load or unsettled cell).
+    pub estimate: f64,
 }
 
 impl Blend {
@@ -114,8 +116,8 @@ pub struct GridStats {
     /// Requests in the low-load strip (a cell with a corner at no torque), interpolated
     /// without an error estimate.
     pub low_load: u64,
-    /// The largest spread of such a request [-].
-    pub worst_spread: f64,
+    /// The largest estimated error of an unresolved request [-].
+    pub worst_estimate: f64,
 }
 
 /// The cache of one model (one worn state): its nodes and torque levels.
@@ -227,14 +229,14 @@ impl SteadyGrid {
             if unloaded_row {
                 self.stats.low_load += 1;
                 corners.retain(|(_, w)| *w > 0.0);
-                return Ok(Blend { corners, speed, torque, level, spread: f64::NAN });
+                return Ok(Blend { corners, speed, torque, level, estimate: f64::NAN });
             }
             // A cell with a corner whose march did not settle (no periodic steady state:
             // the teeth rattle) is not refined: its error cannot be estimated.
             if corners.iter().any(|(p, _)| p.settled > MARCH_SETTLED) {
                 self.stats.unsettled += 1;
                 corners.retain(|(_, w)| *w > 0.0);
-                return Ok(Blend { corners, speed, torque, level, spread: f64::NAN });
+                return Ok(Blend { corners, speed, torque, level, estimate: f64::NAN });
             }
             // The bilinear interpolation's error estimated at the cell's centre, where it is
             // largest for a smooth response; the finest cell (no node at its centre) takes a
@@ -249,10 +251,10 @@ impl SteadyGrid {
             if error <= self.settings.agreement || level == top {
                 if error > self.settings.agreement {
                     self.stats.unresolved += 1;
-                    self.stats.worst_spread = self.stats.worst_spread.max(error);
+                    self.stats.worst_estimate = self.stats.worst_estimate.max(error);
                 }
                 corners.retain(|(_, w)| *w > 0.0);
-                return Ok(Blend { corners, speed, torque, level, spread: error });
+                return Ok(Blend { corners, speed, torque, level, estimate: error });
             }
             parent = error;
         }

@@ -148,7 +148,7 @@ impl SteadyEngine {
             load_torque: torque,
             input_torque: torque,
             balancing_torque: 0.0,
-            blend: Blend { corners: Vec::new(), speed, torque, level: 0, spread: 0.0 },
+            blend: Blend { corners: Vec::new(), speed, torque, level: 0, estimate: 0.0 },
             rigid: model.rigid_velocity.clone(),
             q: vec![0.0; n],
             v: vec![0.0; n],
