@@ -342,7 +342,9 @@ fn nearest_in_row<T: Clone>(nodes: &BTreeMap<Node, T>, (sign, i, j): Node) -> Op
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use std::collections::BTreeMap;
+
+    use crate::dynamics::steady::grid::nearest_in_row;
 
     #[test]
     fn the_nearest_node_of_a_tie_is_the_lower_column() {
