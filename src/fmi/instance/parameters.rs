@@ -6,7 +6,7 @@
 //! one model constructor both front ends use. The variable table
 //! (`modelDescription/variables.toml`) says where each variable acts: a
 //! variable with a `scene.slot` is written and read back through generated
-//! field accessors ([`SceneField`], converted by its [`SceneUnit`](crate::fmi::variables::SceneUnit));
+//! field accessors ([`SceneField`], converted by its [`SceneUnit`]);
 //! the others are the generated [`Special`] enum, which [`apply_special`]
 //! and [`special_value`] match without a catch-all arm, so that such a
 //! variable does not compile until it is given its effect here. The scene
@@ -15,7 +15,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::fmi::variables::{SceneField, Settable, Special, Start, Target, Variable};
+use crate::fmi::variables::{SceneField, SceneUnit, Settable, Special, Start, Target, Variable};
 use crate::model::gear::{Drive, IntegratorKind, Member};
 use crate::model::lumped::Fidelity;
 use crate::scene::units::rpm_to_rad_per_s;
@@ -40,7 +40,7 @@ impl Values<'_> {
     }
 
     fn mm(&self, v: Variable) -> f64 {
-        self.real(v) * 1e3
+        SceneUnit::Mm.from_si(self.real(v))
     }
 
     fn count(&self, v: Variable) -> Result<u32, String> {
@@ -154,7 +154,7 @@ fn apply_special(p: Special, values: &Values, scene: &mut Scene) -> Result<(), S
         // rounding) stays the scene's.
         Special::TipChamferHeight | Special::TipChamferAngle => {
             let h = values.mm(Variable::TipChamferHeight);
-            let a = values.real(Variable::TipChamferAngle).to_degrees();
+            let a = SceneUnit::Deg.from_si(values.real(Variable::TipChamferAngle));
             let set = |c: Option<ChamferSpec>| {
                 Some(ChamferSpec { height_mm: h, angle_deg: a, ..c.unwrap_or(ChamferSpec::new(h, a)) })
             };
@@ -346,8 +346,8 @@ fn special_value(
         Member::Ring => Start::Integer(1),
         Member::Carrier => Start::Integer(2),
     };
-    let mm = |x: f64| Start::Real(x * 1e-3);
-    let diameter = |x: Option<f64>| Start::Real(x.map_or(0.0, |d| d * 1e-3));
+    let mm = |x: f64| Start::Real(SceneUnit::Mm.to_si(x));
+    let diameter = |x: Option<f64>| Start::Real(x.map_or(0.0, |d| SceneUnit::Mm.to_si(d)));
     let d = &scene.dynamics;
     let chamfer = scene.sun.tip_chamfer.unwrap_or_else(|| default_chamfer(scene.sun.module_mm));
     Some(match p {
@@ -416,7 +416,7 @@ fn special_value(
         }),
         Special::Planets => count(scene.planets.count),
         Special::TipChamferHeight => mm(chamfer.height_mm),
-        Special::TipChamferAngle => Start::Real(chamfer.angle_deg.to_radians()),
+        Special::TipChamferAngle => Start::Real(SceneUnit::Deg.to_si(chamfer.angle_deg)),
         Special::SteadyTorqueStep => Start::Real(
             d.steady_torque_step_nm
                 .unwrap_or(crate::scene::STEADY_TORQUE_STEP * scene.operation.input_torque_nm.abs()),
