@@ -1055,8 +1055,18 @@ pub fn read_worn_state_accepting(
     accept: &[StateDifference],
 ) -> Result<(WornState, Vec<ParameterDifference>), StateFileError> {
     let bytes = crate::files::read_input(path, crate::files::InputKind::WornState)?;
-    let text = String::from_utf8_lossy(&bytes);
-    WornState::from_json_accepting(&text, set, accept)
+    parse_worn_state_accepting(path, &bytes, set, accept)
+}
+
+/// [`read_worn_state_accepting`] on the bytes already read from `path`, for a caller that
+/// also keys a cache by them (the file is read once).
+pub fn parse_worn_state_accepting(
+    path: &std::path::Path,
+    bytes: &[u8],
+    set: &GearSet,
+    accept: &[StateDifference],
+) -> Result<(WornState, Vec<ParameterDifference>), StateFileError> {
+    WornState::from_json_accepting(&String::from_utf8_lossy(bytes), set, accept)
         .map_err(|source| StateFileError::State { path: path.to_path_buf(), source: Box::new(source) })
 }
 

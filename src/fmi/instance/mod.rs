@@ -326,28 +326,32 @@ impl Instance {
     /// `wear/example-2004/kappa-2.json`), which must belong to this gear set.
     ///
     /// A state whose gear set differs only in kinds wearStateAccept names is
-    /// taken, and what was accepted is returned as a warning.
+    /// taken, and what was accepted is returned as a warning. Also returns the
+    /// file's bytes (none without a file), which key the steady cache.
     fn contact_model(
         &self,
         set: &crate::model::gear::GearSet,
-    ) -> Result<(SetModel, Option<String>), Refusal> {
+    ) -> Result<(SetModel, Option<String>, Vec<u8>), Refusal> {
+        use crate::wear::state::{parse_worn_state_accepting, StateFileError};
         let file = self.strings.get(&vr::WEAR_STATE_FILE).cloned().unwrap_or_default();
         let accept_text = self.strings.get(&vr::WEAR_STATE_ACCEPT).cloned().unwrap_or_default();
         let accept = crate::wear::state::StateDifference::parse_list(&accept_text)
             .map_err(|e| Refusal::error(format!("wearStateAccept = {accept_text}: {e}")))?;
         if file.is_empty() {
-            return Ok((SetModel::new(set), None));
+            return Ok((SetModel::new(set), None, Vec::new()));
         }
         let path = self.resolve(&file);
-        let (state, accepted) = crate::wear::state::read_worn_state_accepting(&path, set, &accept)
-            .map_err(|e| Refusal::error(format!("wearStateFile = {file}: {e}")))?;
+        let refused = |e: StateFileError| Refusal::error(format!("wearStateFile = {file}: {e}"));
+        let bytes = crate::files::read_input(&path, crate::files::InputKind::WornState)
+            .map_err(|e| refused(e.into()))?;
+        let (state, accepted) = parse_worn_state_accepting(&path, &bytes, set, &accept).map_err(refused)?;
         let warning = (!accepted.is_empty()).then(|| {
             format!(
                 "wearStateFile = {file}: {} (wearStateAccept = {accept_text})",
                 crate::wear::state::describe_accepted(&accepted)
             )
         });
-        Ok((state.set_model(set), warning))
+        Ok((state.set_model(set), warning, bytes))
     }
 
     /// The file a sceneFile or wearStateFile value names: an absolute path
@@ -412,7 +416,7 @@ impl Instance {
                 set.planet_angles().len()
             )));
         }
-        let (contact, warning) = self.contact_model(&set)?;
+        let (contact, warning, state) = self.contact_model(&set)?;
         let model = PlanetaryDynamics::new(&set, contact).map_err(|e| Refusal::error(e.to_string()))?;
         self.build_warnings = warning.into_iter().collect();
         // initialSpeed when it applies (always without a scene file), else
@@ -439,13 +443,6 @@ impl Instance {
             let mut keyed = scene.clone();
             keyed.operation.input_torque_nm = 0.0;
             keyed.dynamics.input_speed_rpm = 0.0;
-            let state = self.strings.get(&vr::WEAR_STATE_FILE).cloned().unwrap_or_default();
-            let state = if state.is_empty() {
-                Vec::new()
-            } else {
-                crate::files::read_input(&self.resolve(&state), crate::files::InputKind::WornState)
-                    .unwrap_or_default()
-            };
             let key = crate::files::hash::fnv1a64(
                 format!(
                     "{}|{}",
