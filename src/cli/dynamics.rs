@@ -86,13 +86,18 @@ pub(crate) fn simulate_command(
         let s = engine.stats();
         eprintln!(
             "steady response: {} steps, {} steady states solved ({} after a march past a fold, {} from the static \
-             state), {} steps interpolated with an estimated error above dynamics.steady_agreement (largest {:.3})",
+             state, {} not found: their row's nearest taken), {} steps interpolated with an estimated error above \
+             dynamics.steady_agreement (largest {:.3}), {} without an estimate (low load {}, not settled {})",
             s.requests.saturating_sub(1),
             s.solved,
             s.marched,
             s.cold,
+            s.failed,
             s.unresolved,
-            s.worst_estimate
+            s.worst_estimate,
+            s.low_load + s.unsettled,
+            s.low_load,
+            s.unsettled
         );
     }
     if let (Some(path), Some(duty)) = (duty_cycle, sim.duty()) {

@@ -685,13 +685,19 @@ impl PeriodicProblem {
         Ok((end, monodromy))
     }
 
-    /// The unknowns of a cold start at `omega`: the static deflection of the
-    /// mean-stiffness model, run for the settings' run-in periods.
-    pub fn cold_start(&mut self, omega: f64, work: &mut Work) -> Result<Vec<f64>, PeriodicError> {
+    /// The unknowns of the static deflection of the mean-stiffness model at `omega`
+    /// [rad/s], at rest relative to the rigid-body motion (a cold start before its run-in).
+    pub fn static_start(&self, omega: f64) -> Vec<f64> {
         let s = static_state(&self.model, omega);
         let n = s.q.len();
         // Project onto the unknowns' space: drop the rigid part of q.
-        let mut z = self.reduce(&s.q, &vec![0.0; n]);
+        self.reduce(&s.q, &vec![0.0; n])
+    }
+
+    /// The unknowns of a cold start at `omega`: the static deflection of the
+    /// mean-stiffness model, run for the settings' run-in periods.
+    pub fn cold_start(&mut self, omega: f64, work: &mut Work) -> Result<Vec<f64>, PeriodicError> {
+        let mut z = self.static_start(omega);
         for _ in 0..self.settings.run_in_periods {
             z = self.flow(omega, &z, work, None)?;
         }

@@ -118,6 +118,9 @@ pub struct GridStats {
     pub low_load: u64,
     /// The largest estimated error of an unresolved request [-].
     pub worst_estimate: f64,
+    /// Nodes no way could solve, which took their torque row's nearest node
+    /// ([`Found::Failed`]).
+    pub failed: u64,
 }
 
 /// The cache of one model (one worn state): its nodes and torque levels.
@@ -203,7 +206,7 @@ impl SteadyGrid {
         let a = ((speed.abs() - self.settings.speed_floor) / ds).max(0.0);
         let b = torque / dt;
         let top = self.settings.refinements;
-        let mut parent = f64::INFINITY;
+        let (mut parent, mut on_strip) = (f64::INFINITY, false);
         for level in 0..=top {
             let c = 1i64 << (top - level);
             let i0 = (a / c as f64).floor() as i64 * c;
@@ -215,8 +218,12 @@ impl SteadyGrid {
             // counted as a low-load one.
             let unloaded_row = j0 == 0 || j0 + c == 0;
             if unloaded_row && level < top {
+                on_strip = true;
                 continue;
             }
+            // Without an estimate to make (the low-load strip; the finest level, which takes
+            // its parent's), a corner of no weight is not needed, and not solved.
+            let finest = level == top;
             let mut corners = Vec::with_capacity(4);
             for (di, dj, w) in [
                 (0, 0, (1.0 - wa) * (1.0 - wb)),
@@ -224,9 +231,14 @@ impl SteadyGrid {
                 (0, c, (1.0 - wa) * wb),
                 (c, c, wa * wb),
             ] {
-                corners.push((self.node((sign, i0 + di, j0 + dj))?, w));
+                if w > 0.0 || !finest {
+                    corners.push((self.node((sign, i0 + di, j0 + dj))?, w));
+                }
             }
-            if unloaded_row {
+            // The finest row above the strip has no coarser cell with an estimate (each
+            // has a corner on the unloaded row): it is interpolated without one, as the
+            // strip is.
+            if unloaded_row || (finest && on_strip && parent.is_infinite()) {
                 self.stats.low_load += 1;
                 corners.retain(|(_, w)| *w > 0.0);
                 return Ok(Blend { corners, speed, torque, level, estimate: f64::NAN });
@@ -242,7 +254,7 @@ impl SteadyGrid {
             // largest for a smooth response; the finest cell (no node at its centre) takes a
             // quarter of its parent's (the error of a bilinear interpolation goes with the
             // square of the cell).
-            let error = if level < top {
+            let error = if !finest {
                 let centre = self.node((sign, i0 + c / 2, j0 + c / 2))?;
                 self.centre_error(&corners, &centre)
             } else {
@@ -317,11 +329,21 @@ impl SteadyGrid {
             self.levels.insert(j, level);
         }
         let level = self.levels.get_mut(&j).expect("inserted above");
-        let point = Arc::new(level.solve(speed, neighbour.as_deref())?);
+        let point = match level.solve(speed, neighbour.as_deref()) {
+            Ok(p) => Arc::new(p),
+            // A node no way solves (a march's period fails to integrate) takes its row's
+            // nearest node, not settled, rather than stopping the run; without one, it stops.
+            Err(e) => {
+                let near = neighbour.ok_or(e)?;
+                let found = Found::Failed;
+                Arc::new(SteadyPoint { speed, torque, found, settled: f64::INFINITY, ..(*near).clone() })
+            }
+        };
         self.stats.solved += 1;
         match point.found {
             Found::Marched => self.stats.marched += 1,
             Found::Cold => self.stats.cold += 1,
+            Found::Failed => self.stats.failed += 1,
             _ => {}
         }
         self.nodes.insert(node, point.clone());

@@ -26,8 +26,60 @@ pub const MARCH_SETTLED: f64 = 1e-3;
 /// Periods a march runs at most where it is the steady state itself (a coast load, or
 /// where the balance finds no orbit): about three and a half input revolutions of the
 /// example. A march that has not settled by then is kept with its last period's change
-/// ([`SteadyPoint::settled`]): the response is not periodic there (the teeth rattle).
+/// ([`SteadyPoint::settled`]): the response is not periodic there (the teeth rattle). A
+/// restart's march counts towards these periods: where its Newton fails, the march goes
+/// on from where it stopped.
 pub const COAST_MARCH_PERIODS: usize = 120;
+
+/// Integrator steps one node's marches take at most, together (docs/STEADY.md, "A node's
+/// cost"). A period's steps are set by the fastest modes, not by the mesh, so a slower
+/// period takes more of them: on the example about 1 100 at 3 000 rpm and 6 400 at
+/// 525 rpm. The budget is then the [`COAST_MARCH_PERIODS`] down to about 2 700 rpm and
+/// about 23 periods at 500 rpm, over 20 decay times of the lowest mode at ζ = 0.05: a march
+/// that has not settled by then rattles. It is kept as one that has not settled within
+/// its periods.
+pub const MARCH_STEPS: u64 = 150_000;
+
+/// A march's state and what it may still spend: the relative state at a period's start,
+/// the last period's change (relative), the periods run and the steps taken.
+struct March {
+    z: Vec<f64>,
+    change: f64,
+    periods: usize,
+    steps: u64,
+}
+
+impl March {
+    fn from(z: &[f64]) -> Self {
+        Self { z: z.to_vec(), change: f64::INFINITY, periods: 0, steps: 0 }
+    }
+
+    fn settled(&self) -> bool {
+        self.change <= MARCH_SETTLED
+    }
+
+    /// Marches on at `omega` [rad/s] until a period changes the state by at most
+    /// [`MARCH_SETTLED`] of it, `periods` periods have run in all, or [`MARCH_STEPS`]
+    /// steps have been taken in all; the error of a period that fails (the state stays at
+    /// that period's start).
+    fn run(
+        &mut self,
+        problem: &mut PeriodicProblem,
+        omega: f64,
+        periods: usize,
+        work: &mut Work,
+    ) -> Result<(), PeriodicError> {
+        while !self.settled() && self.periods < periods && self.steps < MARCH_STEPS {
+            let before = work.steps;
+            let r = problem.residual(omega, &self.z, work)?;
+            self.steps += work.steps - before;
+            self.periods += 1;
+            self.z.iter_mut().zip(&r).for_each(|(a, b)| *a += b);
+            self.change = max_abs(&r) / max_abs(&self.z).max(1.0);
+        }
+        Ok(())
+    }
+}
 
 /// How a steady state was found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,6 +92,10 @@ pub enum Found {
     Marched,
     /// Newton from the static state.
     Cold,
+    /// Not found: every way failed (a march's period did not integrate), and the node took
+    /// its torque row's nearest node, marked as not settled ([`SteadyPoint::settled`]
+    /// infinite), so that its cells carry no estimate.
+    Failed,
 }
 
 /// One mesh's forces over the steady period.
@@ -168,19 +224,24 @@ impl TorqueLevel {
         neighbour: Option<&SteadyPoint>,
     ) -> Result<SteadyPoint, PeriodicError> {
         let mut work = Work::default();
+        let mut march = neighbour.map(|n| &n.start).filter(|z| !z.is_empty()).map(|z| March::from(z));
         if self.torque < 0.0 {
-            return self.marched(omega, neighbour, work);
+            return self.marched(omega, march, work);
         }
-        match self.orbit(omega, neighbour, &mut work) {
+        match self.orbit(omega, neighbour, &mut march, &mut work) {
             Ok((orbit, found)) => self.point(&orbit, found, work),
-            Err(_) => self.marched(omega, neighbour, work),
+            Err(_) => self.marched(omega, march, work),
         }
     }
 
+    /// The orbit at `omega` [rad/s]: Newton from `neighbour`'s orbit, else from the state
+    /// `march` (out of the neighbour's state) reaches, else cold. The march is left where
+    /// it stopped.
     fn orbit(
         &mut self,
         omega: f64,
         neighbour: Option<&SteadyPoint>,
+        march: &mut Option<March>,
         work: &mut Work,
     ) -> Result<(HarmonicOrbit, Found), PeriodicError> {
         let cb = &mut self.balance;
@@ -200,9 +261,16 @@ impl TorqueLevel {
                 cb.restore_symmetry(Symmetry::Cyclic, omega)?;
             }
         }
-        if let Some(start) = neighbour.map(|n| &n.start).filter(|z| !z.is_empty()) {
-            if let Some(z) = march(cb.problem_mut(), omega, start, MARCH_PERIODS, work).map(|(z, _)| z) {
-                if let Ok(x) = cb.solve_from_state(omega, &z, work) {
+        if let Some(m) = march.as_mut() {
+            if m.run(cb.problem_mut(), omega, MARCH_PERIODS, work).is_ok() {
+                // Shooting, the fallback of Newton from a marched state, only from a march
+                // that settled: from one that did not (the budget spent, the teeth rattle)
+                // it costs tens of seconds at low speed and does not converge.
+                let r = match m.settled() {
+                    true => cb.solve_from_state(omega, &m.z, work),
+                    false => cb.solve_from_marched_period(omega, &m.z, work),
+                };
+                if let Ok(x) = r {
                     let mut evaluations = 0;
                     let orbit = cb.orbit_at(omega, &x, 0, &mut evaluations)?;
                     work.rhs_evaluations += evaluations;
@@ -219,23 +287,27 @@ impl TorqueLevel {
         Ok((orbit, Found::Cold))
     }
 
-    /// The settled period of a march at `omega` [rad/s] from `neighbour`'s state (else
-    /// from the static state and the settings' run-in), at most [`COAST_MARCH_PERIODS`]:
-    /// the steady state where the periodic solvers find none (the coast flanks, measured
-    /// in docs/STEADY.md). Its `settled` is the last period's change.
+    /// The settled period of a march at `omega` [rad/s] going on from `march` (a
+    /// neighbour's state, where a restart may have marched already; else the static
+    /// state), at most [`COAST_MARCH_PERIODS`] and
+    /// [`MARCH_STEPS`] in all: the steady state where the periodic solvers find none
+    /// (the coast flanks, measured in docs/STEADY.md). Its `settled` is the last period's
+    /// change.
     fn marched(
         &mut self,
         omega: f64,
-        neighbour: Option<&SteadyPoint>,
+        march: Option<March>,
         mut work: Work,
     ) -> Result<SteadyPoint, PeriodicError> {
         let problem = self.balance.problem_mut();
-        let z = match neighbour.map(|n| &n.start).filter(|z| !z.is_empty()) {
-            Some(z) => z.clone(),
-            None => problem.cold_start(omega, &mut work)?,
+        let mut march = match march {
+            Some(m) => m,
+            None => March::from(&problem.static_start(omega)),
         };
-        let (z, change) = march(problem, omega, &z, COAST_MARCH_PERIODS, &mut work)
-            .ok_or_else(|| PeriodicError::invalid("steady state", omega, "the march failed"))?;
+        march
+            .run(problem, omega, COAST_MARCH_PERIODS, &mut work)
+            .map_err(|e| PeriodicError::invalid("steady state", omega, &format!("the march failed: {e}")))?;
+        let (z, change) = (march.z, march.change);
         let cycles = problem.cycles();
         let samples = self.samples_per_cycle * cycles;
         let (q, v, sampled, end) = problem.sampled_period(omega, &z, samples, &mut work)?;
@@ -341,27 +413,4 @@ impl TorqueLevel {
             work,
         })
     }
-}
-
-/// Marches the relative state `z` over periods at `omega` [rad/s] until one period changes
-/// it by at most [`MARCH_SETTLED`] of it, at most `periods`: the state reached and its last
-/// period's change (relative); `None` where a period fails.
-fn march(
-    problem: &mut PeriodicProblem,
-    omega: f64,
-    z: &[f64],
-    periods: usize,
-    work: &mut Work,
-) -> Option<(Vec<f64>, f64)> {
-    let mut z = z.to_vec();
-    let mut change = f64::INFINITY;
-    for _ in 0..periods {
-        let r = problem.residual(omega, &z, work).ok()?;
-        z.iter_mut().zip(&r).for_each(|(a, b)| *a += b);
-        change = max_abs(&r) / max_abs(&z).max(1.0);
-        if change <= MARCH_SETTLED {
-            break;
-        }
-    }
-    Some((z, change))
 }

@@ -20,6 +20,7 @@ enum Condition {
     RunAway,
     Separation(u8),
     Pressure(u8),
+    SteadyNotFound,
 }
 
 fn mesh_index(mesh: MeshKind) -> u8 {
@@ -159,6 +160,20 @@ impl Watch {
                 worst.and_then(|(p, f)| check::contact_pressure(set, p + 1, mesh, f, margin)).map(at);
             self.note(c, finding, &mut out);
         }
+        // The steady response: a node of the step's cell that no way solved took its row's
+        // nearest node (docs/STEADY.md, "Solving a node").
+        let failed = sim.steady().and_then(|e| {
+            let b = e.blend();
+            b.found().any(|f| f == crate::dynamics::steady::point::Found::Failed).then(|| {
+                format!(
+                    "the steady state near {:.0} rpm and {:.1} N·m was not found (a march's period did not \
+                     integrate): the outputs take the nearest steady state of the same torque",
+                    rad_per_s_to_rpm(b.speed.abs()),
+                    b.torque
+                )
+            })
+        });
+        self.note(Condition::SteadyNotFound, failed.map(at), &mut out);
         out
     }
 }

@@ -260,7 +260,7 @@ impl CondensedBalance {
         z: &[f64],
         work: &mut Work,
     ) -> Result<Vec<f64>, PeriodicError> {
-        match self.solve_from_state_once(omega, z, work) {
+        match self.solve_from_marched_period(omega, z, work) {
             Ok(x) => Ok(x),
             Err(_) => {
                 // Where Newton does not reach the orbit from the marched period, shooting from
@@ -269,7 +269,7 @@ impl CondensedBalance {
                 work.steps += orbit.work.steps;
                 work.rhs_evaluations += orbit.work.rhs_evaluations;
                 work.newton_iterations += orbit.work.newton_iterations;
-                self.solve_from_state_once(omega, &orbit.z, work)
+                self.solve_from_marched_period(omega, &orbit.z, work)
             }
         }
     }
@@ -302,7 +302,11 @@ impl CondensedBalance {
         self.coordinates_of(&marched)
     }
 
-    fn solve_from_state_once(
+    /// The contact coordinates of the periodic state at `omega` [rad/s] by Newton on the
+    /// condensed balance from the period the relative state `z` (a march's) runs through,
+    /// without [`Self::solve_from_state`]'s fallback to shooting (which, from a march that
+    /// has not settled, costs many flows and seldom converges).
+    pub fn solve_from_marched_period(
         &mut self,
         omega: f64,
         z: &[f64],
