@@ -263,3 +263,27 @@ fn a_rattling_node_keeps_to_the_march_budget() {
     );
     assert!(point.meshes.iter().all(|m| m.max.is_finite() && m.min.is_finite() && m.mean.is_finite()));
 }
+
+/// A node whose march does not integrate from its neighbour's state marches from the static
+/// state instead (the worn example at κ = 4 and 18.75 N·m: from the state at 4 800 rpm,
+/// reached from 4 775 rpm, RK 5(4) stalls at t = 6e-11 s at 4 825 rpm; the node failed
+/// with "the march failed" before, as one did in the FMU's step on the drive cycle).
+#[test]
+fn a_march_that_stalls_from_its_neighbour_starts_from_the_static_state() {
+    use planetwear::dynamics::steady::point::{Found, TorqueLevel};
+    let (set, _) = example(|_| {});
+    let worn = &planetwear::package::pack::example_wear_states().unwrap()[4];
+    let model = PlanetaryDynamics::new(&set, worn.set_model(&set)).unwrap();
+    let torque = 18.75;
+    let unit = set.with_input_torque(1.0).unwrap();
+    let torques = unit.balanced_torques().map(|t| t * torque);
+    // The chain of nodes a cycle solved, each level set up at its speed.
+    let mut near = None;
+    for rpm in [4775.0, 4800.0, 4825.0] {
+        let mut level = TorqueLevel::new(&model, torque, torques, rpm * RPM, (60, 0.0)).unwrap();
+        near = Some(level.solve(rpm * RPM, near.as_ref()).unwrap());
+    }
+    let point = near.unwrap();
+    assert_eq!(point.found, Found::Marched);
+    assert!(point.meshes.iter().all(|m| m.max.is_finite() && m.mean.is_finite()));
+}
