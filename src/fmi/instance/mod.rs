@@ -438,7 +438,7 @@ impl Instance {
             // The process's cache of this scene (its operating point aside) and worn state.
             let mut keyed = scene.clone();
             keyed.operation.input_torque_nm = 0.0;
-            keyed.dynamics.input_speed_rpm = 0.0;
+            keyed.dynamics.input_speed = 0.0;
             let state = self.strings.get(&vr::WEAR_STATE_FILE).cloned().unwrap_or_default();
             let state = if state.is_empty() {
                 Vec::new()
