@@ -430,28 +430,31 @@ fn reading_source(table: &Table, r: &mut String) {
     r.push_str("            _ => None,\n        }\n    }\n}\n");
 }
 
-/// The scene unit of a real field from its key's suffix, which must agree
-/// with the variable's SI unit.
-fn scene_unit(v: &Var, field: &str) -> &'static str {
+/// The file units a scene key's suffix names, each with the Rust field that
+/// holds the key: the key without the suffix, in the SI unit
+/// (src/scene/units.rs converts as the file is read and written).
+const FILE_UNITS: &[(&str, &str)] = &[("_mm", "m"), ("_deg", "rad"), ("_gpa", "Pa"), ("_rpm", "rad/s")];
+
+/// The Rust field path of a real scene key (`sun.module_mm` is held, in m,
+/// by `sun.module`), whose SI unit must be the variable's: a key in a file
+/// unit by the field without the suffix, in that unit's SI unit; any other
+/// key by the field of its name, in a unit of its own, never one of those.
+fn real_field(v: &Var, key: &str) -> String {
     let unit = v.unit.as_deref().unwrap_or("1");
-    let (suffix_unit, si) = if field.ends_with("_mm") {
-        ("Mm", "m")
-    } else if field.ends_with("_deg") {
-        ("Deg", "rad")
-    } else if field.ends_with("_gpa") {
-        ("Gpa", "Pa")
-    } else if field.ends_with("_rpm") {
-        ("Rpm", "rad/s")
-    } else {
-        if ["m", "rad", "Pa", "rad/s"].contains(&unit) {
-            fail(format!("{}: field {field} of a variable in {unit} names no scene unit", v.name));
+    match FILE_UNITS.iter().find(|(suffix, _)| key.ends_with(suffix)) {
+        Some((suffix, si)) => {
+            if unit != *si {
+                fail(format!("{}: scene key {key} is held in {si}, the variable is in {unit}", v.name));
+            }
+            key.trim_end_matches(suffix).to_string()
         }
-        return "One";
-    };
-    if unit != si {
-        fail(format!("{}: field {field} is in a unit of {si}, the variable in {unit}", v.name));
+        None => {
+            if FILE_UNITS.iter().any(|(_, si)| *si == unit) {
+                fail(format!("{}: scene key {key} of a variable in {unit} names no file unit", v.name));
+            }
+            key.to_string()
+        }
     }
-    suffix_unit
 }
 
 /// `Settable::scene_keys` and `Settable::target`: the scene keys each
@@ -488,20 +491,15 @@ fn scene_source(table: &Table, r: &mut String) {
             _ => fail(format!("{}: scene.slot {slot} does not fit type {}", v.name, v.ty)),
         };
         let mut names = Vec::new();
-        for (i, field) in place.fields.iter().enumerate() {
+        for (i, key) in place.fields.iter().enumerate() {
             let f = format!("{}_{i}", const_name(&v.name).to_ascii_lowercase());
+            let field = if kind == "Real" { real_field(v, key) } else { key.clone() };
             let _ = writeln!(accessors, "fn {f}(s: &mut Scene) -> &mut {ty} {{\n    &mut s.{field}\n}}");
             names.push(f);
         }
         let list = names.join(", ");
         let target = match kind {
-            "Real" => {
-                let unit = scene_unit(v, &place.fields[0]);
-                if place.fields.iter().any(|f| scene_unit(v, f) != unit) {
-                    fail(format!("{}: scene.fields are in different units", v.name));
-                }
-                format!("SceneField::Real(SceneUnit::{unit}, &[{list}])")
-            }
+            "Real" => format!("SceneField::Real(&[{list}])"),
             "Count" => format!("SceneField::Count(&[{list}])"),
             _ if names.len() == 1 => format!("SceneField::Derived({list})"),
             _ => fail(format!("{}: a derived slot writes one field", v.name)),

@@ -5,6 +5,7 @@ use planetwear::dynamics::duty::{input_torque_per_mesh_force, DutyBins, DutyErro
 use planetwear::dynamics::equations::PlanetaryDynamics;
 use planetwear::dynamics::simulation::Simulation;
 use planetwear::model::gear::{GearSet, MeshKind};
+use planetwear::scene::units::gpa_to_pa;
 use planetwear::scene::{Fidelity, Scene};
 use planetwear::wear::duty::{DutyCycle, DutyCycleError, FORMAT};
 
@@ -141,7 +142,7 @@ fn a_duty_cycle_file_reads_back_and_refuses_what_it_is_not() {
     assert!(refused(&altered).contains("checksum"));
 
     let mut other = Scene::example_2004();
-    other.material.youngs_modulus_gpa = 210.0;
+    other.material.youngs_modulus = gpa_to_pa(210.0);
     let other = other.validate().unwrap();
     let message = DutyCycle::from_json(&text, &other).unwrap_err();
     assert!(matches!(message, DutyCycleError::GearSet { .. }), "{message}");

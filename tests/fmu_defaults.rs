@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 use planetwear::fmi::instance::{scene_values, Instance, DEFAULT_SCENE};
 use planetwear::fmi::variables::{vr, Causality, Kind, Settable, Start, VARIABLES};
+use planetwear::scene::units::{gpa_to_pa, mm_to_m, rpm_to_rad_per_s};
 use planetwear::scene::Scene;
 
 /// A fresh directory under the target directory (the tests' working
@@ -180,12 +181,12 @@ fn parameters_to_scene_to_parameters_is_the_identity() {
     s.dynamics.integrator = planetwear::scene::IntegratorKind::GeneralizedAlpha;
     s.dynamics.steps_per_mesh_cycle = 96;
     s.dynamics.mesh_damping_ratio = 0.04;
-    s.dynamics.input_speed_rpm = 2500.0;
-    s.material.youngs_modulus_gpa = 210.0;
+    s.dynamics.input_speed = rpm_to_rad_per_s(2500.0);
+    s.material.youngs_modulus = gpa_to_pa(210.0);
     s.supports.planet_bearing_n_per_m = 2.0e9;
     s.inertia.sun_mass_kg = Some(0.9);
     s.planets.count = 2; // (34 + 70) / 2: the assembly condition holds
-    s.centre_distance_mm = 39.0;
+    s.centre_distance = mm_to_m(39.0);
     let values = scene_values(&s).unwrap();
     let mut i = Instance::new("identity", None);
     set_all(&mut i, &values);

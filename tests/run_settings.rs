@@ -27,7 +27,7 @@ fn the_scene_gives_the_gear_set_and_its_run_settings_in_si() {
     let (set, run) = scene.validate_with_run().unwrap();
     assert_eq!(set, scene.validate().unwrap());
     let d = &scene.dynamics;
-    assert_eq!(run.input_speed(), rpm_to_rad_per_s(d.input_speed_rpm));
+    assert_eq!(run.input_speed(), d.input_speed);
     assert_eq!(run.integrator(), d.integrator);
     assert_eq!(run.relative_tolerance(), d.relative_tolerance);
     assert_eq!(run.simulation_relative_tolerance(), d.simulation_relative_tolerance);
@@ -101,7 +101,7 @@ fn the_input_speed_rule_is_the_same_from_the_scene_and_from_a_change() {
     let run = example_run();
     for (rpm, ok) in [(1.0e6, true), (-1.0e6, true), (0.0, true), (2.0e6, false), (f64::INFINITY, false)] {
         let mut s = Scene::example_2004();
-        s.dynamics.input_speed_rpm = rpm;
+        s.dynamics.input_speed = rpm_to_rad_per_s(rpm);
         let from_scene = s.validate_with_run();
         let from_change = run.with(|d| d.input_speed = rpm_to_rad_per_s(rpm));
         assert_eq!(from_scene.is_ok(), ok, "{rpm} rpm from the scene");

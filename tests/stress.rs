@@ -393,23 +393,23 @@ fn fifty_micrometres_of_wear_and_pairs_that_never_touch() {
 fn scaled(f: f64) -> Scene {
     let mut s = Scene::example_2004_annulus();
     for g in [&mut s.sun, &mut s.planet] {
-        g.module_mm *= f;
-        g.tooth_thickness_mm *= f;
-        g.tip_radius_mm *= f;
-        g.root_radius_mm *= f;
-        g.bore_radius_mm *= f;
-        g.hob_tip_radius_mm *= f;
-        g.face_width_mm *= f;
+        g.module *= f;
+        g.tooth_thickness *= f;
+        g.tip_radius *= f;
+        g.root_radius *= f;
+        g.bore_radius *= f;
+        g.hob_tip_radius *= f;
+        g.face_width *= f;
     }
     let r = &mut s.ring;
-    r.module_mm *= f;
-    r.tooth_thickness_mm *= f;
-    r.minor_radius_mm *= f;
-    r.root_radius_mm *= f;
-    r.rim_radius_mm *= f;
-    r.fillet_radius_mm *= f;
-    r.face_width_mm *= f;
-    s.centre_distance_mm *= f;
+    r.module *= f;
+    r.tooth_thickness *= f;
+    r.minor_radius *= f;
+    r.root_radius *= f;
+    r.rim_radius *= f;
+    r.fillet_radius *= f;
+    r.face_width *= f;
+    s.centre_distance *= f;
     s.operation.input_torque_nm *= f * f * f;
     let b = &mut s.supports;
     b.sun_radial_n_per_m *= f;

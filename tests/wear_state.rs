@@ -6,6 +6,7 @@ use std::sync::OnceLock;
 use planetwear::contact::ltca::MeshModel;
 use planetwear::geometry::profile::ProfileDeviation;
 use planetwear::model::gear::{GearSet, MeshKind};
+use planetwear::scene::units::{gpa_to_pa, mm_to_m};
 use planetwear::scene::Scene;
 use planetwear::wear::archard::{Limit, WearSettings};
 use planetwear::wear::flank::Flank;
@@ -184,7 +185,7 @@ fn a_state_of_another_gear_set_is_refused_with_what_differs() {
     assert!(WornState::from_json(&text, &same).is_ok());
     // A material change is another gear set for wear (Hertz).
     let mut soft = Scene::example_2004();
-    soft.material.youngs_modulus_gpa = 110.0;
+    soft.material.youngs_modulus = gpa_to_pa(110.0);
     let soft = soft.validate().unwrap();
     let e = WornState::from_json(&text, &soft).unwrap_err();
     assert!(e.to_string().contains("material.youngs_modulus"), "{e}");
@@ -327,9 +328,8 @@ fn a_set_entered_in_other_units_is_the_same_set() {
     let mut scene = planetwear::scene::Scene::example_2004();
     let set = scene.validate().unwrap();
     let state = planetwear::wear::state::WornState::unworn(&set, 10, 1);
-    scene.planet.pressure_angle_deg =
-        (scene.planet.pressure_angle_deg.to_radians() * (1.0 + 1e-15)).to_degrees();
-    scene.ring.tooth_thickness_mm *= 1.0 + 2e-16;
+    scene.planet.pressure_angle *= 1.0 + 1e-15;
+    scene.ring.tooth_thickness *= 1.0 + 2e-16;
     let rounded = scene.validate().unwrap();
     assert_ne!(
         planetwear::wear::state::GearSetPrint::of(&rounded).fingerprint,
@@ -337,7 +337,7 @@ fn a_set_entered_in_other_units_is_the_same_set() {
         "the test must exercise a different fingerprint"
     );
     state.check_gear_set(&rounded).expect("the same set in other units");
-    scene.ring.tooth_thickness_mm *= 1.0 + 1e-6;
+    scene.ring.tooth_thickness *= 1.0 + 1e-6;
     let changed = scene.validate().unwrap();
     let e = state.check_gear_set(&changed).unwrap_err().to_string();
     assert!(e.contains("ring.tooth_thickness"), "{e}");
@@ -399,7 +399,7 @@ fn a_state_file_moves_the_unloaded_separation_and_the_static_te_of_the_dynamic_m
 /// The example with another Young's modulus: same geometry, other material.
 fn other_material() -> GearSet {
     let mut s = Scene::example_2004();
-    s.material.youngs_modulus_gpa = 210.0;
+    s.material.youngs_modulus = gpa_to_pa(210.0);
     s.validate().unwrap()
 }
 
@@ -446,10 +446,10 @@ fn a_geometry_difference_is_refused_even_with_every_acceptance() {
     use planetwear::wear::state::StateDifference;
     let text = worn().to_json().unwrap();
     let mut s = Scene::example_2004();
-    s.material.youngs_modulus_gpa = 210.0;
-    s.sun.face_width_mm = 28.0;
-    s.planet.face_width_mm = 28.0;
-    s.ring.face_width_mm = 28.0;
+    s.material.youngs_modulus = gpa_to_pa(210.0);
+    s.sun.face_width = mm_to_m(28.0);
+    s.planet.face_width = mm_to_m(28.0);
+    s.ring.face_width = mm_to_m(28.0);
     let set = s.validate().unwrap();
     let e = WornState::from_json_accepting(&text, &set, &StateDifference::ALL).unwrap_err().to_string();
     assert!(e.contains("sun.face_width is 0.03 in the state and 0.028 here"), "{e}");

@@ -147,51 +147,12 @@ pub enum Reading {
     BalancingTorque,
 }
 
-/// The unit of a scene field, which a real parameter (SI) is converted to
-/// when it is written (the scene is the command line's edge format).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SceneUnit {
-    /// The SI unit itself.
-    One,
-    /// Millimetres (from metres).
-    Mm,
-    /// Degrees (from radians).
-    Deg,
-    /// Gigapascals (from pascals).
-    Gpa,
-    /// Revolutions per minute (from radians per second).
-    Rpm,
-}
-
-impl SceneUnit {
-    /// An SI value in this unit.
-    pub fn from_si(self, x: f64) -> f64 {
-        match self {
-            SceneUnit::One => x,
-            SceneUnit::Mm => x * 1e3,
-            SceneUnit::Deg => x.to_degrees(),
-            SceneUnit::Gpa => x * 1e-9,
-            SceneUnit::Rpm => crate::scene::units::rad_per_s_to_rpm(x),
-        }
-    }
-
-    /// A value in this unit in SI.
-    pub fn to_si(self, x: f64) -> f64 {
-        match self {
-            SceneUnit::One => x,
-            SceneUnit::Mm => x * 1e-3,
-            SceneUnit::Deg => x.to_radians(),
-            SceneUnit::Gpa => x * 1e9,
-            SceneUnit::Rpm => crate::scene::units::rpm_to_rad_per_s(x),
-        }
-    }
-}
-
 /// A scene field a settable variable writes (the table's `scene.slot`).
 #[derive(Clone, Copy, Debug)]
 pub enum SceneField {
-    /// Real fields in a unit: every one takes the value.
-    Real(SceneUnit, &'static [fn(&mut Scene) -> &mut f64]),
+    /// Real fields, in the variable's SI unit as the scene holds them:
+    /// every one takes the value.
+    Real(&'static [fn(&mut Scene) -> &mut f64]),
     /// Counts: every one takes the value, which must not be negative.
     Count(&'static [fn(&mut Scene) -> &mut u32]),
     /// An optional real: 0 means "derived from the geometry" (`None`).

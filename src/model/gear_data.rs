@@ -27,40 +27,41 @@
 //! radius is renamed to the gear-data key it came from
 //! ([`name_by_gear_data`]).
 
-use std::f64::consts::PI;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 use crate::model::gear::ToothForm;
 use crate::model::involute::{inv, inv_inverse};
+use crate::scene::units::m_to_mm;
 use crate::scene::{GearData, Problem, Scene};
 
-/// The radii of one gear derived from its gear data \[mm\].
+/// The radii of one gear derived from its gear data \[m\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DerivedRadii {
-    /// Reference radius m·z/2 \[mm\].
-    pub reference_radius_mm: f64,
-    /// Base radius r·cos α \[mm\].
-    pub base_radius_mm: f64,
-    /// Tip radius (the ring's minor radius) \[mm\].
-    pub tip_radius_mm: f64,
-    /// Root radius \[mm\].
-    pub root_radius_mm: f64,
-    /// Circular tooth thickness at the reference circle, allowance included \[mm\].
-    pub tooth_thickness_mm: f64,
-    /// Hob tip radius (external) or root fillet radius (ring) \[mm\].
-    pub tool_tip_radius_mm: f64,
+    /// Reference radius m·z/2 \[m\].
+    pub reference_radius: f64,
+    /// Base radius r·cos α \[m\].
+    pub base_radius: f64,
+    /// Tip radius (the ring's minor radius) \[m\].
+    pub tip_radius: f64,
+    /// Root radius \[m\].
+    pub root_radius: f64,
+    /// Circular tooth thickness at the reference circle, allowance included \[m\].
+    pub tooth_thickness: f64,
+    /// Hob tip radius (external) or root fillet radius (ring) \[m\].
+    pub tool_tip_radius: f64,
 }
 
 /// The radii of an external gear (sun, planet) of `teeth` teeth, module
-/// `module_mm` \[mm\] and pressure angle `pressure_angle_deg` \[deg\] from its
-/// gear data.
-pub fn external_radii(teeth: u32, module_mm: f64, pressure_angle_deg: f64, gd: &GearData) -> DerivedRadii {
-    radii(1.0, teeth, module_mm, pressure_angle_deg, gd)
+/// `module` \[m\] and pressure angle `pressure_angle` \[rad\] from its gear
+/// data.
+pub fn external_radii(teeth: u32, module: f64, pressure_angle: f64, gd: &GearData) -> DerivedRadii {
+    radii(1.0, teeth, module, pressure_angle, gd)
 }
 
 /// The radii of an internal gear (the ring) from its gear data: the tip
 /// radius is the minor radius, the tool tip radius the root fillet's.
-pub fn ring_radii(teeth: u32, module_mm: f64, pressure_angle_deg: f64, gd: &GearData) -> DerivedRadii {
-    radii(-1.0, teeth, module_mm, pressure_angle_deg, gd)
+pub fn ring_radii(teeth: u32, module: f64, pressure_angle: f64, gd: &GearData) -> DerivedRadii {
+    radii(-1.0, teeth, module, pressure_angle, gd)
 }
 
 /// ISO 21771's radii of a gear whose teeth stand outward (`side` = 1,
@@ -68,17 +69,17 @@ pub fn ring_radii(teeth: u32, module_mm: f64, pressure_angle_deg: f64, gd: &Gear
 /// point the other way on an internal gear, while a positive profile shift
 /// moves both circles outward on either and thickens an external tooth but
 /// thins an internal one.
-fn radii(side: f64, teeth: u32, module_mm: f64, pressure_angle_deg: f64, gd: &GearData) -> DerivedRadii {
-    let (m, a) = (module_mm, pressure_angle_deg.to_radians());
+fn radii(side: f64, teeth: u32, module: f64, pressure_angle: f64, gd: &GearData) -> DerivedRadii {
+    let (m, a) = (module, pressure_angle);
     let r = m * f64::from(teeth) / 2.0;
     let x = gd.profile_shift;
     DerivedRadii {
-        reference_radius_mm: r,
-        base_radius_mm: r * a.cos(),
-        tip_radius_mm: gd.tip_diameter_mm.map_or(r + (side * gd.addendum_factor + x) * m, |d| d / 2.0),
-        root_radius_mm: gd.root_diameter_mm.map_or(r + (x - side * gd.dedendum_factor) * m, |d| d / 2.0),
-        tooth_thickness_mm: (PI / 2.0 + side * (2.0 * x * a.tan())) * m + gd.tooth_thickness_allowance_mm,
-        tool_tip_radius_mm: gd.tool_tip_radius_factor * m,
+        reference_radius: r,
+        base_radius: r * a.cos(),
+        tip_radius: gd.tip_diameter.map_or(r + (side * gd.addendum_factor + x) * m, |d| d / 2.0),
+        root_radius: gd.root_diameter.map_or(r + (x - side * gd.dedendum_factor) * m, |d| d / 2.0),
+        tooth_thickness: (PI / 2.0 + side * (2.0 * x * a.tan())) * m + gd.tooth_thickness_allowance,
+        tool_tip_radius: gd.tool_tip_radius_factor * m,
     }
 }
 
@@ -92,10 +93,10 @@ pub fn operating_pressure_angle(z1: u32, x1: f64, z2: u32, x2: f64, alpha: f64, 
     inv_inverse(inv(alpha) + 2.0 * alpha.tan() * xs / zs)
 }
 
-/// Zero-backlash operating centre distance \[mm\] of the same pair with
-/// module `module_mm`: a_w = m·(z₂ ± z₁)/2 · cos α / cos α_w.
+/// Zero-backlash operating centre distance \[m\] of the same pair with
+/// module `module` \[m\]: a_w = m·(z₂ ± z₁)/2 · cos α / cos α_w.
 pub fn operating_centre_distance(
-    module_mm: f64,
+    module: f64,
     z1: u32,
     x1: f64,
     z2: u32,
@@ -105,7 +106,7 @@ pub fn operating_centre_distance(
 ) -> f64 {
     let zs = if internal { f64::from(z2) - f64::from(z1) } else { f64::from(z1) + f64::from(z2) };
     let aw = operating_pressure_angle(z1, x1, z2, x2, alpha, internal);
-    module_mm * zs / 2.0 * alpha.cos() / aw.cos()
+    module * zs / 2.0 * alpha.cos() / aw.cos()
 }
 
 /// Smallest profile shift without undercut of an external gear of `teeth`
@@ -124,12 +125,12 @@ pub fn minimum_profile_shift(
         - f64::from(teeth) * alpha.sin().powi(2) / 2.0
 }
 
-/// The largest difference \[mm\] allowed between the scene's centre distance
+/// The largest difference \[m\] allowed between the scene's centre distance
 /// and the zero-backlash operating centre distance of a mesh whose gears
-/// are both given by gear data: a profile shift rounded to four decimals
-/// moves a_w by well under it, and the backlash it leaves (at most
+/// are both given by gear data, 0.01 mm: a profile shift rounded to four
+/// decimals moves a_w by well under it, and the backlash it leaves (at most
 /// 2·0.01·sin α_w mm) is checked with the allowances.
-pub const CENTRE_DISTANCE_TOLERANCE_MM: f64 = 0.01;
+pub const CENTRE_DISTANCE_TOLERANCE: f64 = 1.0e-5;
 
 /// The scene with every gear given by gear data written in the radii form
 /// (its derived radius fields filled in, `gear_data` kept), and the
@@ -139,26 +140,25 @@ pub fn resolve(scene: &Scene) -> (Scene, Vec<Problem>) {
     let mut s = scene.clone();
     let mut problems = Vec::new();
     if let Some(gd) = scene.sun.gear_data {
-        check_data("sun", &gd, scene.sun.module_mm, &mut problems);
+        check_data("sun", &gd, scene.sun.module, &mut problems);
         conflicts("sun", &external_derived_fields(&scene.sun), &mut problems);
-        let d = external_radii(scene.sun.teeth, scene.sun.module_mm, scene.sun.pressure_angle_deg, &gd);
+        let d = external_radii(scene.sun.teeth, scene.sun.module, scene.sun.pressure_angle, &gd);
         fill_external(&mut s.sun, &d);
     }
     if let Some(gd) = scene.planet.gear_data {
-        check_data("planet", &gd, scene.planet.module_mm, &mut problems);
+        check_data("planet", &gd, scene.planet.module, &mut problems);
         conflicts("planet", &external_derived_fields(&scene.planet), &mut problems);
-        let d =
-            external_radii(scene.planet.teeth, scene.planet.module_mm, scene.planet.pressure_angle_deg, &gd);
+        let d = external_radii(scene.planet.teeth, scene.planet.module, scene.planet.pressure_angle, &gd);
         fill_external(&mut s.planet, &d);
     }
     if let Some(gd) = scene.ring.gear_data {
-        check_data("ring", &gd, scene.ring.module_mm, &mut problems);
+        check_data("ring", &gd, scene.ring.module, &mut problems);
         conflicts("ring", &ring_derived_fields(&scene.ring), &mut problems);
-        let d = ring_radii(scene.ring.teeth, scene.ring.module_mm, scene.ring.pressure_angle_deg, &gd);
-        s.ring.tooth_thickness_mm = d.tooth_thickness_mm;
-        s.ring.minor_radius_mm = d.tip_radius_mm;
-        s.ring.root_radius_mm = d.root_radius_mm;
-        s.ring.fillet_radius_mm = d.tool_tip_radius_mm;
+        let d = ring_radii(scene.ring.teeth, scene.ring.module, scene.ring.pressure_angle, &gd);
+        s.ring.tooth_thickness = d.tooth_thickness;
+        s.ring.minor_radius = d.tip_radius;
+        s.ring.root_radius = d.root_radius;
+        s.ring.fillet_radius = d.tool_tip_radius;
     }
     if problems.is_empty() {
         centre_distance(scene, &mut problems);
@@ -167,29 +167,29 @@ pub fn resolve(scene: &Scene) -> (Scene, Vec<Problem>) {
 }
 
 fn fill_external(g: &mut crate::scene::ExternalGearSpec, d: &DerivedRadii) {
-    g.tooth_thickness_mm = d.tooth_thickness_mm;
-    g.tip_radius_mm = d.tip_radius_mm;
-    g.root_radius_mm = d.root_radius_mm;
-    g.hob_tip_radius_mm = d.tool_tip_radius_mm;
+    g.tooth_thickness = d.tooth_thickness;
+    g.tip_radius = d.tip_radius;
+    g.root_radius = d.root_radius;
+    g.hob_tip_radius = d.tool_tip_radius;
 }
 
-/// The fields of an external gear that its gear data derive, by key.
+/// The fields of an external gear that its gear data derive, by key (SI).
 fn external_derived_fields(g: &crate::scene::ExternalGearSpec) -> [(&'static str, f64); 4] {
     [
-        ("tooth_thickness_mm", g.tooth_thickness_mm),
-        ("tip_radius_mm", g.tip_radius_mm),
-        ("root_radius_mm", g.root_radius_mm),
-        ("hob_tip_radius_mm", g.hob_tip_radius_mm),
+        ("tooth_thickness_mm", g.tooth_thickness),
+        ("tip_radius_mm", g.tip_radius),
+        ("root_radius_mm", g.root_radius),
+        ("hob_tip_radius_mm", g.hob_tip_radius),
     ]
 }
 
-/// The fields of the ring that its gear data derive, by key.
+/// The fields of the ring that its gear data derive, by key (SI).
 fn ring_derived_fields(g: &crate::scene::RingGearSpec) -> [(&'static str, f64); 4] {
     [
-        ("tooth_thickness_mm", g.tooth_thickness_mm),
-        ("minor_radius_mm", g.minor_radius_mm),
-        ("root_radius_mm", g.root_radius_mm),
-        ("fillet_radius_mm", g.fillet_radius_mm),
+        ("tooth_thickness_mm", g.tooth_thickness),
+        ("minor_radius_mm", g.minor_radius),
+        ("root_radius_mm", g.root_radius),
+        ("fillet_radius_mm", g.fillet_radius),
     ]
 }
 
@@ -199,7 +199,7 @@ fn conflicts(gear: &str, fields: &[(&str, f64)], problems: &mut Vec<Problem>) {
         if *v != 0.0 {
             problems.push(Problem {
                 name: format!("{gear}.{field}"),
-                value: v.to_string(),
+                value: m_to_mm(*v).to_string(),
                 reason: format!(
                     "{gear} is given by its gear data ({gear}.gear_data): its radii follow from it; \
                      give a tip or root diameter as {gear}.gear_data.tip_diameter_mm or root_diameter_mm"
@@ -209,7 +209,7 @@ fn conflicts(gear: &str, fields: &[(&str, f64)], problems: &mut Vec<Problem>) {
     }
 }
 
-fn check_data(gear: &str, gd: &GearData, module_mm: f64, problems: &mut Vec<Problem>) {
+fn check_data(gear: &str, gd: &GearData, module: f64, problems: &mut Vec<Problem>) {
     let mut fail = |field: &str, value: String, reason: &str| {
         problems.push(Problem { name: format!("{gear}.gear_data.{field}"), value, reason: reason.into() })
     };
@@ -239,22 +239,22 @@ fn check_data(gear: &str, gd: &GearData, module_mm: f64, problems: &mut Vec<Prob
             "must lie above 0 and below 1 (tool tip radius factor ρ_fP*; ISO 53: 0.38)",
         );
     }
-    let a = gd.tooth_thickness_allowance_mm;
-    let limit = if module_mm.is_finite() && module_mm > 0.0 { 0.5 * module_mm } else { f64::INFINITY };
+    let a = gd.tooth_thickness_allowance;
+    let limit = if module.is_finite() && module > 0.0 { 0.5 * module } else { f64::INFINITY };
     if !(a.is_finite() && a <= 0.0 && a > -limit) {
         fail(
             "tooth_thickness_allowance_mm",
-            a.to_string(),
+            m_to_mm(a).to_string(),
             &format!(
                 "must be zero or negative and above -0.5·m = {:.4} mm (an allowance thins the tooth)",
-                -limit
+                m_to_mm(-limit)
             ),
         );
     }
-    for (field, d) in [("tip_diameter_mm", gd.tip_diameter_mm), ("root_diameter_mm", gd.root_diameter_mm)] {
+    for (field, d) in [("tip_diameter_mm", gd.tip_diameter), ("root_diameter_mm", gd.root_diameter)] {
         if let Some(d) = d {
             if !(d.is_finite() && d > 0.0) {
-                fail(field, d.to_string(), "must be a finite number greater than zero");
+                fail(field, m_to_mm(d).to_string(), "must be a finite number greater than zero");
             }
         }
     }
@@ -262,30 +262,31 @@ fn check_data(gear: &str, gd: &GearData, module_mm: f64, problems: &mut Vec<Prob
 
 /// Each mesh whose two gears are given by gear data must run at the
 /// centre distance its profile shifts give (within
-/// [`CENTRE_DISTANCE_TOLERANCE_MM`]).
+/// [`CENTRE_DISTANCE_TOLERANCE`]).
 fn centre_distance(scene: &Scene, problems: &mut Vec<Problem>) {
     let (sun, planet, ring) = (&scene.sun, &scene.planet, &scene.ring);
-    let (m, deg) = (sun.module_mm, sun.pressure_angle_deg);
-    let same = [planet.module_mm, ring.module_mm].iter().all(|v| *v == m)
-        && [planet.pressure_angle_deg, ring.pressure_angle_deg].iter().all(|v| *v == deg);
-    if !(same && m.is_finite() && m > 0.0 && deg.is_finite() && deg > 0.0 && deg < 90.0) {
+    let (m, alpha) = (sun.module, sun.pressure_angle);
+    let same = [planet.module, ring.module].iter().all(|v| *v == m)
+        && [planet.pressure_angle, ring.pressure_angle].iter().all(|v| *v == alpha);
+    if !(same && m.is_finite() && m > 0.0 && alpha.is_finite() && alpha > 0.0 && alpha < FRAC_PI_2) {
         return; // The rules of the radii name unequal or invalid modules and angles.
     }
-    let alpha = deg.to_radians();
-    let a = scene.centre_distance_mm;
+    let a = scene.centre_distance;
+    let tolerance_mm = m_to_mm(CENTRE_DISTANCE_TOLERANCE);
     if let (Some(gs), Some(gp)) = (sun.gear_data, planet.gear_data) {
         let (xs, xp) = (gs.profile_shift, gp.profile_shift);
         let aw = operating_centre_distance(m, sun.teeth, xs, planet.teeth, xp, alpha, false);
-        if aw.is_finite() && (a - aw).abs() > CENTRE_DISTANCE_TOLERANCE_MM {
+        if aw.is_finite() && (a - aw).abs() > CENTRE_DISTANCE_TOLERANCE {
             problems.push(Problem {
                 name: "centre_distance_mm".into(),
-                value: a.to_string(),
+                value: m_to_mm(a).to_string(),
                 reason: format!(
                     "the profile shifts of sun and planet (x_sun + x_planet = {:.4}) give the operating centre \
-                     distance a_w = {aw:.4} mm (inv α_w = inv α + 2·tan α·(x_sun + x_planet)/(z_sun + z_planet)); \
-                     the centre distance must be it within {CENTRE_DISTANCE_TOLERANCE_MM} mm (backlash comes \
+                     distance a_w = {:.4} mm (inv α_w = inv α + 2·tan α·(x_sun + x_planet)/(z_sun + z_planet)); \
+                     the centre distance must be it within {tolerance_mm} mm (backlash comes \
                      from the tooth-thickness allowances)",
-                    xs + xp
+                    xs + xp,
+                    m_to_mm(aw)
                 ),
             });
         }
@@ -293,7 +294,7 @@ fn centre_distance(scene: &Scene, problems: &mut Vec<Problem>) {
     if let (Some(gp), Some(gr)) = (planet.gear_data, ring.gear_data) {
         let (xp, xr) = (gp.profile_shift, gr.profile_shift);
         let aw = operating_centre_distance(m, planet.teeth, xp, ring.teeth, xr, alpha, true);
-        if aw.is_finite() && (a - aw).abs() > CENTRE_DISTANCE_TOLERANCE_MM {
+        if aw.is_finite() && (a - aw).abs() > CENTRE_DISTANCE_TOLERANCE {
             // The ring's shift that makes the internal mesh run at `a`.
             let zd = f64::from(ring.teeth) - f64::from(planet.teeth);
             let cos_w = m * zd / 2.0 * alpha.cos() / a;
@@ -304,9 +305,11 @@ fn centre_distance(scene: &Scene, problems: &mut Vec<Problem>) {
                 name: "ring.gear_data.profile_shift".into(),
                 value: xr.to_string(),
                 reason: format!(
-                    "the ring–planet mesh runs at a_w = {aw:.4} mm with these profile shifts \
+                    "the ring–planet mesh runs at a_w = {:.4} mm with these profile shifts \
                      (inv α_w = inv α + 2·tan α·(x_ring − x_planet)/(z_ring − z_planet)), not at \
-                     centre_distance_mm = {a} mm (within {CENTRE_DISTANCE_TOLERANCE_MM} mm){fit}"
+                     centre_distance_mm = {} mm (within {tolerance_mm} mm){fit}",
+                    m_to_mm(aw),
+                    m_to_mm(a)
                 ),
             });
         }
@@ -330,13 +333,13 @@ pub fn name_by_gear_data(problem: Problem, scene: &Scene) -> Problem {
         return problem; // A radius field set beside the gear data: its own key.
     }
     let (key, value) = match field {
-        "tooth_thickness_mm" => ("tooth_thickness_allowance_mm", gd.tooth_thickness_allowance_mm),
-        "tip_radius_mm" | "minor_radius_mm" => match gd.tip_diameter_mm {
-            Some(d) => ("tip_diameter_mm", d),
+        "tooth_thickness_mm" => ("tooth_thickness_allowance_mm", m_to_mm(gd.tooth_thickness_allowance)),
+        "tip_radius_mm" | "minor_radius_mm" => match gd.tip_diameter {
+            Some(d) => ("tip_diameter_mm", m_to_mm(d)),
             None => ("addendum_factor", gd.addendum_factor),
         },
-        "root_radius_mm" => match gd.root_diameter_mm {
-            Some(d) => ("root_diameter_mm", d),
+        "root_radius_mm" => match gd.root_diameter {
+            Some(d) => ("root_diameter_mm", m_to_mm(d)),
             None => ("dedendum_factor", gd.dedendum_factor),
         },
         "hob_tip_radius_mm" | "fillet_radius_mm" => ("tool_tip_radius_factor", gd.tool_tip_radius_factor),

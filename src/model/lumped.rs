@@ -25,6 +25,7 @@ use serde::{Deserialize, Serialize};
 pub use crate::scene::Fidelity;
 
 use crate::model::gear::Member;
+use crate::scene::units::{rad_to_deg, DEG};
 
 /// The constants of a linear (mean-stiffness) lumped planetary model.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -355,8 +356,8 @@ impl crate::scene::lumped::LumpedScene {
         positive("lumped.sun_mesh_n_per_m", l.sun_mesh_n_per_m, false);
         positive("lumped.ring_mesh_n_per_m", l.ring_mesh_n_per_m, false);
         for (name, a) in [
-            ("lumped.sun_pressure_angle_deg", l.sun_pressure_angle_deg),
-            ("lumped.ring_pressure_angle_deg", l.ring_pressure_angle_deg),
+            ("lumped.sun_pressure_angle_deg", rad_to_deg(l.sun_pressure_angle)),
+            ("lumped.ring_pressure_angle_deg", rad_to_deg(l.ring_pressure_angle)),
         ] {
             if !(a.is_finite() && a > 0.0 && a < 45.0) {
                 problems.push(crate::scene::Problem {
@@ -367,9 +368,9 @@ impl crate::scene::lumped::LumpedScene {
             }
         }
         let n = l.planet.count;
-        let angles: Vec<f64> = match &l.planet.angles_deg {
+        let angles: Vec<f64> = match &l.planet.angles {
             None => (0..n).map(|i| 2.0 * std::f64::consts::PI * f64::from(i) / f64::from(n.max(1))).collect(),
-            Some(a) => a.iter().map(|d| d.to_radians()).collect(),
+            Some(a) => a.clone(),
         };
         if !(1..=32).contains(&n) {
             problems.push(crate::scene::Problem {
@@ -380,7 +381,7 @@ impl crate::scene::lumped::LumpedScene {
         } else if angles.len() != n as usize || angles.iter().any(|a| !a.is_finite()) {
             problems.push(crate::scene::Problem {
                 name: "lumped.planet.angles_deg".into(),
-                value: format!("{:?}", l.planet.angles_deg),
+                value: format!("{:?}", DEG.written(&l.planet.angles)),
                 reason: format!("must list exactly lumped.planet.count = {n} finite angles"),
             });
         }
@@ -406,8 +407,8 @@ impl crate::scene::lumped::LumpedScene {
             planet_bearings: Vec::new(),
             sun_mesh: l.sun_mesh_n_per_m,
             ring_mesh: l.ring_mesh_n_per_m,
-            sun_pressure_angle: l.sun_pressure_angle_deg.to_radians(),
-            ring_pressure_angle: l.ring_pressure_angle_deg.to_radians(),
+            sun_pressure_angle: l.sun_pressure_angle,
+            ring_pressure_angle: l.ring_pressure_angle,
             planet_angles: angles,
             held: l.held,
             fidelity: l.fidelity,

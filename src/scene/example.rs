@@ -1,5 +1,6 @@
 //! The 2004 scene: the automatic-transmission planetary set of docs/MODEL.md §1.
 
+use super::units::{deg_to_rad, mm_to_m};
 use super::Member;
 use super::{
     AnalysisSpec, ChamferSpec, ExternalGearSpec, GearData, MaterialSpec, OperationSpec, PlanetLayoutSpec,
@@ -23,7 +24,8 @@ impl Scene {
         s.name = "example-2004".into();
         // `planetwear calibrate --plan example-2004` (the plan:
         // src/scene/example-2004.calibration.toml; values to five digits).
-        let chamfer = ChamferSpec { edge_carries_load: false, ..ChamferSpec::new(0.22724, 45.0) };
+        let chamfer =
+            ChamferSpec { edge_carries_load: false, ..ChamferSpec::new(mm_to_m(0.22724), deg_to_rad(45.0)) };
         s.sun.tip_chamfer = Some(chamfer);
         s.planet.tip_chamfer = Some(chamfer);
         s.inertia.sun_inertia_kg_m2 = Some(1.2813e-4);
@@ -68,7 +70,8 @@ impl Scene {
         s.dynamics.contact = super::ContactModel::Deformable;
         // `planetwear calibrate --plan example-2004-deformable` (the plan:
         // src/scene/example-2004-deformable.calibration.toml; five digits).
-        let chamfer = ChamferSpec { edge_carries_load: false, ..ChamferSpec::new(0.21447, 45.0) };
+        let chamfer =
+            ChamferSpec { edge_carries_load: false, ..ChamferSpec::new(mm_to_m(0.21447), deg_to_rad(45.0)) };
         s.sun.tip_chamfer = Some(chamfer);
         s.planet.tip_chamfer = Some(chamfer);
         s.inertia.sun_inertia_kg_m2 = Some(1.4627e-4);
@@ -86,45 +89,45 @@ impl Scene {
             name: "example-2004-annulus".into(),
             sun: ExternalGearSpec {
                 teeth: 34,
-                module_mm: 1.5,
-                pressure_angle_deg: 21.3,
-                tooth_thickness_mm: 1.895,
-                tip_radius_mm: 26.37,
-                root_radius_mm: 23.00,
-                bore_radius_mm: 12.88,
-                hob_tip_radius_mm: 0.2,
-                face_width_mm: 30.0,
+                module: mm_to_m(1.5),
+                pressure_angle: deg_to_rad(21.3),
+                tooth_thickness: mm_to_m(1.895),
+                tip_radius: mm_to_m(26.37),
+                root_radius: mm_to_m(23.00),
+                bore_radius: mm_to_m(12.88),
+                hob_tip_radius: mm_to_m(0.2),
+                face_width: mm_to_m(30.0),
                 tip_chamfer: None,
                 gear_data: None,
             },
             planet: ExternalGearSpec {
                 teeth: 18,
-                module_mm: 1.5,
-                pressure_angle_deg: 21.3,
-                tooth_thickness_mm: 2.585,
-                tip_radius_mm: 15.25,
-                root_radius_mm: 11.875,
-                bore_radius_mm: 5.94,
-                hob_tip_radius_mm: 0.2,
-                face_width_mm: 30.0,
+                module: mm_to_m(1.5),
+                pressure_angle: deg_to_rad(21.3),
+                tooth_thickness: mm_to_m(2.585),
+                tip_radius: mm_to_m(15.25),
+                root_radius: mm_to_m(11.875),
+                bore_radius: mm_to_m(5.94),
+                hob_tip_radius: mm_to_m(0.2),
+                face_width: mm_to_m(30.0),
                 tip_chamfer: None,
                 gear_data: None,
             },
             ring: RingGearSpec {
                 teeth: 70,
-                module_mm: 1.5,
-                pressure_angle_deg: 21.3,
-                tooth_thickness_mm: 1.884,
-                minor_radius_mm: 51.725,
-                root_radius_mm: 55.00,
-                rim_radius_mm: 58.95,
-                fillet_radius_mm: 0.5,
-                face_width_mm: 30.0,
+                module: mm_to_m(1.5),
+                pressure_angle: deg_to_rad(21.3),
+                tooth_thickness: mm_to_m(1.884),
+                minor_radius: mm_to_m(51.725),
+                root_radius: mm_to_m(55.00),
+                rim_radius: mm_to_m(58.95),
+                fillet_radius: mm_to_m(0.5),
+                face_width: mm_to_m(30.0),
                 tip_chamfer: None,
                 gear_data: None,
             },
-            planets: PlanetLayoutSpec { count: 4, angles_deg: None },
-            centre_distance_mm: 39.0,
+            planets: PlanetLayoutSpec { count: 4, angles: None },
+            centre_distance: mm_to_m(39.0),
             material: MaterialSpec::default(),
             operation: OperationSpec { held: Member::Carrier, input: Member::Sun, input_torque_nm: 750.0 },
             analysis: AnalysisSpec::default(),
@@ -154,33 +157,34 @@ impl Scene {
                 addendum_factor: 0.875,
                 dedendum_factor: 1.375,
                 tool_tip_radius_factor,
-                tooth_thickness_allowance_mm,
-                tip_diameter_mm: None,
-                root_diameter_mm: None,
+                tooth_thickness_allowance: mm_to_m(tooth_thickness_allowance_mm),
+                tip_diameter: None,
+                root_diameter: None,
             };
         let hob = 0.2 / 1.5;
-        s.sun.gear_data = Some(GearData { tip_diameter_mm: Some(52.74), ..data(-x, -0.1200462457, hob) });
+        s.sun.gear_data =
+            Some(GearData { tip_diameter: Some(mm_to_m(52.74)), ..data(-x, -0.1200462457, hob) });
         s.planet.gear_data = Some(data(x, -0.1123427346, hob));
         s.ring.gear_data =
-            Some(GearData { tip_diameter_mm: Some(103.45), ..data(x, -0.1310462457, 0.5 / 1.5) });
+            Some(GearData { tip_diameter: Some(mm_to_m(103.45)), ..data(x, -0.1310462457, 0.5 / 1.5) });
         for (t, r, f, h) in [
             (
-                &mut s.sun.tooth_thickness_mm,
-                &mut s.sun.tip_radius_mm,
-                &mut s.sun.root_radius_mm,
-                &mut s.sun.hob_tip_radius_mm,
+                &mut s.sun.tooth_thickness,
+                &mut s.sun.tip_radius,
+                &mut s.sun.root_radius,
+                &mut s.sun.hob_tip_radius,
             ),
             (
-                &mut s.planet.tooth_thickness_mm,
-                &mut s.planet.tip_radius_mm,
-                &mut s.planet.root_radius_mm,
-                &mut s.planet.hob_tip_radius_mm,
+                &mut s.planet.tooth_thickness,
+                &mut s.planet.tip_radius,
+                &mut s.planet.root_radius,
+                &mut s.planet.hob_tip_radius,
             ),
             (
-                &mut s.ring.tooth_thickness_mm,
-                &mut s.ring.minor_radius_mm,
-                &mut s.ring.root_radius_mm,
-                &mut s.ring.fillet_radius_mm,
+                &mut s.ring.tooth_thickness,
+                &mut s.ring.minor_radius,
+                &mut s.ring.root_radius,
+                &mut s.ring.fillet_radius,
             ),
         ] {
             (*t, *r, *f, *h) = (0.0, 0.0, 0.0, 0.0);

@@ -15,7 +15,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{ChamferSpec, ExternalGearSpec, RingGearSpec};
+use super::{units, ChamferSpec, ExternalGearSpec, RingGearSpec};
 
 /// ISO 21771 gear data of one gear (sun, planet or ring), the part of a
 /// drawing's gear data that fixes its radii and tooth thickness.
@@ -38,19 +38,30 @@ pub struct GearData {
     /// ρ_fP*·m for sun and planet, the ring's root fillet radius for the ring.
     #[serde(default = "tool_tip_radius_factor_default")]
     pub tool_tip_radius_factor: f64,
-    /// Tooth-thickness allowance A_s \[mm\] on the circular tooth thickness at
-    /// the reference circle (zero or negative: it thins the tooth and
-    /// carries the backlash).
-    #[serde(default)]
-    pub tooth_thickness_allowance_mm: f64,
-    /// Tip diameter \[mm\] (the ring's minor diameter) as made, overriding
-    /// the one of the addendum factor and profile shift.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub tip_diameter_mm: Option<f64>,
-    /// Root diameter \[mm\] as made, overriding the one of the dedendum factor
-    /// and profile shift.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub root_diameter_mm: Option<f64>,
+    /// Tooth-thickness allowance A_s \[m\] (file: `tooth_thickness_allowance_mm`)
+    /// on the circular tooth thickness at the reference circle (zero or
+    /// negative: it thins the tooth and carries the backlash).
+    #[serde(rename = "tooth_thickness_allowance_mm", with = "units::mm", default)]
+    pub tooth_thickness_allowance: f64,
+    /// Tip diameter \[m\] (file: `tip_diameter_mm`; the ring's minor
+    /// diameter) as made, overriding the one of the addendum factor and
+    /// profile shift.
+    #[serde(
+        rename = "tip_diameter_mm",
+        with = "units::mm",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub tip_diameter: Option<f64>,
+    /// Root diameter \[m\] (file: `root_diameter_mm`) as made, overriding the
+    /// one of the dedendum factor and profile shift.
+    #[serde(
+        rename = "root_diameter_mm",
+        with = "units::mm",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub root_diameter: Option<f64>,
 }
 
 /// Basic rack profile A of ISO 53: h_aP* = 1.
@@ -81,9 +92,9 @@ impl GearData {
             addendum_factor: ADDENDUM_FACTOR,
             dedendum_factor: DEDENDUM_FACTOR,
             tool_tip_radius_factor: TOOL_TIP_RADIUS_FACTOR,
-            tooth_thickness_allowance_mm: 0.0,
-            tip_diameter_mm: None,
-            root_diameter_mm: None,
+            tooth_thickness_allowance: 0.0,
+            tip_diameter: None,
+            root_diameter: None,
         }
     }
 }
@@ -99,18 +110,32 @@ impl Default for GearData {
 #[serde(deny_unknown_fields)]
 pub(super) struct ExternalGearFile {
     teeth: u32,
-    module_mm: f64,
-    pressure_angle_deg: f64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    tooth_thickness_mm: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    tip_radius_mm: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    root_radius_mm: Option<f64>,
-    bore_radius_mm: f64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    hob_tip_radius_mm: Option<f64>,
-    face_width_mm: f64,
+    #[serde(rename = "module_mm", with = "units::mm")]
+    module: f64,
+    #[serde(rename = "pressure_angle_deg", with = "units::deg")]
+    pressure_angle: f64,
+    #[serde(
+        rename = "tooth_thickness_mm",
+        with = "units::mm",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    tooth_thickness: Option<f64>,
+    #[serde(rename = "tip_radius_mm", with = "units::mm", default, skip_serializing_if = "Option::is_none")]
+    tip_radius: Option<f64>,
+    #[serde(rename = "root_radius_mm", with = "units::mm", default, skip_serializing_if = "Option::is_none")]
+    root_radius: Option<f64>,
+    #[serde(rename = "bore_radius_mm", with = "units::mm")]
+    bore_radius: f64,
+    #[serde(
+        rename = "hob_tip_radius_mm",
+        with = "units::mm",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    hob_tip_radius: Option<f64>,
+    #[serde(rename = "face_width_mm", with = "units::mm")]
+    face_width: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     tip_chamfer: Option<ChamferSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -122,18 +147,37 @@ pub(super) struct ExternalGearFile {
 #[serde(deny_unknown_fields)]
 pub(super) struct RingGearFile {
     teeth: u32,
-    module_mm: f64,
-    pressure_angle_deg: f64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    tooth_thickness_mm: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    minor_radius_mm: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    root_radius_mm: Option<f64>,
-    rim_radius_mm: f64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    fillet_radius_mm: Option<f64>,
-    face_width_mm: f64,
+    #[serde(rename = "module_mm", with = "units::mm")]
+    module: f64,
+    #[serde(rename = "pressure_angle_deg", with = "units::deg")]
+    pressure_angle: f64,
+    #[serde(
+        rename = "tooth_thickness_mm",
+        with = "units::mm",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    tooth_thickness: Option<f64>,
+    #[serde(
+        rename = "minor_radius_mm",
+        with = "units::mm",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    minor_radius: Option<f64>,
+    #[serde(rename = "root_radius_mm", with = "units::mm", default, skip_serializing_if = "Option::is_none")]
+    root_radius: Option<f64>,
+    #[serde(rename = "rim_radius_mm", with = "units::mm")]
+    rim_radius: f64,
+    #[serde(
+        rename = "fillet_radius_mm",
+        with = "units::mm",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    fillet_radius: Option<f64>,
+    #[serde(rename = "face_width_mm", with = "units::mm")]
+    face_width: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     tip_chamfer: Option<ChamferSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -172,23 +216,23 @@ impl TryFrom<ExternalGearFile> for ExternalGearSpec {
     fn try_from(f: ExternalGearFile) -> Result<Self, String> {
         let v = one_form(
             &[
-                ("tooth_thickness_mm", f.tooth_thickness_mm),
-                ("tip_radius_mm", f.tip_radius_mm),
-                ("root_radius_mm", f.root_radius_mm),
-                ("hob_tip_radius_mm", f.hob_tip_radius_mm),
+                ("tooth_thickness_mm", f.tooth_thickness),
+                ("tip_radius_mm", f.tip_radius),
+                ("root_radius_mm", f.root_radius),
+                ("hob_tip_radius_mm", f.hob_tip_radius),
             ],
             f.gear_data.is_some(),
         )?;
         Ok(Self {
             teeth: f.teeth,
-            module_mm: f.module_mm,
-            pressure_angle_deg: f.pressure_angle_deg,
-            tooth_thickness_mm: v[0],
-            tip_radius_mm: v[1],
-            root_radius_mm: v[2],
-            bore_radius_mm: f.bore_radius_mm,
-            hob_tip_radius_mm: v[3],
-            face_width_mm: f.face_width_mm,
+            module: f.module,
+            pressure_angle: f.pressure_angle,
+            tooth_thickness: v[0],
+            tip_radius: v[1],
+            root_radius: v[2],
+            bore_radius: f.bore_radius,
+            hob_tip_radius: v[3],
+            face_width: f.face_width,
             tip_chamfer: f.tip_chamfer,
             gear_data: f.gear_data,
         })
@@ -200,14 +244,14 @@ impl From<ExternalGearSpec> for ExternalGearFile {
         let radius = |v: f64| g.gear_data.is_none().then_some(v);
         Self {
             teeth: g.teeth,
-            module_mm: g.module_mm,
-            pressure_angle_deg: g.pressure_angle_deg,
-            tooth_thickness_mm: radius(g.tooth_thickness_mm),
-            tip_radius_mm: radius(g.tip_radius_mm),
-            root_radius_mm: radius(g.root_radius_mm),
-            bore_radius_mm: g.bore_radius_mm,
-            hob_tip_radius_mm: radius(g.hob_tip_radius_mm),
-            face_width_mm: g.face_width_mm,
+            module: g.module,
+            pressure_angle: g.pressure_angle,
+            tooth_thickness: radius(g.tooth_thickness),
+            tip_radius: radius(g.tip_radius),
+            root_radius: radius(g.root_radius),
+            bore_radius: g.bore_radius,
+            hob_tip_radius: radius(g.hob_tip_radius),
+            face_width: g.face_width,
             tip_chamfer: g.tip_chamfer,
             gear_data: g.gear_data,
         }
@@ -220,23 +264,23 @@ impl TryFrom<RingGearFile> for RingGearSpec {
     fn try_from(f: RingGearFile) -> Result<Self, String> {
         let v = one_form(
             &[
-                ("tooth_thickness_mm", f.tooth_thickness_mm),
-                ("minor_radius_mm", f.minor_radius_mm),
-                ("root_radius_mm", f.root_radius_mm),
-                ("fillet_radius_mm", f.fillet_radius_mm),
+                ("tooth_thickness_mm", f.tooth_thickness),
+                ("minor_radius_mm", f.minor_radius),
+                ("root_radius_mm", f.root_radius),
+                ("fillet_radius_mm", f.fillet_radius),
             ],
             f.gear_data.is_some(),
         )?;
         Ok(Self {
             teeth: f.teeth,
-            module_mm: f.module_mm,
-            pressure_angle_deg: f.pressure_angle_deg,
-            tooth_thickness_mm: v[0],
-            minor_radius_mm: v[1],
-            root_radius_mm: v[2],
-            rim_radius_mm: f.rim_radius_mm,
-            fillet_radius_mm: v[3],
-            face_width_mm: f.face_width_mm,
+            module: f.module,
+            pressure_angle: f.pressure_angle,
+            tooth_thickness: v[0],
+            minor_radius: v[1],
+            root_radius: v[2],
+            rim_radius: f.rim_radius,
+            fillet_radius: v[3],
+            face_width: f.face_width,
             tip_chamfer: f.tip_chamfer,
             gear_data: f.gear_data,
         })
@@ -248,14 +292,14 @@ impl From<RingGearSpec> for RingGearFile {
         let radius = |v: f64| g.gear_data.is_none().then_some(v);
         Self {
             teeth: g.teeth,
-            module_mm: g.module_mm,
-            pressure_angle_deg: g.pressure_angle_deg,
-            tooth_thickness_mm: radius(g.tooth_thickness_mm),
-            minor_radius_mm: radius(g.minor_radius_mm),
-            root_radius_mm: radius(g.root_radius_mm),
-            rim_radius_mm: g.rim_radius_mm,
-            fillet_radius_mm: radius(g.fillet_radius_mm),
-            face_width_mm: g.face_width_mm,
+            module: g.module,
+            pressure_angle: g.pressure_angle,
+            tooth_thickness: radius(g.tooth_thickness),
+            minor_radius: radius(g.minor_radius),
+            root_radius: radius(g.root_radius),
+            rim_radius: g.rim_radius,
+            fillet_radius: radius(g.fillet_radius),
+            face_width: g.face_width,
             tip_chamfer: g.tip_chamfer,
             gear_data: g.gear_data,
         }

@@ -5,7 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::SceneError;
+use super::{units, SceneError};
 use super::{Fidelity, Member};
 
 /// One central member of a lumped scene.
@@ -33,11 +33,11 @@ pub struct PlanetSpec {
     pub rotational_mass_kg: f64,
     /// Planet bearing stiffness, radial and tangential [N/m].
     pub bearing_n_per_m: f64,
-    /// Number of planets (equally spaced unless `angles_deg` is given).
+    /// Number of planets (equally spaced unless `angles` is given).
     pub count: u32,
-    /// Planet angles \[deg\].
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub angles_deg: Option<Vec<f64>>,
+    /// Planet angles \[rad\] (file: `angles_deg`).
+    #[serde(rename = "angles_deg", with = "units::deg", default, skip_serializing_if = "Option::is_none")]
+    pub angles: Option<Vec<f64>>,
 }
 
 /// The model section of a lumped scene.
@@ -61,10 +61,12 @@ pub struct LumpedSpec {
     pub sun_mesh_n_per_m: f64,
     /// Ring–planet mesh stiffness [N/m].
     pub ring_mesh_n_per_m: f64,
-    /// Sun–planet pressure angle \[deg\].
-    pub sun_pressure_angle_deg: f64,
-    /// Ring–planet pressure angle \[deg\].
-    pub ring_pressure_angle_deg: f64,
+    /// Sun–planet pressure angle \[rad\] (file: `sun_pressure_angle_deg`).
+    #[serde(rename = "sun_pressure_angle_deg", with = "units::deg")]
+    pub sun_pressure_angle: f64,
+    /// Ring–planet pressure angle \[rad\] (file: `ring_pressure_angle_deg`).
+    #[serde(rename = "ring_pressure_angle_deg", with = "units::deg")]
+    pub ring_pressure_angle: f64,
 }
 
 /// A lumped scene file.
@@ -107,12 +109,12 @@ impl LumpedScene {
                     rotational_mass_kg: 0.61,
                     bearing_n_per_m: 1e8,
                     count: 4,
-                    angles_deg: None,
+                    angles: None,
                 },
                 sun_mesh_n_per_m: 5e8,
                 ring_mesh_n_per_m: 5e8,
-                sun_pressure_angle_deg: 24.6,
-                ring_pressure_angle_deg: 24.6,
+                sun_pressure_angle: units::deg_to_rad(24.6),
+                ring_pressure_angle: units::deg_to_rad(24.6),
             },
         }
     }

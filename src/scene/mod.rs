@@ -1,14 +1,18 @@
 //! Stage 1, scene: what a user writes to describe a planetary gear set.
 //!
-//! A [`Scene`] is the file as written (TOML, engineering units named in every
-//! key: `_mm`, `_deg`, `_gpa`, `_nm`, `_n_per_m`), with the built-in scenes
-//! and the words the file is written in (members, drives, integrators,
-//! fidelity). `Scene::validate` (in [`crate::model::build`]) checks every
-//! rule at once and returns either the model's `GearSet` (SI inside, proven
-//! valid; with its `RunSettings` through `Scene::validate_with_run`) or a
-//! [`SceneError`] listing one [`Problem`] per broken rule, each naming the
-//! parameter and what is allowed. [`units`] holds the one conversion
-//! between the rpm users write and the rad/s of the core.
+//! A [`Scene`] is the file as written, held in SI: the file (TOML) names
+//! an engineering unit in every key (`_mm`, `_deg`, `_gpa`, `_rpm`, `_nm`,
+//! `_n_per_m`), and a key in mm, degrees, GPa or rpm is held in m, rad, Pa
+//! or rad/s by the field of its name without the unit (`module_mm` by
+//! `module`), converted as the file is read and written by [`units`], so a
+//! number a user wrote is written back as written. With it come the
+//! built-in scenes and the words the file is written in (members, drives,
+//! integrators, fidelity). `Scene::validate` (in [`crate::model::build`])
+//! checks every rule at once and returns either the model's `GearSet`
+//! (proven valid; with its `RunSettings` through
+//! `Scene::validate_with_run`) or a [`SceneError`] listing one [`Problem`]
+//! per broken rule, each naming the parameter by its file key, with its
+//! value in the key's unit, and what is allowed.
 //!
 //! May import: [`crate::files`].
 
@@ -26,7 +30,8 @@ pub use validate::{default_chamfer, Problem, SceneError};
 
 pub use terms::{ContactModel, DampingModel, Drive, Fidelity, IntegratorKind, Member, Response};
 
-/// A planetary gear set as written in a scene file (engineering units).
+/// A planetary gear set as written in a scene file, held in SI (the file's
+/// engineering units converted by [`units`] as it is read and written).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
@@ -40,9 +45,11 @@ pub struct Scene {
     pub ring: RingGearSpec,
     /// Number and placement of the planets.
     pub planets: PlanetLayoutSpec,
-    /// Centre distance sun–planet = ring–planet \[mm\]. The operating pressure
-    /// angles of both meshes follow from it and the base radii.
-    pub centre_distance_mm: f64,
+    /// Centre distance sun–planet = ring–planet \[m\] (file: mm). The
+    /// operating pressure angles of both meshes follow from it and the base
+    /// radii.
+    #[serde(rename = "centre_distance_mm", with = "units::mm")]
+    pub centre_distance: f64,
     /// Material of all gears.
     #[serde(default)]
     pub material: MaterialSpec,
@@ -176,10 +183,10 @@ pub const STEADY_AGREEMENT: f64 = 0.05;
 pub const STEADY_REFINEMENTS: u32 = 3;
 
 fn is_default_steady_speed_step(x: &f64) -> bool {
-    *x == STEADY_SPEED_STEP_RPM
+    *x == units::rpm_to_rad_per_s(STEADY_SPEED_STEP_RPM)
 }
 fn is_default_steady_speed_floor(x: &f64) -> bool {
-    *x == STEADY_SPEED_FLOOR_RPM
+    *x == units::rpm_to_rad_per_s(STEADY_SPEED_FLOOR_RPM)
 }
 fn is_default_steady_agreement(x: &f64) -> bool {
     *x == STEADY_AGREEMENT
@@ -217,8 +224,9 @@ pub struct DynamicsSpec {
     pub rayleigh_stiffness_s: f64,
     /// How the input is driven.
     pub drive: Drive,
-    /// Input speed \[rpm\] of a single run (sweeps set their own).
-    pub input_speed_rpm: f64,
+    /// Input speed \[rad/s\] (file: rpm) of a single run (sweeps set their own).
+    #[serde(rename = "input_speed_rpm", with = "units::rpm")]
+    pub input_speed: f64,
     /// Torsional stiffness of the input shaft for the speed drive [N·m/rad].
     pub shaft_stiffness_nm_per_rad: f64,
     /// Integrator.
@@ -251,16 +259,26 @@ pub struct DynamicsSpec {
     /// docs/STEADY.md).
     #[serde(skip_serializing_if = "Response::is_time")]
     pub response: Response,
-    /// The steady response's cache: node spacing of input speed on its coarsest grid \[rpm\].
-    #[serde(skip_serializing_if = "is_default_steady_speed_step")]
-    pub steady_speed_step_rpm: f64,
+    /// The steady response's cache: node spacing of input speed on its coarsest grid
+    /// \[rad/s\] (file: rpm).
+    #[serde(
+        rename = "steady_speed_step_rpm",
+        with = "units::rpm",
+        skip_serializing_if = "is_default_steady_speed_step"
+    )]
+    pub steady_speed_step: f64,
     /// ... node spacing of input torque on its coarsest grid \[N·m\]; absent: a fifth of
     /// the scene's input torque.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub steady_torque_step_nm: Option<f64>,
-    /// ... the lowest input speed it solves; slower steps take the steady state there \[rpm\].
-    #[serde(skip_serializing_if = "is_default_steady_speed_floor")]
-    pub steady_speed_floor_rpm: f64,
+    /// ... the lowest input speed it solves; slower steps take the steady state there
+    /// \[rad/s\] (file: rpm).
+    #[serde(
+        rename = "steady_speed_floor_rpm",
+        with = "units::rpm",
+        skip_serializing_if = "is_default_steady_speed_floor"
+    )]
+    pub steady_speed_floor: f64,
     /// ... the largest interpolation error a cell may have, estimated at its centre, as a
     /// fraction of the static mesh load (and of the separation fraction) \[-\].
     #[serde(skip_serializing_if = "is_default_steady_agreement")]
@@ -290,7 +308,7 @@ impl Default for DynamicsSpec {
             rayleigh_mass_per_s: 0.0,
             rayleigh_stiffness_s: 0.0,
             drive: Drive::Torque,
-            input_speed_rpm: 3000.0,
+            input_speed: units::rpm_to_rad_per_s(3000.0),
             shaft_stiffness_nm_per_rad: 5.0e4,
             // The cheapest setting of the work-precision study with E_h ≤ 1e-3
             // at every operating point (docs/ACCURACY.md).
@@ -306,43 +324,45 @@ impl Default for DynamicsSpec {
             load_balance: false,
             speed_driven_member: None,
             response: Response::Time,
-            steady_speed_step_rpm: STEADY_SPEED_STEP_RPM,
+            steady_speed_step: units::rpm_to_rad_per_s(STEADY_SPEED_STEP_RPM),
             steady_torque_step_nm: None,
-            steady_speed_floor_rpm: STEADY_SPEED_FLOOR_RPM,
+            steady_speed_floor: units::rpm_to_rad_per_s(STEADY_SPEED_FLOOR_RPM),
             steady_agreement: STEADY_AGREEMENT,
             steady_refinements: STEADY_REFINEMENTS,
         }
     }
 }
 
-/// An external spur gear (sun or planet) as written in a scene file: by
-/// its radii, or by its gear data (`gear_data`, ISO 21771; then the four
-/// derived fields `tooth_thickness_mm`, `tip_radius_mm`, `root_radius_mm`
-/// and `hob_tip_radius_mm` are absent from the file, hold 0 here and are
-/// derived when the scene is validated).
+/// An external spur gear (sun or planet) as written in a scene file, in SI
+/// (each field's file key and unit in brackets): by its radii, or by its
+/// gear data (`gear_data`, ISO 21771; then the four derived fields
+/// `tooth_thickness`, `tip_radius`, `root_radius` and `hob_tip_radius` are
+/// absent from the file, hold 0 here and are derived when the scene is
+/// validated).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "gear_data::ExternalGearFile", into = "gear_data::ExternalGearFile")]
 pub struct ExternalGearSpec {
     /// Number of teeth.
     pub teeth: u32,
-    /// Module \[mm\].
-    pub module_mm: f64,
-    /// Pressure angle of the generating rack \[deg\]; with the standard centre
-    /// distance it is also the operating pressure angle.
-    pub pressure_angle_deg: f64,
-    /// Circular tooth thickness at the reference circle m·Z/2 \[mm\]; it carries
-    /// the backlash allowance.
-    pub tooth_thickness_mm: f64,
-    /// Tip radius \[mm\].
-    pub tip_radius_mm: f64,
-    /// Root radius \[mm\].
-    pub root_radius_mm: f64,
-    /// Bore (inner) radius of the gear body \[mm\].
-    pub bore_radius_mm: f64,
-    /// Tip radius of the hob that generated the root fillet \[mm\].
-    pub hob_tip_radius_mm: f64,
-    /// Face width \[mm\].
-    pub face_width_mm: f64,
+    /// Module \[m\] (`module_mm`).
+    pub module: f64,
+    /// Pressure angle of the generating rack \[rad\] (`pressure_angle_deg`);
+    /// with the standard centre distance it is also the operating pressure
+    /// angle.
+    pub pressure_angle: f64,
+    /// Circular tooth thickness at the reference circle m·Z/2 \[m\]
+    /// (`tooth_thickness_mm`); it carries the backlash allowance.
+    pub tooth_thickness: f64,
+    /// Tip radius \[m\] (`tip_radius_mm`).
+    pub tip_radius: f64,
+    /// Root radius \[m\] (`root_radius_mm`).
+    pub root_radius: f64,
+    /// Bore (inner) radius of the gear body \[m\] (`bore_radius_mm`).
+    pub bore_radius: f64,
+    /// Tip radius of the hob that generated the root fillet \[m\] (`hob_tip_radius_mm`).
+    pub hob_tip_radius: f64,
+    /// Face width \[m\] (`face_width_mm`).
+    pub face_width: f64,
     /// Tip chamfer; `None` (omitted) means the default of docs/PARAMETERS.md.
     pub tip_chamfer: Option<ChamferSpec>,
     /// Gear data (ISO 21771) the radii are derived from; `None` for the
@@ -350,31 +370,33 @@ pub struct ExternalGearSpec {
     pub gear_data: Option<GearData>,
 }
 
-/// The internal ring gear as written in a scene file: by its radii, or by
-/// its gear data (`gear_data`; then `tooth_thickness_mm`,
-/// `minor_radius_mm`, `root_radius_mm` and `fillet_radius_mm` are absent
-/// from the file, hold 0 here and are derived when the scene is validated).
+/// The internal ring gear as written in a scene file, in SI (each field's
+/// file key and unit in brackets): by its radii, or by its gear data
+/// (`gear_data`; then `tooth_thickness`, `minor_radius`, `root_radius` and
+/// `fillet_radius` are absent from the file, hold 0 here and are derived
+/// when the scene is validated).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "gear_data::RingGearFile", into = "gear_data::RingGearFile")]
 pub struct RingGearSpec {
     /// Number of teeth.
     pub teeth: u32,
-    /// Module \[mm\].
-    pub module_mm: f64,
-    /// Pressure angle of the generating tool \[deg\].
-    pub pressure_angle_deg: f64,
-    /// Circular tooth thickness of a ring tooth at the reference circle \[mm\].
-    pub tooth_thickness_mm: f64,
-    /// Minor radius: the radius of the ring's tooth tips \[mm\].
-    pub minor_radius_mm: f64,
-    /// Root radius \[mm\].
-    pub root_radius_mm: f64,
-    /// Outside radius of the rim \[mm\].
-    pub rim_radius_mm: f64,
-    /// Radius of the root fillet \[mm\].
-    pub fillet_radius_mm: f64,
-    /// Face width \[mm\].
-    pub face_width_mm: f64,
+    /// Module \[m\] (`module_mm`).
+    pub module: f64,
+    /// Pressure angle of the generating tool \[rad\] (`pressure_angle_deg`).
+    pub pressure_angle: f64,
+    /// Circular tooth thickness of a ring tooth at the reference circle \[m\]
+    /// (`tooth_thickness_mm`).
+    pub tooth_thickness: f64,
+    /// Minor radius: the radius of the ring's tooth tips \[m\] (`minor_radius_mm`).
+    pub minor_radius: f64,
+    /// Root radius \[m\] (`root_radius_mm`).
+    pub root_radius: f64,
+    /// Outside radius of the rim \[m\] (`rim_radius_mm`).
+    pub rim_radius: f64,
+    /// Radius of the root fillet \[m\] (`fillet_radius_mm`).
+    pub fillet_radius: f64,
+    /// Face width \[m\] (`face_width_mm`).
+    pub face_width: f64,
     /// Tip chamfer of the ring teeth; omitted means none.
     pub tip_chamfer: Option<ChamferSpec>,
     /// Gear data (ISO 21771) the radii are derived from; `None` for the
@@ -382,16 +404,19 @@ pub struct RingGearSpec {
     pub gear_data: Option<GearData>,
 }
 
-/// A straight tip chamfer: it starts on the involute `height_mm` below the
-/// tip circle and meets the tip circle at `angle_deg` to the tip circle's
-/// tangent (the usual "h × 45°" edge break).
+/// A straight tip chamfer: it starts on the involute `height` below the
+/// tip circle and meets the tip circle at `angle` to the tip circle's
+/// tangent (the usual "h × 45°" edge break). SI; the file writes
+/// `height_mm`, `angle_deg` and `edge_radius_mm`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ChamferSpec {
-    /// Radial height of the chamfer \[mm\].
-    pub height_mm: f64,
-    /// Angle between the chamfer and the tip circle's tangent \[deg\].
-    pub angle_deg: f64,
+    /// Radial height of the chamfer \[m\].
+    #[serde(rename = "height_mm", with = "units::mm")]
+    pub height: f64,
+    /// Angle between the chamfer and the tip circle's tangent \[rad\].
+    #[serde(rename = "angle_deg", with = "units::deg")]
+    pub angle: f64,
     /// Whether the edge where the chamfer meets the involute may touch the
     /// mating flank (corner contact outside the involute path). `false`
     /// reads the chamfer as relieving the tip: contact ends at the involute
@@ -399,21 +424,26 @@ pub struct ChamferSpec {
     #[serde(default = "edge_carries_load_default", skip_serializing_if = "is_true")]
     pub edge_carries_load: bool,
     /// Radius to which the edge between involute and chamfer is rounded
-    /// \[mm\]; read only when the edge carries no load: it sets how the
+    /// \[m\]; read only when the edge carries no load: it sets how the
     /// relief begins (docs/PARAMETERS.md).
-    #[serde(default = "edge_radius_default", skip_serializing_if = "is_edge_radius_default")]
-    pub edge_radius_mm: f64,
+    #[serde(
+        rename = "edge_radius_mm",
+        with = "units::mm",
+        default = "edge_radius_default",
+        skip_serializing_if = "is_edge_radius_default"
+    )]
+    pub edge_radius: f64,
 }
 
 /// Default rounding radius of a chamfer's edge \[mm\]: a deburred edge.
 pub const EDGE_RADIUS_MM: f64 = 0.05;
 
 fn edge_radius_default() -> f64 {
-    EDGE_RADIUS_MM
+    units::mm_to_m(EDGE_RADIUS_MM)
 }
 
 fn is_edge_radius_default(v: &f64) -> bool {
-    *v == EDGE_RADIUS_MM
+    *v == edge_radius_default()
 }
 
 fn edge_carries_load_default() -> bool {
@@ -425,10 +455,10 @@ fn is_true(v: &bool) -> bool {
 }
 
 impl ChamferSpec {
-    /// A chamfer of radial height `height_mm` \[mm\] at `angle_deg` \[deg\] to
-    /// the tip circle's tangent whose edge may carry load.
-    pub fn new(height_mm: f64, angle_deg: f64) -> Self {
-        Self { height_mm, angle_deg, edge_carries_load: true, edge_radius_mm: EDGE_RADIUS_MM }
+    /// A chamfer of radial height `height` \[m\] at `angle` \[rad\] to the
+    /// tip circle's tangent whose edge may carry load.
+    pub fn new(height: f64, angle: f64) -> Self {
+        Self { height, angle, edge_carries_load: true, edge_radius: edge_radius_default() }
     }
 }
 
@@ -438,18 +468,19 @@ impl ChamferSpec {
 pub struct PlanetLayoutSpec {
     /// Number of planets.
     pub count: u32,
-    /// Angular positions of the planet centres \[deg\], counter-clockwise from
-    /// the first; omitted means equally spaced.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub angles_deg: Option<Vec<f64>>,
+    /// Angular positions of the planet centres \[rad\] (file: `angles_deg`),
+    /// counter-clockwise from the first; omitted means equally spaced.
+    #[serde(rename = "angles_deg", with = "units::deg", default, skip_serializing_if = "Option::is_none")]
+    pub angles: Option<Vec<f64>>,
 }
 
 /// Material constants of all gears.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
-    /// Young's modulus \[GPa\].
-    pub youngs_modulus_gpa: f64,
+    /// Young's modulus \[Pa\] (file: GPa).
+    #[serde(rename = "youngs_modulus_gpa", with = "units::gpa")]
+    pub youngs_modulus: f64,
     /// Poisson's ratio [-].
     pub poisson_ratio: f64,
     /// Density [kg/m³].
@@ -459,7 +490,7 @@ pub struct MaterialSpec {
 impl Default for MaterialSpec {
     /// Steel (docs/MODEL.md §1).
     fn default() -> Self {
-        Self { youngs_modulus_gpa: 207.0, poisson_ratio: 0.3, density_kg_per_m3: 7850.0 }
+        Self { youngs_modulus: units::gpa_to_pa(207.0), poisson_ratio: 0.3, density_kg_per_m3: 7850.0 }
     }
 }
 

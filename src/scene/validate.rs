@@ -5,7 +5,7 @@
 
 use std::fmt;
 
-use super::ChamferSpec;
+use super::{units, ChamferSpec};
 
 /// One broken rule of a scene.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,9 +51,11 @@ impl SceneError {
     }
 }
 
-/// Default tip chamfer of sun and planet (docs/PARAMETERS.md): 0.1·m radial
-/// height at 45° to the tip circle, a common edge break for hobbed and
-/// shaved automotive gears.
-pub fn default_chamfer(module_mm: f64) -> ChamferSpec {
-    ChamferSpec::new(0.1 * module_mm, 45.0)
+/// Default tip chamfer of sun and planet of module `module` \[m\]
+/// (docs/PARAMETERS.md): 0.1·m radial height at 45° to the tip circle, a
+/// common edge break for hobbed and shaved automotive gears. The height is
+/// the tenth of the module as the file writes it (in mm), so that a scene
+/// with its defaults written out shows it as written.
+pub fn default_chamfer(module: f64) -> ChamferSpec {
+    ChamferSpec::new(units::mm_to_m(0.1 * units::m_to_mm(module)), units::deg_to_rad(45.0))
 }

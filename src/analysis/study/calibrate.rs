@@ -254,7 +254,7 @@ impl<'a> Evaluator<'a> {
     fn contact_key(scene: &Scene) -> String {
         serde_json::json!({
             "sun": scene.sun, "planet": scene.planet, "ring": scene.ring, "planets": scene.planets,
-            "centre_distance_mm": scene.centre_distance_mm, "material": scene.material,
+            "centre_distance_mm": crate::scene::units::m_to_mm(scene.centre_distance), "material": scene.material,
             "analysis": scene.analysis, "mesh_stiffness": scene.mesh_stiffness,
         })
         .to_string()

@@ -22,7 +22,7 @@ use crate::geometry::profile::ProfileEnds;
 use crate::model::gear::{Drive, GearSet, MeshKind};
 use crate::model::lumped::Fidelity;
 use crate::model::run::RunSettings;
-use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
+use crate::scene::units::{deg_to_rad, m_to_mm, mm_to_m, rad_per_s_to_rpm, rpm_to_rad_per_s};
 use crate::scene::{ChamferSpec, Scene};
 use crate::wear::archard::{PressureSource, WearSettings, WearingFlanks};
 use crate::wear::flank::Flank;
@@ -45,11 +45,14 @@ pub struct Variant {
 
 fn unchanged(_: &mut WearSettings) {}
 
+/// `base` with sun and planet chamfers `height_mm` high (in mm, as the
+/// variant's key names it).
 fn with_chamfer(base: &Scene, height_mm: f64) -> Scene {
     let mut s = base.clone();
+    let height = mm_to_m(height_mm);
     for g in [&mut s.sun, &mut s.planet] {
-        let c = g.tip_chamfer.unwrap_or(ChamferSpec::new(height_mm, 45.0));
-        g.tip_chamfer = Some(ChamferSpec { height_mm, ..c });
+        let c = g.tip_chamfer.unwrap_or(ChamferSpec::new(height, deg_to_rad(45.0)));
+        g.tip_chamfer = Some(ChamferSpec { height, ..c });
     }
     s
 }
@@ -57,7 +60,7 @@ fn with_chamfer(base: &Scene, height_mm: f64) -> Scene {
 fn with_edge(base: &Scene, carries: bool) -> Scene {
     let mut s = base.clone();
     for g in [&mut s.sun, &mut s.planet] {
-        let c = g.tip_chamfer.unwrap_or_else(|| crate::scene::default_chamfer(g.module_mm));
+        let c = g.tip_chamfer.unwrap_or_else(|| crate::scene::default_chamfer(g.module));
         g.tip_chamfer = Some(ChamferSpec { edge_carries_load: carries, ..c });
     }
     s
@@ -65,7 +68,9 @@ fn with_edge(base: &Scene, carries: bool) -> Scene {
 
 /// The variants of the experiment on `base`, one factor at a time.
 pub fn variants(base: &Scene) -> Vec<Variant> {
-    let chamfer = |s: &Scene| s.sun.tip_chamfer.map_or(0.1 * s.sun.module_mm, |c| c.height_mm);
+    let chamfer = |s: &Scene| {
+        m_to_mm(s.sun.tip_chamfer.unwrap_or_else(|| crate::scene::default_chamfer(s.sun.module)).height)
+    };
     let edge_loaded = base.sun.tip_chamfer.is_none_or(|c| c.edge_carries_load);
     let h = chamfer(base);
     let mut v = vec![Variant {

@@ -442,7 +442,7 @@ impl Instance {
             // The process's cache of this scene (its operating point aside) and worn state.
             let mut keyed = scene.clone();
             keyed.operation.input_torque_nm = 0.0;
-            keyed.dynamics.input_speed_rpm = 0.0;
+            keyed.dynamics.input_speed = 0.0;
             let key = crate::files::hash::fnv1a64(
                 format!(
                     "{}|{}",

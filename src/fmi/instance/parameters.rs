@@ -1,12 +1,13 @@
 //! From the FMU's settable variables to a scene, and back from a scene's
 //! problems to the variables the importer set.
 //!
-//! The FMU's parameters are SI (m, rad, Pa); the scene is the edge format
-//! the command line reads (mm, degrees, GPa) and `Scene::validate` is the
-//! one model constructor both front ends use. The variable table
+//! The FMU's parameters are SI (m, rad, Pa, rad/s), as the scene holds
+//! them (its files write mm, degrees, GPa and rpm), so a value goes into
+//! the scene as it is; `Scene::validate` is the one model constructor both
+//! front ends use. The variable table
 //! (`modelDescription/variables.toml`) says where each variable acts: a
 //! variable with a `scene.slot` is written and read back through generated
-//! field accessors ([`SceneField`], converted by its [`SceneUnit`]);
+//! field accessors ([`SceneField`]);
 //! the others are the generated [`Special`] enum, which [`apply_special`]
 //! and [`special_value`] match without a catch-all arm, so that such a
 //! variable does not compile until it is given its effect here. The scene
@@ -15,10 +16,9 @@
 
 use std::collections::BTreeMap;
 
-use crate::fmi::variables::{SceneField, SceneUnit, Settable, Special, Start, Target, Variable};
+use crate::fmi::variables::{SceneField, Settable, Special, Start, Target, Variable};
 use crate::model::gear::{Drive, IntegratorKind, Member};
 use crate::model::lumped::Fidelity;
-use crate::scene::units::rpm_to_rad_per_s;
 use crate::scene::Response;
 use crate::scene::{default_chamfer, ChamferSpec, GearData, PlanetLayoutSpec, Problem, Scene, SceneError};
 
@@ -37,10 +37,6 @@ impl Values<'_> {
 
     fn int(&self, v: Variable) -> i32 {
         self.integers.get(&v.value_reference()).copied().unwrap_or(0)
-    }
-
-    fn mm(&self, v: Variable) -> f64 {
-        SceneUnit::Mm.from_si(self.real(v))
     }
 
     fn count(&self, v: Variable) -> Result<u32, String> {
@@ -70,8 +66,8 @@ fn member(v: Variable, code: i32) -> Result<Member, String> {
 pub(super) fn apply(p: Settable, values: &Values, scene: &mut Scene) -> Result<(), String> {
     let v = p.variable();
     match p.target() {
-        Target::Field(SceneField::Real(unit, fields)) => {
-            let x = unit.from_si(values.real(v));
+        Target::Field(SceneField::Real(fields)) => {
+            let x = values.real(v);
             fields.iter().for_each(|f| *f(scene) = x);
         }
         Target::Field(SceneField::Count(fields)) => {
@@ -148,15 +144,15 @@ fn apply_special(p: Special, values: &Values, scene: &mut Scene) -> Result<(), S
         }
         // The order-tracking window of the outputs, read when the simulation is built.
         Special::HarmonicWindowCycles => {}
-        Special::Planets => scene.planets = PlanetLayoutSpec { count: values.count(v)?, angles_deg: None },
+        Special::Planets => scene.planets = PlanetLayoutSpec { count: values.count(v)?, angles: None },
         // Height and angle make one chamfer: either sets both from the
         // current values. The edge's reading (whether it carries load, its
         // rounding) stays the scene's.
         Special::TipChamferHeight | Special::TipChamferAngle => {
-            let h = values.mm(Variable::TipChamferHeight);
-            let a = SceneUnit::Deg.from_si(values.real(Variable::TipChamferAngle));
+            let (height, angle) =
+                (values.real(Variable::TipChamferHeight), values.real(Variable::TipChamferAngle));
             let set = |c: Option<ChamferSpec>| {
-                Some(ChamferSpec { height_mm: h, angle_deg: a, ..c.unwrap_or(ChamferSpec::new(h, a)) })
+                Some(ChamferSpec { height, angle, ..c.unwrap_or(ChamferSpec::new(height, angle)) })
             };
             scene.sun.tip_chamfer = set(scene.sun.tip_chamfer);
             scene.planet.tip_chamfer = set(scene.planet.tip_chamfer);
@@ -208,7 +204,7 @@ fn gear_data(values: &Values, scene: &mut Scene) -> Result<(), String> {
         }
     }
     let diameter = |v: Variable| {
-        let d = values.mm(v);
+        let d = values.real(v);
         (d != 0.0).then_some(d)
     };
     let data = |x: Variable, rho: Variable, allowance: Variable, tip: Variable| GearData {
@@ -216,9 +212,9 @@ fn gear_data(values: &Values, scene: &mut Scene) -> Result<(), String> {
         addendum_factor: values.real(Variable::AddendumFactor),
         dedendum_factor: values.real(Variable::DedendumFactor),
         tool_tip_radius_factor: values.real(rho),
-        tooth_thickness_allowance_mm: values.mm(allowance),
-        tip_diameter_mm: diameter(tip),
-        root_diameter_mm: None,
+        tooth_thickness_allowance: values.real(allowance),
+        tip_diameter: diameter(tip),
+        root_diameter: None,
     };
     scene.sun.gear_data = Some(data(
         Variable::SunProfileShift,
@@ -239,10 +235,10 @@ fn gear_data(values: &Values, scene: &mut Scene) -> Result<(), String> {
         Variable::RingTipDiameter,
     ));
     for g in [&mut scene.sun, &mut scene.planet] {
-        (g.tooth_thickness_mm, g.tip_radius_mm, g.root_radius_mm, g.hob_tip_radius_mm) = (0.0, 0.0, 0.0, 0.0);
+        (g.tooth_thickness, g.tip_radius, g.root_radius, g.hob_tip_radius) = (0.0, 0.0, 0.0, 0.0);
     }
     let r = &mut scene.ring;
-    (r.tooth_thickness_mm, r.minor_radius_mm, r.root_radius_mm, r.fillet_radius_mm) = (0.0, 0.0, 0.0, 0.0);
+    (r.tooth_thickness, r.minor_radius, r.root_radius, r.fillet_radius) = (0.0, 0.0, 0.0, 0.0);
     Ok(())
 }
 
@@ -252,7 +248,7 @@ fn gear_data(values: &Values, scene: &mut Scene) -> Result<(), String> {
 /// the scene's set. The torque inputs
 /// are the set's balanced torques (the input torque on the input member);
 /// initialSpeed and inputSpeedReference are the scene's input speed of a
-/// single run (`dynamics.input_speed_rpm`). Variables without a counterpart
+/// single run (`dynamics.input_speed`). Variables without a counterpart
 /// are left out: the files, wearStateAccept and harmonicWindowCycles (the
 /// CLI measures over `dynamics.measured_revolutions` instead).
 pub fn scene_values(scene: &Scene) -> Result<BTreeMap<Settable, Start>, SceneError> {
@@ -264,7 +260,7 @@ pub fn scene_values(scene: &Scene) -> Result<BTreeMap<Settable, Start>, SceneErr
     let mut out = BTreeMap::new();
     for p in Settable::ALL.iter().copied() {
         let value = match p.target() {
-            Target::Field(SceneField::Real(unit, f)) => Start::Real(unit.to_si(*f[0](&mut fields))),
+            Target::Field(SceneField::Real(f)) => Start::Real(*f[0](&mut fields)),
             Target::Field(SceneField::Count(f)) => count(*f[0](&mut fields)),
             Target::Field(SceneField::Derived(f)) => Start::Real(f(&mut fields).unwrap_or(0.0)),
             Target::Special(special) => match special_value(special, scene, torques, by_data) {
@@ -346,10 +342,9 @@ fn special_value(
         Member::Ring => Start::Integer(1),
         Member::Carrier => Start::Integer(2),
     };
-    let mm = |x: f64| Start::Real(SceneUnit::Mm.to_si(x));
-    let diameter = |x: Option<f64>| Start::Real(x.map_or(0.0, |d| SceneUnit::Mm.to_si(d)));
+    let diameter = |x: Option<f64>| Start::Real(x.unwrap_or(0.0));
     let d = &scene.dynamics;
-    let chamfer = scene.sun.tip_chamfer.unwrap_or_else(|| default_chamfer(scene.sun.module_mm));
+    let chamfer = scene.sun.tip_chamfer.unwrap_or_else(|| default_chamfer(scene.sun.module));
     Some(match p {
         Special::SceneFile
         | Special::WearStateFile
@@ -382,15 +377,15 @@ fn special_value(
                 Special::DedendumFactor => Start::Real(sun.dedendum_factor),
                 Special::ToolTipRadiusFactor => Start::Real(sun.tool_tip_radius_factor),
                 Special::RingToolTipRadiusFactor => Start::Real(ring.tool_tip_radius_factor),
-                Special::SunToothThicknessAllowance => mm(sun.tooth_thickness_allowance_mm),
-                Special::PlanetToothThicknessAllowance => mm(planet.tooth_thickness_allowance_mm),
-                Special::RingToothThicknessAllowance => mm(ring.tooth_thickness_allowance_mm),
-                Special::SunTipDiameter => diameter(sun.tip_diameter_mm),
-                Special::PlanetTipDiameter => diameter(planet.tip_diameter_mm),
-                _ => diameter(ring.tip_diameter_mm),
+                Special::SunToothThicknessAllowance => Start::Real(sun.tooth_thickness_allowance),
+                Special::PlanetToothThicknessAllowance => Start::Real(planet.tooth_thickness_allowance),
+                Special::RingToothThicknessAllowance => Start::Real(ring.tooth_thickness_allowance),
+                Special::SunTipDiameter => diameter(sun.tip_diameter),
+                Special::PlanetTipDiameter => diameter(planet.tip_diameter),
+                _ => diameter(ring.tip_diameter),
             }
         }
-        Special::InputSpeedReference => Start::Real(rpm_to_rad_per_s(d.input_speed_rpm)),
+        Special::InputSpeedReference => Start::Real(d.input_speed),
         Special::SunTorque => Start::Real(torques[0]),
         Special::RingTorque => Start::Real(torques[1]),
         Special::CarrierTorque => Start::Real(torques[2]),
@@ -415,8 +410,8 @@ fn special_value(
             IntegratorKind::Rk45 => 1,
         }),
         Special::Planets => count(scene.planets.count),
-        Special::TipChamferHeight => mm(chamfer.height_mm),
-        Special::TipChamferAngle => Start::Real(SceneUnit::Deg.to_si(chamfer.angle_deg)),
+        Special::TipChamferHeight => Start::Real(chamfer.height),
+        Special::TipChamferAngle => Start::Real(chamfer.angle),
         Special::SteadyTorqueStep => Start::Real(
             d.steady_torque_step_nm
                 .unwrap_or(crate::scene::STEADY_TORQUE_STEP * scene.operation.input_torque_nm.abs()),

@@ -5,6 +5,7 @@ use std::f64::consts::PI;
 
 use super::{Checker, PLANET_TIP_GAP_FACTOR};
 use crate::model::gear::GearSet;
+use crate::scene::units::DEG;
 use crate::scene::PlanetLayoutSpec;
 
 impl Checker {
@@ -16,21 +17,25 @@ impl Checker {
             self.fail("planets.count", count, "must be between 1 and 32");
             return Vec::new();
         }
-        let mut angles: Vec<f64> = match &planets.angles_deg {
+        let mut angles: Vec<f64> = match &planets.angles {
             None => (0..count).map(|i| 2.0 * PI * f64::from(i) / f64::from(count)).collect(),
             Some(list) => {
                 if list.len() != count as usize {
                     self.fail(
                         "planets.angles_deg",
-                        format!("{list:?}"),
+                        format!("{:?}", DEG.written(list)),
                         format!("must list exactly planets.count = {count} angles"),
                     );
                 }
-                list.iter().map(|d| d.to_radians()).collect()
+                list.clone()
             }
         };
         if angles.iter().any(|a| !a.is_finite()) {
-            self.fail("planets.angles_deg", format!("{:?}", planets.angles_deg), "must be finite numbers");
+            self.fail(
+                "planets.angles_deg",
+                format!("{:?}", DEG.written(&planets.angles)),
+                "must be finite numbers",
+            );
             angles.clear();
         }
         angles
@@ -41,7 +46,7 @@ impl Checker {
     pub(super) fn assembly(&mut self, set: &GearSet, planets: &PlanetLayoutSpec) {
         let zsum = f64::from(set.sun.teeth + set.ring.teeth);
         let n_planets = set.planet_angles.len();
-        let equally_spaced = planets.angles_deg.is_none() && n_planets > 0;
+        let equally_spaced = planets.angles.is_none() && n_planets > 0;
         if equally_spaced && (set.sun.teeth + set.ring.teeth) % n_planets as u32 != 0 {
             self.fail(
                 "planets.count",
@@ -85,7 +90,7 @@ impl Checker {
             let chord = 2.0 * set.centre_distance * (gap / 2.0).sin();
             let need = 2.0 * set.planet.tip_radius + PLANET_TIP_GAP_FACTOR * set.planet.module;
             if chord <= need {
-                let (key, value) = if planets.angles_deg.is_none() {
+                let (key, value) = if planets.angles.is_none() {
                     ("planets.count".to_string(), sorted.len().to_string())
                 } else {
                     (

@@ -6,25 +6,27 @@ use super::{tip_key, Checker};
 use crate::model::gear::{GearKind, GearSet, MeshKind, ToothForm};
 use crate::model::gear_data::trochoid_margin;
 use crate::model::mesh::PathOfContact;
+use crate::scene::units::m_to_mm;
 
 impl Checker {
-    /// The centre distance `a_mm` must exceed what either mesh needs: the sum
-    /// of sun and planet base radii, the ring's base radius less the planet's.
-    pub(super) fn centre_distance(&mut self, set: &GearSet, a_mm: f64) {
-        let ext = (set.sun.base_radius() + set.planet.base_radius()) * 1e3;
-        let int = (set.ring.base_radius() - set.planet.base_radius()) * 1e3;
-        if a_mm <= ext {
+    /// The centre distance must exceed what either mesh needs: the sum of
+    /// sun and planet base radii, the ring's base radius less the planet's.
+    pub(super) fn centre_distance(&mut self, set: &GearSet) {
+        let a = set.centre_distance;
+        let ext = set.sun.base_radius() + set.planet.base_radius();
+        let int = set.ring.base_radius() - set.planet.base_radius();
+        if a <= ext {
             self.fail(
                 "centre_distance_mm",
-                a_mm,
-                format!("must exceed the sum of sun and planet base radii, {ext:.4} mm"),
+                m_to_mm(a),
+                format!("must exceed the sum of sun and planet base radii, {:.4} mm", m_to_mm(ext)),
             );
         }
-        if a_mm <= int {
+        if a <= int {
             self.fail(
                 "centre_distance_mm",
-                a_mm,
-                format!("must exceed the ring base radius less the planet's, {int:.4} mm"),
+                m_to_mm(a),
+                format!("must exceed the ring base radius less the planet's, {:.4} mm", m_to_mm(int)),
             );
         }
     }

@@ -1,6 +1,7 @@
 //! The model built from a scene: every rule of the scene checked at once,
-//! every problem named by the user's key (`sun.tip_radius_mm`), and the
-//! values converted to SI. A [`GearSet`] exists only through
+//! every problem named by the user's key (`sun.tip_radius_mm`) and shown
+//! in the key's unit as the user wrote it; the scene holds SI, which the
+//! model takes as it is. A [`GearSet`] exists only through
 //! [`Scene::validate`] (or [`Scene::validate_with_run`]), so holding one means
 //! it passed every rule; a [`RunSettings`] only through the same validation
 //! or [`RunSettings::new`], which checks it by the same rules.
@@ -19,6 +20,7 @@ use std::fmt;
 use crate::model::gear::{Analysis, Bodies, Body, Damping, GearSet, Material, MeshKind, Supports};
 use crate::model::gear_data::name_by_gear_data;
 use crate::model::run::RunSettings;
+use crate::scene::units::m_to_mm;
 use crate::scene::{default_chamfer, DampingModel, InertiaSpec, Problem, Scene, SceneError};
 use gears::Gears;
 use settings::{check_analysis, check_inertia, check_mesh_stiffness, check_operation, check_supports};
@@ -45,7 +47,7 @@ impl Scene {
         let mut s = self.clone();
         for g in [&mut s.sun, &mut s.planet] {
             if g.tip_chamfer.is_none() {
-                g.tip_chamfer = Some(default_chamfer(g.module_mm));
+                g.tip_chamfer = Some(default_chamfer(g.module));
             }
         }
         let b = &set.bodies;
@@ -137,13 +139,13 @@ fn validate_radii(given: &Scene) -> Result<(GearSet, RunSettings), SceneError> {
     let run = settings::run_values(scene, &mut c);
     check_operation(&scene.dynamics, &scene.operation, &mut c);
     let angles = c.planet_angles(&scene.planets);
-    let centre_ok = c.positive("centre_distance_mm", scene.centre_distance_mm);
+    let centre_ok = c.positive("centre_distance_mm", m_to_mm(scene.centre_distance));
     if !(gears_ok && centre_ok) {
         return Err(SceneError::Invalid { problems: c.problems });
     }
 
     let set = gear_set(scene, gears, angles, material);
-    c.centre_distance(&set, scene.centre_distance_mm);
+    c.centre_distance(&set);
     if !c.problems.is_empty() {
         return Err(SceneError::Invalid { problems: c.problems });
     }
@@ -173,7 +175,7 @@ fn gear_set(scene: &Scene, gears: Gears, angles: Vec<f64>, material: Material) -
         planet: gears.planet,
         ring: gears.ring,
         planet_angles: angles,
-        centre_distance: scene.centre_distance_mm * 1e-3,
+        centre_distance: scene.centre_distance,
         material,
         held: op.held,
         input: op.input,

@@ -5,7 +5,7 @@
 use super::Checker;
 use crate::model::gear::{ContactModel, Drive, Material, Member};
 use crate::model::run::{RunSettings, RunValues, SteadyValues};
-use crate::scene::units::{rad_per_s_to_rpm, rpm_to_rad_per_s};
+use crate::scene::units::{pa_to_gpa, rad_per_s_to_rpm, rpm_to_rad_per_s};
 use crate::scene::{
     AnalysisSpec, DampingModel, DynamicsSpec, InertiaSpec, MaterialSpec, MeshStiffnessSpec, OperationSpec,
     Scene, SceneError, SupportSpec,
@@ -15,7 +15,7 @@ use crate::scene::{
 pub(super) fn material(m: &MaterialSpec, c: &mut Checker) -> Material {
     c.in_range(
         "material.youngs_modulus_gpa",
-        m.youngs_modulus_gpa,
+        pa_to_gpa(m.youngs_modulus),
         0.0,
         1.0e4,
         "an engineering metal or polymer",
@@ -23,7 +23,7 @@ pub(super) fn material(m: &MaterialSpec, c: &mut Checker) -> Material {
     c.in_range("material.poisson_ratio", m.poisson_ratio, 0.0, 0.5, "isotropic elastic material");
     c.positive("material.density_kg_per_m3", m.density_kg_per_m3);
     Material {
-        youngs_modulus: m.youngs_modulus_gpa * 1e9,
+        youngs_modulus: m.youngs_modulus,
         poisson_ratio: m.poisson_ratio,
         density: m.density_kg_per_m3,
     }
@@ -123,7 +123,7 @@ pub(super) fn run_values(scene: &Scene, c: &mut Checker) -> RunValues {
     check_contact(scene, c);
     c.positive("dynamics.shaft_stiffness_nm_per_rad", d.shaft_stiffness_nm_per_rad);
     let run = RunValues {
-        input_speed: rpm_to_rad_per_s(d.input_speed_rpm),
+        input_speed: d.input_speed,
         integrator: d.integrator,
         rho_infinity: d.rho_infinity,
         steps_per_mesh_cycle: d.steps_per_mesh_cycle as usize,
@@ -135,17 +135,17 @@ pub(super) fn run_values(scene: &Scene, c: &mut Checker) -> RunValues {
         samples_per_mesh_cycle: d.samples_per_mesh_cycle as usize,
         response: d.response,
         steady: SteadyValues {
-            speed_step: rpm_to_rad_per_s(d.steady_speed_step_rpm),
+            speed_step: d.steady_speed_step,
             torque_step: d
                 .steady_torque_step_nm
                 .unwrap_or(crate::scene::STEADY_TORQUE_STEP * scene.operation.input_torque_nm.abs()),
-            speed_floor: rpm_to_rad_per_s(d.steady_speed_floor_rpm),
+            speed_floor: d.steady_speed_floor,
             agreement: d.steady_agreement,
             refinements: d.steady_refinements,
             sample_phase: 0.0,
         },
     };
-    check_run_settings(&run, Some(d.input_speed_rpm), c);
+    check_run_settings(&run, c);
     if let (Some(x), false) = (d.steady_torque_step_nm, d.response == crate::scene::Response::Steady) {
         if !(x.is_finite() && (1e-3..=1e7).contains(&x)) {
             c.fail("dynamics.steady_torque_step_nm", x, "must lie between 1e-3 and 1e7 N·m");
@@ -174,14 +174,13 @@ pub(super) fn check_operation(d: &DynamicsSpec, op: &OperationSpec, c: &mut Chec
 const MAX_INPUT_SPEED_RPM: f64 = 1.0e6;
 
 /// The input-speed rule: a finite speed of at most [`MAX_INPUT_SPEED_RPM`] in
-/// magnitude, checked in rad/s. `given_rpm` is the value the user wrote, when
-/// there is one, shown as given in the problem; otherwise the speed is shown
-/// converted to rpm (the scene key's unit).
-fn check_input_speed(omega: f64, given_rpm: Option<f64>, c: &mut Checker) {
+/// magnitude, checked in rad/s, shown in rpm (the scene key's unit) as the
+/// user wrote it.
+fn check_input_speed(omega: f64, c: &mut Checker) {
     if !(omega.is_finite() && omega.abs() <= rpm_to_rad_per_s(MAX_INPUT_SPEED_RPM)) {
         c.fail(
             "dynamics.input_speed_rpm",
-            given_rpm.unwrap_or_else(|| rad_per_s_to_rpm(omega)),
+            rad_per_s_to_rpm(omega),
             "must be a finite speed below 1e6 rpm in magnitude",
         );
     }
@@ -190,8 +189,8 @@ fn check_input_speed(omega: f64, given_rpm: Option<f64>, c: &mut Checker) {
 /// Every rule of the run settings, each problem named by its scene key (the
 /// input speed shown in rpm, as the scene gives it). Shared by
 /// [`Scene::validate`] and [`RunSettings::new`].
-fn check_run_settings(d: &RunValues, given_rpm: Option<f64>, c: &mut Checker) {
-    check_input_speed(d.input_speed, given_rpm, c);
+fn check_run_settings(d: &RunValues, c: &mut Checker) {
+    check_input_speed(d.input_speed, c);
     if !(d.rho_infinity.is_finite() && (0.0..=1.0).contains(&d.rho_infinity)) {
         c.fail("dynamics.rho_infinity", d.rho_infinity, "must lie between 0 and 1 (spectral radius)");
     }
@@ -256,7 +255,7 @@ impl RunSettings {
     /// key (`dynamics.relative_tolerance`, …).
     pub fn new(values: RunValues) -> Result<RunSettings, SceneError> {
         let mut c = Checker { problems: Vec::new() };
-        check_run_settings(&values, None, &mut c);
+        check_run_settings(&values, &mut c);
         if c.problems.is_empty() {
             Ok(RunSettings { values })
         } else {
