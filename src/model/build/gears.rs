@@ -93,13 +93,7 @@ impl Checker {
             );
             sizes_ok = false;
         }
-        let angle_ok = self.in_range(
-            &n("pressure_angle_deg"),
-            rad_to_deg(g.pressure_angle),
-            10.0,
-            35.0,
-            "spur gear practice",
-        );
+        let angle_ok = self.pressure_angle(key, g.pressure_angle);
         let reference = g.module * f64::from(g.teeth) / 2.0;
         let chamfer_spec = g.tip_chamfer.unwrap_or_else(|| default_chamfer(g.module));
         let chamfer = self.chamfer(key, &chamfer_spec, g.tip_radius - reference);
@@ -256,13 +250,7 @@ impl Checker {
         ok &= self.positive(&n("rim_radius_mm"), m_to_mm(g.rim_radius));
         ok &= self.positive(&n("fillet_radius_mm"), m_to_mm(g.fillet_radius));
         ok &= self.positive(&n("face_width_mm"), m_to_mm(g.face_width));
-        ok &= self.in_range(
-            &n("pressure_angle_deg"),
-            rad_to_deg(g.pressure_angle),
-            10.0,
-            35.0,
-            "spur gear practice",
-        );
+        ok &= self.pressure_angle("ring", g.pressure_angle);
         let reference = g.module * f64::from(g.teeth) / 2.0;
         let chamfer = g.tip_chamfer.map(|c| self.chamfer("ring", &c, reference - g.minor_radius));
         let form = ToothForm {

@@ -20,7 +20,7 @@ use std::fmt;
 use crate::model::gear::{Analysis, Bodies, Body, Damping, GearSet, Material, MeshKind, Supports};
 use crate::model::gear_data::name_by_gear_data;
 use crate::model::run::RunSettings;
-use crate::scene::units::m_to_mm;
+use crate::scene::units::{m_to_mm, rad_to_deg};
 use crate::scene::{default_chamfer, DampingModel, InertiaSpec, Problem, Scene, SceneError};
 use gears::Gears;
 use settings::{check_analysis, check_inertia, check_mesh_stiffness, check_operation, check_supports};
@@ -90,6 +90,18 @@ impl Checker {
         } else {
             true
         }
+    }
+
+    /// A gear's pressure angle `angle` \[rad\] under `key`, in degrees strictly between 10
+    /// and 35 (spur gear practice).
+    fn pressure_angle(&mut self, key: &str, angle: f64) -> bool {
+        self.in_range(
+            &format!("{key}.pressure_angle_deg"),
+            rad_to_deg(angle),
+            10.0,
+            35.0,
+            "spur gear practice",
+        )
     }
 }
 
