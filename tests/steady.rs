@@ -247,7 +247,9 @@ fn a_rattling_node_keeps_to_the_march_budget() {
     let unit = set.with_input_torque(1.0).unwrap();
     let torques = unit.balanced_torques().map(|t| t * torque);
     let omega = 550.0 * RPM;
-    let mut level = TorqueLevel::new(&model, torque, torques, omega, (60, 0.0)).unwrap();
+    let mut level =
+        TorqueLevel::new(&model, (torque, unit.mesh_load_per_planet() * torque), torques, omega, (60, 0.0))
+            .unwrap();
     let point = level.solve(omega, None).unwrap();
     // One period at 550 rpm takes about 6 000 steps on the worn flanks.
     let period_steps = 20_000;
@@ -280,10 +282,41 @@ fn a_march_that_stalls_from_its_neighbour_starts_from_the_static_state() {
     // The chain of nodes a cycle solved, each level set up at its speed.
     let mut near = None;
     for rpm in [4775.0, 4800.0, 4825.0] {
-        let mut level = TorqueLevel::new(&model, torque, torques, rpm * RPM, (60, 0.0)).unwrap();
+        let mut level = TorqueLevel::new(
+            &model,
+            (torque, unit.mesh_load_per_planet() * torque),
+            torques,
+            rpm * RPM,
+            (60, 0.0),
+        )
+        .unwrap();
         near = Some(level.solve(rpm * RPM, near.as_ref()).unwrap());
     }
     let point = near.unwrap();
     assert_eq!(point.found, Found::Marched);
     assert!(point.meshes.iter().all(|m| m.max.is_finite() && m.mean.is_finite()));
+}
+
+/// The steady state keeps only orbits that are motions of the gear set: over any bounded
+/// steady motion the mean mesh forces carry the torques. On the worn example at κ = 4,
+/// 5 275 rpm and 18.75 N·m, Newton on the balance from the static state converges to a
+/// root whose mean mesh forces are 8.7e18 times the static load; the node is then the
+/// march's. Law checked: every mesh's mean force within 10 times the static load (a
+/// rattling planet's was 0.2–2.2 times it).
+#[test]
+fn an_orbit_whose_mean_forces_do_not_carry_the_torque_is_not_kept() {
+    use planetwear::dynamics::steady::point::TorqueLevel;
+    let (set, _) = example(|_| {});
+    let worn = &planetwear::package::pack::example_wear_states().unwrap()[4];
+    let model = PlanetaryDynamics::new(&set, worn.set_model(&set)).unwrap();
+    let torque = 18.75;
+    let unit = set.with_input_torque(1.0).unwrap();
+    let load = unit.mesh_load_per_planet() * torque;
+    let torques = unit.balanced_torques().map(|t| t * torque);
+    let omega = 5275.0 * RPM;
+    let mut level = TorqueLevel::new(&model, (torque, load), torques, omega, (60, 0.0)).unwrap();
+    let point = level.solve(omega, None).unwrap();
+    for (k, m) in point.meshes.iter().enumerate() {
+        assert!(m.mean.abs() <= 10.0 * load, "mesh {k}: mean {} N against a static load of {load} N", m.mean);
+    }
 }

@@ -321,7 +321,7 @@ impl SteadyGrid {
             let torques = self.torques_per_nm.map(|t| t * torque);
             let level = TorqueLevel::new(
                 &self.base,
-                torque,
+                (torque, self.load_per_nm * torque),
                 torques,
                 speed,
                 (self.samples_per_cycle, self.settings.sample_phase),
