@@ -232,6 +232,36 @@ fn the_same_steps_give_the_same_outputs_bit_for_bit() {
     }
 }
 
+/// The example's model on its shipped worn state κ = `kappa`.
+fn worn_model(kappa: usize) -> (GearSet, PlanetaryDynamics) {
+    let (set, _) = example(|_| {});
+    let worn = &planetwear::package::pack::example_wear_states().unwrap()[kappa];
+    let model = PlanetaryDynamics::new(&set, worn.set_model(&set)).unwrap();
+    (set, model)
+}
+
+/// The steady states of input torque `torque` [N·m] of `model`, set up at `rpm`, and the
+/// static mesh load per planet at that torque \[N\].
+fn torque_level(
+    set: &GearSet,
+    model: &PlanetaryDynamics,
+    torque: f64,
+    rpm: f64,
+) -> (planetwear::dynamics::steady::point::TorqueLevel, f64) {
+    let unit = set.with_input_torque(1.0).unwrap();
+    let load = unit.mesh_load_per_planet() * torque;
+    let torques = unit.balanced_torques().map(|t| t * torque);
+    let level = planetwear::dynamics::steady::point::TorqueLevel::new(
+        model,
+        (torque, load),
+        torques,
+        rpm * RPM,
+        (60, 0.0),
+    )
+    .unwrap();
+    (level, load)
+}
+
 /// A node where the worn teeth rattle (the example at κ = 6, 550 rpm, 37.5 N·m: light load
 /// at low speed) costs at most the march budget: its marches, together, stop within
 /// `MARCH_STEPS` integrator steps and one period more, it is marked as not settled, and its
@@ -239,17 +269,10 @@ fn the_same_steps_give_the_same_outputs_bit_for_bit() {
 /// and then tried shooting from the unsettled state: 19 s.)
 #[test]
 fn a_rattling_node_keeps_to_the_march_budget() {
-    use planetwear::dynamics::steady::point::{TorqueLevel, MARCH_SETTLED, MARCH_STEPS};
-    let (set, _) = example(|_| {});
-    let worn = &planetwear::package::pack::example_wear_states().unwrap()[6];
-    let model = PlanetaryDynamics::new(&set, worn.set_model(&set)).unwrap();
-    let torque = 37.5;
-    let unit = set.with_input_torque(1.0).unwrap();
-    let torques = unit.balanced_torques().map(|t| t * torque);
+    use planetwear::dynamics::steady::point::{MARCH_SETTLED, MARCH_STEPS};
+    let (set, model) = worn_model(6);
+    let (mut level, _) = torque_level(&set, &model, 37.5, 550.0);
     let omega = 550.0 * RPM;
-    let mut level =
-        TorqueLevel::new(&model, (torque, unit.mesh_load_per_planet() * torque), torques, omega, (60, 0.0))
-            .unwrap();
     let point = level.solve(omega, None).unwrap();
     // One period at 550 rpm takes about 6 000 steps on the worn flanks.
     let period_steps = 20_000;
@@ -272,24 +295,12 @@ fn a_rattling_node_keeps_to_the_march_budget() {
 /// with "the march failed" before, as one did in the FMU's step on the drive cycle).
 #[test]
 fn a_march_that_stalls_from_its_neighbour_starts_from_the_static_state() {
-    use planetwear::dynamics::steady::point::{Found, TorqueLevel};
-    let (set, _) = example(|_| {});
-    let worn = &planetwear::package::pack::example_wear_states().unwrap()[4];
-    let model = PlanetaryDynamics::new(&set, worn.set_model(&set)).unwrap();
-    let torque = 18.75;
-    let unit = set.with_input_torque(1.0).unwrap();
-    let torques = unit.balanced_torques().map(|t| t * torque);
+    use planetwear::dynamics::steady::point::Found;
+    let (set, model) = worn_model(4);
     // The chain of nodes a cycle solved, each level set up at its speed.
     let mut near = None;
     for rpm in [4775.0, 4800.0, 4825.0] {
-        let mut level = TorqueLevel::new(
-            &model,
-            (torque, unit.mesh_load_per_planet() * torque),
-            torques,
-            rpm * RPM,
-            (60, 0.0),
-        )
-        .unwrap();
+        let (mut level, _) = torque_level(&set, &model, 18.75, rpm);
         near = Some(level.solve(rpm * RPM, near.as_ref()).unwrap());
     }
     let point = near.unwrap();
@@ -305,16 +316,9 @@ fn a_march_that_stalls_from_its_neighbour_starts_from_the_static_state() {
 /// rattling planet's was 0.2–2.2 times it).
 #[test]
 fn an_orbit_whose_mean_forces_do_not_carry_the_torque_is_not_kept() {
-    use planetwear::dynamics::steady::point::TorqueLevel;
-    let (set, _) = example(|_| {});
-    let worn = &planetwear::package::pack::example_wear_states().unwrap()[4];
-    let model = PlanetaryDynamics::new(&set, worn.set_model(&set)).unwrap();
-    let torque = 18.75;
-    let unit = set.with_input_torque(1.0).unwrap();
-    let load = unit.mesh_load_per_planet() * torque;
-    let torques = unit.balanced_torques().map(|t| t * torque);
+    let (set, model) = worn_model(4);
+    let (mut level, load) = torque_level(&set, &model, 18.75, 5275.0);
     let omega = 5275.0 * RPM;
-    let mut level = TorqueLevel::new(&model, (torque, load), torques, omega, (60, 0.0)).unwrap();
     let point = level.solve(omega, None).unwrap();
     for (k, m) in point.meshes.iter().enumerate() {
         assert!(m.mean.abs() <= 10.0 * load, "mesh {k}: mean {} N against a static load of {load} N", m.mean);
