@@ -336,36 +336,44 @@ struct Steps {
 impl Steps {
     /// Factorises I + C R for the convolution `convolution` on `linear`'s receptances.
     fn new(linear: &Linear, convolution: Vec<f64>, (mz, mf): (usize, usize), lu: DenseLu) -> Self {
-        let top = 2 * linear.harmonics + 1;
-        let (rows, size) = (mf * top, mz * top);
+        let h = linear.harmonics;
+        let (rows, size) = (mf * (2 * h + 1), mz * (2 * h + 1));
+        debug_assert_eq!(convolution.len(), rows * size);
         let mut lu = lu;
         let mut inner = vec![0.0; rows * rows];
-        for c in 0..rows {
-            // R's column c: force g's coefficient block cb, nonzero in harmonic k's rows only.
-            let (cb, g) = (c / mf, c % mf);
-            let k = cb.div_ceil(2);
-            // The unit coefficient's complex amplitude: a₀ = 1, a_k = 1 (1), b_k = 1 (−i).
-            let unit = if cb == 0 || cb % 2 == 1 { Complex::new(1.0, 0.0) } else { Complex::new(0.0, -1.0) };
-            let out = &mut inner[c * rows..(c + 1) * rows];
-            out[c] = 1.0;
-            let r = &linear.receptance[k];
-            for a in 0..mz {
-                let z = r[a * mf + g] * unit;
-                let entries: &[(usize, f64)] = if k == 0 {
-                    &[(a, z.re)]
-                } else {
-                    &[((2 * k - 1) * mz + a, z.re), (2 * k * mz + a, -z.im)]
-                };
-                for &(j, v) in entries {
-                    if v != 0.0 {
-                        for (o, x) in out.iter_mut().zip(&convolution[j * rows..(j + 1) * rows]) {
-                            *o += v * x;
-                        }
-                    }
-                }
-            }
+        for d in inner.iter_mut().step_by(rows + 1) {
+            *d = 1.0;
         }
-        debug_assert_eq!(convolution.len(), rows * size);
+        let c = faer::MatRef::from_column_major_slice(&convolution, rows, size);
+        let mut out = faer::MatMut::from_column_major_slice_mut(&mut inner, rows, rows);
+        // R is block-diagonal in the harmonics: harmonic k's force coefficients (its cosine
+        // and sine blocks of mf columns) reach its contact coordinates' cosine and sine
+        // blocks (mz rows each) only, so C R is one product per harmonic.
+        for k in 0..=h {
+            let r = &linear.receptance[k];
+            let at = |a: usize, g: usize| r[a * mf + g];
+            let (block, width) = if k == 0 { (0, 1) } else { (2 * k - 1, 2) };
+            // A force coefficient's unit amplitude: a₀ = 1, a_k = 1 (1), b_k = 1 (−i); the
+            // response's cosine and sine coefficients are (Re, −Im) of the amplitude.
+            let r_block = faer::Mat::<f64>::from_fn(width * mz, width * mf, |row, col| {
+                let (side, a) = (row / mz, row % mz);
+                let (unit, g) = (col / mf, col % mf);
+                let z = if unit == 0 { at(a, g) } else { at(a, g) * Complex::new(0.0, -1.0) };
+                if side == 0 {
+                    z.re
+                } else {
+                    -z.im
+                }
+            });
+            faer::linalg::matmul::matmul(
+                out.as_mut().subcols_mut(block * mf, width * mf),
+                faer::Accum::Add,
+                c.subcols(block * mz, width * mz),
+                r_block.as_ref(),
+                1.0,
+                faer::Par::Seq,
+            );
+        }
         lu.factorize(&inner, rows);
         Self { convolution, lu, forces: rows, receptance: linear.receptance.clone(), dims: (mz, mf) }
     }
