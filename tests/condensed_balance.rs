@@ -292,6 +292,7 @@ fn a_restart_that_breaks_the_symmetry_goes_on_with_every_mesh() {
         branch.follow_broken_symmetry(follow);
         let (mut work, mut flows) = (Work::default(), 0);
         let x = branch.restart(omega, &from, &mut work, &mut flows).expect("a restart state");
+        assert_eq!(branch.broken_restarts(), usize::from(follow));
         if follow {
             assert_eq!(cb.symmetry(), Symmetry::Full);
             let broken = cb.asymmetry(omega, &x).unwrap();

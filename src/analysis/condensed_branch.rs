@@ -40,6 +40,8 @@ pub struct CondensedBranch<'a> {
     /// Whether a restart whose march breaks the planets' symmetry goes on with every mesh
     /// ([`Self::follow_broken_symmetry`]).
     broken_symmetry: bool,
+    /// Restarts that went on with every mesh along a symmetry-broken branch.
+    broken_restarts: usize,
     /// The orbits of the points accepted, in the full balance's coordinates, in the order of
     /// the branch's points (for their forces: `HarmonicBalance::steady_state`).
     pub orbits: Vec<HarmonicOrbit>,
@@ -49,7 +51,14 @@ impl<'a> CondensedBranch<'a> {
     /// Continuation on `balance`.
     pub fn new(balance: &'a mut CondensedBalance) -> Self {
         let symmetry = balance.symmetry();
-        Self { symmetry, points: symmetry, broken_symmetry: false, balance, orbits: Vec::new() }
+        Self {
+            symmetry,
+            points: symmetry,
+            broken_symmetry: false,
+            broken_restarts: 0,
+            balance,
+            orbits: Vec::new(),
+        }
     }
 
     /// Whether a restart whose march reaches a state that breaks the planets' symmetry goes
@@ -58,6 +67,12 @@ impl<'a> CondensedBranch<'a> {
     /// branch, unstable there. Off by default (docs/PERIODIC.md §3).
     pub fn follow_broken_symmetry(&mut self, follow: bool) {
         self.broken_symmetry = follow;
+    }
+
+    /// How many restarts went on with every mesh along a symmetry-broken branch
+    /// ([`Self::follow_broken_symmetry`]).
+    pub fn broken_restarts(&self) -> usize {
+        self.broken_restarts
     }
 
     /// The branch point at `x` and `omega` with its multipliers, its orbit kept in
@@ -218,6 +233,7 @@ impl BranchSolver for CondensedBranch<'_> {
         let found = self.restarted(omega, from, &z, (work, flows));
         if found.is_some() {
             self.points = self.balance.symmetry();
+            self.broken_restarts += usize::from(self.points != self.symmetry);
         }
         found
     }

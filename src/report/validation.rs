@@ -244,7 +244,7 @@ pub fn markdown(
     let _ = writeln!(out, "\n## Figures\n");
     let _ = writeln!(
         out,
-        "![forced response]({figures}/forced_response.png)\n\nF^(rms) of planet 1's sun–planet mesh, up and down sweeps at κ = 0 and the worn κ; the vertical lines mark the study's peak speeds.\n"
+        "![forced response]({figures}/forced_response.png)\n\nF^(rms) of the sun–planet mesh (the most loaded planet's), up and down sweeps at κ = 0 and the worn κ; the vertical lines mark the study's peak speeds.\n"
     );
     let _ = writeln!(
         out,

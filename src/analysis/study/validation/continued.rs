@@ -1,7 +1,8 @@
 //! The validation's forced response from the continuation's branches: the
 //! periodic states of the harmonic balance condensed onto the contact
 //! coordinates (`CondensedBalance`, the planets' cyclic symmetry checked at
-//! every point), followed up and down in speed through their folds, with
+//! every point, and where a restart's march breaks it, the symmetry-broken
+//! branch followed with every mesh), followed up and down in speed through their folds, with
 //! their stability from the whole model's Floquet multipliers.
 //!
 //! A direction's curve is what its run passes on stable states: at each
@@ -27,7 +28,9 @@ use crate::dynamics::equations::PlanetaryDynamics;
 use crate::dynamics::periodic::{
     CondensedBalance, HarmonicBalance, HarmonicSettings, PeriodicProblem, ShootingSettings, Symmetry,
 };
-use crate::dynamics::response::{steady_state, sweep_from, Direction, State, SteadyState, Window};
+use crate::dynamics::response::{
+    steady_state, sweep_from, Direction, MeshResponse, State, SteadyState, Window,
+};
 use crate::model::gear::GearSet;
 use crate::model::gear::MeshKind;
 use crate::model::run::RunSettings;
@@ -55,19 +58,30 @@ pub(super) struct Continued {
     /// The speed \[rad/s\] where the run joined an earlier run's branch and
     /// ended (`None`: it ran to its last speed or stopped for another reason).
     pub joined: Option<f64>,
-    /// Whether the run kept the planets' cyclic symmetry to its end (else it
-    /// went on with every mesh from the first orbit that broke it).
+    /// Whether every point of the run kept the planets' cyclic symmetry: no restart went on
+    /// with every mesh along a symmetry-broken branch, and no solve gave the symmetry up.
     pub cyclic: bool,
 }
 
-/// F^(rms) and separation of planet 1's sun–planet and ring–planet mesh.
+/// The sun–planet and ring–planet meshes' F^(rms), each the largest of the planets', and
+/// separation, each the largest of the planets'. On an orbit that keeps the planets'
+/// symmetry every planet reads alike (planet 1's figures); on one that breaks it (one planet
+/// loaded apart from the others, near 11 500 rpm on the example) the reading does not depend
+/// on which planet the march that reached it happened to load.
 pub(super) fn measures(ss: &SteadyState) -> CurvePoint {
-    let m = |k: MeshKind| ss.meshes.iter().find(|m| m.planet == 0 && m.mesh == k);
-    let (a, b) = (m(MeshKind::SunPlanet), m(MeshKind::RingPlanet));
+    reading(ss.input_speed, &ss.meshes)
+}
+
+/// [`measures`] of the meshes `meshes` at the input speed `speed` [rad/s].
+fn reading(speed: f64, meshes: &[MeshResponse]) -> CurvePoint {
+    let largest = |k: MeshKind, of: fn(&MeshResponse) -> f64| {
+        meshes.iter().filter(|m| m.mesh == k).map(of).fold(0.0, f64::max)
+    };
+    let (sun, ring) = (MeshKind::SunPlanet, MeshKind::RingPlanet);
     CurvePoint {
-        speed: ss.input_speed,
-        rms: [a.map_or(0.0, |m| m.harmonics.rms), b.map_or(0.0, |m| m.harmonics.rms)],
-        separation: [a.map_or(0.0, |m| m.separation), b.map_or(0.0, |m| m.separation)],
+        speed,
+        rms: [largest(sun, |m| m.harmonics.rms), largest(ring, |m| m.harmonics.rms)],
+        separation: [largest(sun, |m| m.separation), largest(ring, |m| m.separation)],
     }
 }
 
@@ -88,12 +102,16 @@ pub(super) fn follow(
     let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
     let settings = ContinuationSettings::new(from, to, step);
     let mut solver = CondensedBranch::new(&mut cb);
+    // A restart whose march reaches a state that breaks the planets' symmetry goes on along
+    // that branch (where the symmetric one is unstable), as a marching sweep would ride it.
+    solver.follow_broken_symmetry(true);
     let branch = match joining {
         Some(other) => follow_joining(&mut solver, &settings, other, |_| {}),
         None => follow_branch(&mut solver, &settings, |_| {}),
     }?;
     let orbits = std::mem::take(&mut solver.orbits);
-    let cyclic = cb.symmetry() == Symmetry::Cyclic;
+    let broken = solver.broken_restarts();
+    let cyclic = broken == 0 && cb.symmetry() == Symmetry::Cyclic;
     let mut points = Vec::with_capacity(orbits.len());
     let mut ends = Vec::with_capacity(orbits.len());
     let mut nearest: Vec<Option<(f64, CurvePoint, State)>> = vec![None; spots.len()];
@@ -415,7 +433,7 @@ pub(super) fn sweep_run(
         if cyclic {
             "the planets' cyclic symmetry held on every run, checked at every point"
         } else {
-            "a run gave up the planets' cyclic symmetry and went on with every mesh"
+            "where a restart's march broke the planets' cyclic symmetry, on with every mesh along that branch to the next restart"
         },
         crate::dynamics::periodic::CONDENSED_MAX_HARMONICS,
         plan.describe(),
@@ -463,6 +481,48 @@ fn unstable_stretches(unstable: &[Option<usize>], direction: Direction) -> Vec<(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Planet `planet`'s two meshes with F^(rms) `rms` and separation `separation`.
+    fn planet_meshes(planet: usize, rms: f64, separation: f64) -> Vec<MeshResponse> {
+        [(MeshKind::SunPlanet, 1.0), (MeshKind::RingPlanet, 0.5)]
+            .into_iter()
+            .map(|(mesh, share)| MeshResponse {
+                planet,
+                mesh,
+                harmonics: crate::dynamics::spectrum::Harmonics {
+                    mean: 263.0,
+                    amplitude: vec![share * rms],
+                    rms: share * rms,
+                },
+                separation: share * separation,
+                max_force: 0.0,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_reading_is_planet_1_where_the_planets_are_alike_and_the_loaded_planet_where_one_breaks_ranks() {
+        let alike: Vec<MeshResponse> = (0..4).flat_map(|p| planet_meshes(p, 120.0, 0.0)).collect();
+        let r = reading(1000.0, &alike);
+        assert_eq!((r.rms, r.separation), ([120.0, 60.0], [0.0, 0.0]));
+        // One planet loaded apart from the others (the example near 11 500 rpm): the same
+        // reading whichever planet it is.
+        let broken = |loaded: usize| -> Vec<MeshResponse> {
+            (0..4)
+                .flat_map(|p| {
+                    if p == loaded {
+                        planet_meshes(p, 400.0, 0.3)
+                    } else {
+                        planet_meshes(p, 115.0, 0.0)
+                    }
+                })
+                .collect()
+        };
+        for loaded in 0..4 {
+            let r = reading(1000.0, &broken(loaded));
+            assert_eq!((r.rms, r.separation), ([400.0, 200.0], [0.3, 0.15]), "planet {loaded} loaded");
+        }
+    }
 
     fn point(speed: f64, rms: f64) -> CurvePoint {
         CurvePoint { speed, rms: [rms, 2.0 * rms], separation: [0.0, 0.0] }

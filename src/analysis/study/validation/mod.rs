@@ -90,8 +90,9 @@ pub struct ValidationPlan {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ForcedResponse {
-    /// The continuation's branches on the cyclic condensed harmonic balance,
-    /// up and down, stable and unstable, with their folds; each direction's
+    /// The continuation's branches on the cyclic condensed harmonic balance
+    /// (symmetry-broken branches with every mesh), up and down, stable and
+    /// unstable, with their folds; each direction's
     /// curve read on the branch its run rides; spot-checked by marching from
     /// branch points ([`SPOT_SPEEDS`]).
     Continuation,
@@ -304,9 +305,9 @@ pub struct CurvePoint {
     /// Input speed [rad/s] (written in rpm, as `speed_rpm`).
     #[serde(rename = "speed_rpm", with = "crate::scene::units::rpm")]
     pub speed: f64,
-    /// F^(rms) of planet 1's sun–planet and ring–planet mesh \[N\].
+    /// F^(rms) of the sun–planet and ring–planet mesh, each the most loaded planet's \[N\].
     pub rms: [f64; 2],
-    /// Separation fraction of both meshes [-].
+    /// Separation fraction of both meshes, each the largest of the planets' [-].
     pub separation: [f64; 2],
 }
 
