@@ -9,11 +9,12 @@
 
 use planetwear::contact::deformable::body::{BodyCompliance, BodyModel, BodySettings};
 use planetwear::contact::deformable::fe::{FeMesh, FeSystem, PlaneStrain, GAUSS3};
-use planetwear::contact::deformable::mesher::MeshDensity;
+use planetwear::contact::deformable::mesher::{BaseLine, GearMesh, MeshDensity};
 use planetwear::contact::deformable::BodyInfluence;
 use planetwear::contact::iso6336::{iso_stiffness, IsoPair};
 use planetwear::contact::stiffness::ToothComplianceCurve;
-use planetwear::model::gear::{GearKind, GearSet, MeshKind, ToothForm};
+use planetwear::geometry::profile::{FlankOutline, ProfileDeviation};
+use planetwear::model::gear::{GearKind, GearSet, Material, MeshKind, ToothForm};
 use planetwear::scene::Scene;
 
 fn example() -> GearSet {
@@ -187,45 +188,111 @@ fn the_cut_faces_effect_fades_with_more_buffer_teeth() {
     }
 }
 
-#[test]
-#[ignore = "fails: the FE foundation lies 22-30 % below Sainsot's formula (docs/DEFORMABLE.md)"]
-fn fillet_foundation_against_sainsot_velex_duverger() {
-    // Sainsot et al. (2004): the foundation deflection is that of the full
-    // body minus that of the tooth alone built in at its root. Both FE
-    // models read the load point's displacement along the load, so the
-    // local field under the load cancels; the formula (with the
-    // coefficients of crate::contact::stiffness) was fitted to within a few
-    // per cent of its authors' FE; a different discretisation and base line
-    // justify 15 %.
-    let set = example();
+/// Plane stress with the constants of `m` is plane strain with these.
+fn plane_stress(m: &Material) -> Material {
+    let nu = m.poisson_ratio;
+    Material {
+        youngs_modulus: m.youngs_modulus * (1.0 + 2.0 * nu) / (1.0 + nu).powi(2),
+        poisson_ratio: nu / (1.0 + nu),
+        ..*m
+    }
+}
+
+/// The FE foundation compliance at `rolls` [m/N]: the sector of teeth
+/// −`side`..=`side` minus tooth 0 alone held along `base`, both read at the
+/// load point along the load.
+fn foundation_fe(form: &ToothForm, m: &Material, base: BaseLine, side: i32, rolls: &[f64]) -> Vec<f64> {
     let d = MeshDensity::default();
+    let mesh = GearMesh::sector_on(form, &d, 2, side, base);
+    let full = BodyModel::from_mesh(form, m, mesh).unwrap();
+    let alone = BodyModel::from_mesh(form, m, GearMesh::tooth_alone_on(form, &d, 2, base)).unwrap();
+    let uf = full.system.solve(&rolls.iter().map(|x| full.unit_load(0, *x)).collect::<Vec<_>>());
+    let ua = alone.system.solve(&rolls.iter().map(|x| alone.unit_load(0, *x)).collect::<Vec<_>>());
+    let width = form.face_width;
+    rolls
+        .iter()
+        .enumerate()
+        .map(|(c, x)| {
+            (full.surface_displacement(&uf, c, 0, *x) - alone.surface_displacement(&ua, c, 0, *x)) / width
+        })
+        .collect()
+}
+
+#[test]
+fn fillet_foundation_against_sainsot_velex_duverger() {
+    // Sainsot et al. (2004): the foundation deflection is that of the whole
+    // body minus that of the tooth alone built in at the root circle, u_f
+    // measured along the centreline from the root circle, S_f = 2 r_f θ_f
+    // the root circle's arc under the tooth, h_f = r_f / r_bore, E Young's
+    // modulus. The FE in that setting: the tooth patches end on the root
+    // circle, plane stress (the formula carries E; in plane strain the FE
+    // reads 8-12 % lower), the widest sector the teeth allow ((Z − 1)/2
+    // teeth each side: the cut faces at ±3 teeth make it 13-27 % stiffer),
+    // the bore held (the whole body needs a support; the formula has the
+    // bore radius as its parameter). Both FE models read the load point's displacement along
+    // the load, so the local field under the load cancels. Tolerance 5 %:
+    // the formula is a six-term polynomial fit to its authors' model, the
+    // last buffer teeth added (3 → 8 → 16 sun, 3 → 6 → 8 planet) still
+    // changed the FE by up to 2.2 %, and a discretisation difference of the
+    // level-2 mesh is below 0.3 % (the convergence table); the plane-strain
+    // reading and the narrow sector each lie outside it.
+    let set = example();
+    let m = *set.material();
+    let stress = plane_stress(&m);
     let mut worst: f64 = 0.0;
     for (name, form) in [("sun", set.sun()), ("planet", set.planet())] {
-        let full = BodyModel::sector(form, set.material(), &d, 2, 3).unwrap();
-        let alone = BodyModel::tooth_alone(form, set.material(), &d, 2).unwrap();
-        let curve = ToothComplianceCurve::new(form, set.material());
+        let theta_f = FlankOutline::new(form, &ProfileDeviation::none()).root_half_angle;
+        let curve = ToothComplianceCurve::new(form, &m);
         let (x0, x1) = (curve.roll[0], curve.roll[curve.roll.len() - 1]);
         let rolls: Vec<f64> = (0..5).map(|k| x0 + (x1 - x0) * (0.1 + 0.2 * k as f64)).collect();
-        let cases_full: Vec<_> = rolls.iter().map(|x| full.unit_load(0, *x)).collect();
-        let cases_alone: Vec<_> = rolls.iter().map(|x| alone.unit_load(0, *x)).collect();
-        let (uf, ua) = (full.system.solve(&cases_full), alone.system.solve(&cases_alone));
+        let probe = BodyModel::tooth_alone(form, &m, &MeshDensity::default(), 1).unwrap();
+        let e = m.youngs_modulus;
+        let formula = |origin: f64| -> Vec<f64> {
+            rolls
+                .iter()
+                .map(|x| sainsot_at(form, *x, probe.inward_normal(0, *x), origin, e, theta_f))
+                .collect()
+        };
+        let (circle, chord) = (formula(form.root_radius), formula(form.root_radius * theta_f.cos()));
+        let side = (form.teeth as i32 - 1) / 2;
+        let paper = foundation_fe(form, &stress, BaseLine::RootCircle, side, &rolls);
+        let show = |what: &str, v: &[f64], reference: &[f64]| {
+            let rel: Vec<String> =
+                v.iter().zip(reference).map(|(a, b)| format!("{:+.1}", 100.0 * (a / b - 1.0))).collect();
+            eprintln!("foundation {name}, {what}: {} %", rel.join(", "));
+        };
+        eprintln!(
+            "foundation {name}: θ_f {theta_f:.5} rad, h_f {:.3}, S_f {:.4} mm, r_f(1 − cos θ_f) {:.4} mm, sector ±{side} teeth",
+            planetwear::contact::stiffness::foundation_ratio(form),
+            2e3 * form.root_radius * theta_f,
+            1e3 * form.root_radius * (1.0 - theta_f.cos())
+        );
         for (c, x) in rolls.iter().enumerate() {
-            let width = form.face_width;
-            let fe = (full.surface_displacement(&uf, c, 0, *x) - alone.surface_displacement(&ua, c, 0, *x))
-                / width;
-            let tooth = alone.surface_displacement(&ua, c, 0, *x) / width;
-            let formula = curve.at(*x);
-            let rel = fe / formula.foundation - 1.0;
+            let rel = paper[c] / circle[c] - 1.0;
             eprintln!(
-                "foundation {name} roll {x:.4}: FE {fe:.4e} m/N, Sainsot {:.4e} m/N ({:+.1} %); tooth alone FE {tooth:.4e}, energy method bending+shear+axial {:.4e} m/N",
-                formula.foundation,
-                100.0 * rel,
-                formula.bending + formula.shear + formula.axial
+                "foundation {name} roll {x:.4}: FE {:.4e} m/N, Sainsot {:.4e} m/N ({:+.1} %)",
+                paper[c],
+                circle[c],
+                100.0 * rel
             );
             worst = worst.max(rel.abs());
         }
+        // Each difference of the former comparison, one at a time.
+        show("formula with u_f from the root chord over from the root circle", &chord, &circle);
+        let strain = foundation_fe(form, &m, BaseLine::RootCircle, side, &rolls);
+        show("FE plane strain over plane stress", &strain, &paper);
+        let chord_fe = foundation_fe(form, &stress, BaseLine::RootChord, side, &rolls);
+        show("FE tooth held on the root chord's base line over the root circle", &chord_fe, &paper);
+        let narrow = foundation_fe(form, &stress, BaseLine::RootCircle, 3, &rolls);
+        show("FE sector ±3 teeth over the widest", &narrow, &paper);
+        let old = foundation_fe(form, &m, BaseLine::RootChord, 3, &rolls);
+        show(
+            "former comparison (chord, plane strain, ±3 teeth; u_f from the chord) against its formula",
+            &old,
+            &chord,
+        );
     }
-    assert!(worst < 0.15, "{worst}");
+    assert!(worst < 0.05, "{worst}");
 }
 
 /// Johnson's line-contact approach of the surfaces to points at depths
@@ -357,8 +424,7 @@ fn the_mesh_is_conforming() {
     // outline of the sector (its length against the polar estimate).
     let set = example();
     for form in [set.sun(), set.ring()] {
-        let g =
-            planetwear::contact::deformable::mesher::GearMesh::sector(form, &MeshDensity::default(), 1, 1);
+        let g = GearMesh::sector(form, &MeshDensity::default(), 1, 1);
         let m = &g.mesh;
         let mut near = 0;
         for i in 0..m.nodes.len() {
@@ -377,4 +443,21 @@ fn the_mesh_is_conforming() {
         );
         assert_eq!(near, 0);
     }
+}
+
+/// Sainsot, Velex & Duverger (2004), eq. for the fillet-foundation
+/// deflection per unit force, at roll `x` of `form`'s upper flank, the load
+/// along the inward normal `n` (tooth frame), u_f measured from the radius
+/// `origin` on the centreline, modulus `e` [m/N].
+fn sainsot_at(form: &ToothForm, x: f64, n: [f64; 2], origin: f64, e: f64, theta_f: f64) -> f64 {
+    use planetwear::contact::stiffness::{foundation_ratio, sainsot_coefficients};
+    let r = planetwear::model::involute::radius_at_roll(x, form.base_radius());
+    let phi = form.involute_half_angle(r);
+    let (px, py) = (r * phi.cos(), r * phi.sin());
+    let x_cross = px - py * n[0] / n[1];
+    let dir = if form.kind == GearKind::External { 1.0 } else { -1.0 };
+    let u = dir * (x_cross - origin) / (2.0 * form.root_radius * theta_f);
+    let c = sainsot_coefficients(theta_f, foundation_ratio(form));
+    let tan2 = (n[0] / n[1]).powi(2);
+    n[1] * n[1] / (e * form.face_width) * (c[0] * u * u + c[1] * u + c[2] * (1.0 + c[3] * tan2))
 }
