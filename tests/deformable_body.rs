@@ -13,7 +13,7 @@ use planetwear::contact::deformable::mesher::{BaseLine, GearMesh, MeshDensity};
 use planetwear::contact::deformable::BodyInfluence;
 use planetwear::contact::iso6336::{iso_stiffness, IsoPair};
 use planetwear::contact::stiffness::ToothComplianceCurve;
-use planetwear::geometry::profile::{FlankOutline, ProfileDeviation};
+use planetwear::geometry::profile::{FlankOutline, ProfileDeviation, Region};
 use planetwear::model::gear::{GearKind, GearSet, Material, MeshKind, ToothForm};
 use planetwear::scene::Scene;
 
@@ -112,21 +112,23 @@ fn work_of_the_loads_equals_the_strain_energy() {
     }
 }
 
-/// Self coefficients of the centre tooth at the pitch point and at the
-/// grid point nearest the tip, at refinement `level`.
-fn self_coefficients(form: &ToothForm, set: &GearSet, pitch: f64, level: usize) -> (f64, f64, usize) {
-    let s = BodySettings { level, ..BodySettings::default() };
-    let b = BodyCompliance::new(form, set.material(), &s).unwrap();
-    let r = b.rolls();
-    let tip = if form.kind == GearKind::External { r[r.len() - 2] } else { r[1] };
-    (b.coefficient(0, pitch, 0, pitch), b.coefficient(0, tip, 0, tip), b.degrees_of_freedom())
+/// The body at refinement `level`, default settings otherwise.
+fn at_level(form: &ToothForm, set: &GearSet, level: usize) -> BodyCompliance {
+    BodyCompliance::new(form, set.material(), &BodySettings { level, ..BodySettings::default() }).unwrap()
+}
+
+/// The observed order of three readings at levels 1, 2, 4 [-].
+fn observed_order(c: &[f64]) -> f64 {
+    ((c[1] - c[0]) / (c[2] - c[1])).abs().log2()
 }
 
 #[test]
 fn coefficients_converge_with_mesh_refinement() {
     // Levels 1, 2, 4: the differences shrink at a steady rate, and the
     // default level's error estimated by Richardson extrapolation from the
-    // three is at most 1 %.
+    // three is at most 1 %. The observed order along the flank (five points,
+    // form circle to the involute's end) is printed: a corner of the outline
+    // (a singular point) would lower it at every point.
     let set = example();
     let default_level = BodySettings::default().level;
     for (name, form, mesh) in [
@@ -135,21 +137,37 @@ fn coefficients_converge_with_mesh_refinement() {
         ("ring", set.ring(), MeshKind::RingPlanet),
     ] {
         let pitch = pitch_roll(&set, mesh);
-        let runs: Vec<_> = [1, 2, 4].iter().map(|l| self_coefficients(form, &set, pitch, *l)).collect();
-        for (what, pick) in [("pitch", 0), ("tip", 1)] {
-            let c: Vec<f64> = runs.iter().map(|r| if pick == 0 { r.0 } else { r.1 }).collect();
-            let order = ((c[1] - c[0]) / (c[2] - c[1])).abs().log2();
+        let runs: Vec<BodyCompliance> = [1, 2, 4].iter().map(|l| at_level(form, &set, *l)).collect();
+        let r = runs[0].rolls();
+        let tip = if form.kind == GearKind::External { r[r.len() - 2] } else { r[1] };
+        for (what, x) in [("pitch", pitch), ("tip", tip)] {
+            let c: Vec<f64> = runs.iter().map(|b| b.coefficient(0, x, 0, x)).collect();
+            let order = observed_order(&c);
             let limit = c[2] + (c[2] - c[1]) / (2f64.powf(order) - 1.0);
             let error = |v: f64| (v / limit - 1.0).abs();
+            let dofs: Vec<usize> = runs.iter().map(BodyCompliance::degrees_of_freedom).collect();
             eprintln!(
                 "convergence {name} {what}: L1 {:.5e} L2 {:.5e} L4 {:.5e} m/N (dofs {} {} {}), order {order:.2}, limit {limit:.5e}, errors {:.2} % {:.2} % {:.2} %",
-                c[0], c[1], c[2], runs[0].2, runs[1].2, runs[2].2,
+                c[0], c[1], c[2], dofs[0], dofs[1], dofs[2],
                 100.0 * error(c[0]), 100.0 * error(c[1]), 100.0 * error(c[2])
             );
             assert!((c[2] - c[1]).abs() < (c[1] - c[0]).abs(), "differences do not shrink: {c:?}");
             let at_default = c[[1, 2, 4].iter().position(|l| *l == default_level).unwrap()];
             assert!(error(at_default) <= 0.01, "{name} {what}: default error {}", error(at_default));
         }
+        let (lo, hi) = (r[0], r[r.len() - 1]);
+        let orders: Vec<String> = [0.03, 0.25, 0.5, 0.75, 0.97]
+            .iter()
+            .map(|t| {
+                let x = lo + (hi - lo) * t;
+                let c: Vec<f64> = runs.iter().map(|b| b.coefficient(0, x, 0, x)).collect();
+                format!("{:.2}", observed_order(&c))
+            })
+            .collect();
+        eprintln!(
+            "convergence {name}: order at 3, 25, 50, 75, 97 % of the roll range: {}",
+            orders.join(", ")
+        );
     }
 }
 
@@ -220,22 +238,21 @@ fn foundation_fe(form: &ToothForm, m: &Material, base: BaseLine, side: i32, roll
 
 #[test]
 fn fillet_foundation_against_sainsot_velex_duverger() {
-    // Sainsot et al. (2004): the foundation deflection is that of the whole
-    // body minus that of the tooth alone built in at the root circle, u_f
+    // Sainsot et al. (2004): the foundation deflection is that of the body
+    // minus that of the tooth alone built in at the root circle, u_f
     // measured along the centreline from the root circle, S_f = 2 r_f θ_f
     // the root circle's arc under the tooth, h_f = r_f / r_bore, E Young's
     // modulus. The FE in that setting: the tooth patches end on the root
     // circle, plane stress (the formula carries E; in plane strain the FE
-    // reads 8-12 % lower), the widest sector the teeth allow ((Z − 1)/2
-    // teeth each side: the cut faces at ±3 teeth make it 13-27 % stiffer),
-    // the bore held (the whole body needs a support; the formula has the
-    // bore radius as its parameter). Both FE models read the load point's displacement along
+    // reads 6-9 % lower), the widest sector the teeth allow ((Z − 1)/2 teeth
+    // each side: the cut faces at ±3 teeth make it 7-19 % stiffer), the bore
+    // held (the body needs a support; the formula has the bore radius as its
+    // parameter). Both FE models read the load point's displacement along
     // the load, so the local field under the load cancels. Tolerance 5 %:
-    // the formula is a six-term polynomial fit to its authors' model, the
-    // last buffer teeth added (3 → 8 → 16 sun, 3 → 6 → 8 planet) still
-    // changed the FE by up to 2.2 %, and a discretisation difference of the
-    // level-2 mesh is below 0.3 % (the convergence table); the plane-strain
-    // reading and the narrow sector each lie outside it.
+    // the formula is a six-term polynomial fit to its authors' model, and
+    // halving the sector's teeth each side still changes the FE by a few
+    // per cent (printed); the plane-strain reading and the ±3-teeth sector
+    // each fall outside it.
     let set = example();
     let m = *set.material();
     let stress = plane_stress(&m);
@@ -283,8 +300,13 @@ fn fillet_foundation_against_sainsot_velex_duverger() {
         show("FE plane strain over plane stress", &strain, &paper);
         let chord_fe = foundation_fe(form, &stress, BaseLine::RootChord, side, &rolls);
         show("FE tooth held on the root chord's base line over the root circle", &chord_fe, &paper);
+        let half = foundation_fe(form, &stress, BaseLine::RootCircle, side / 2, &rolls);
+        show(&format!("FE sector ±{} teeth over the widest", side / 2), &half, &paper);
         let narrow = foundation_fe(form, &stress, BaseLine::RootCircle, 3, &rolls);
         show("FE sector ±3 teeth over the widest", &narrow, &paper);
+        // The pair model's own split: its tooth from the root chord, plane strain.
+        let pair = foundation_fe(form, &m, BaseLine::RootChord, side, &rolls);
+        show("pair model's formula (u_f from the chord) over the FE in its split (chord, plane strain, widest)", &chord, &pair);
         let old = foundation_fe(form, &m, BaseLine::RootChord, 3, &rolls);
         show(
             "former comparison (chord, plane strain, ±3 teeth; u_f from the chord) against its formula",
@@ -460,4 +482,47 @@ fn sainsot_at(form: &ToothForm, x: f64, n: [f64; 2], origin: f64, e: f64, theta_
     let c = sainsot_coefficients(theta_f, foundation_ratio(form));
     let tan2 = (n[0] / n[1]).powi(2);
     n[1] * n[1] / (e * form.face_width) * (c[0] * u * u + c[1] * u + c[2] * (1.0 + c[3] * tan2))
+}
+
+#[test]
+#[ignore = "fails: the ring's fillet is drawn in the rim with an 89° corner; the fix moves the calibrated examples (docs/DEFORMABLE.md, Convergence)"]
+fn the_outline_is_smooth_from_the_root_land_to_the_involute() {
+    // The fillet is a circle tangent to the root circle and to the involute
+    // (GearKind::Internal: ToothForm::ring_fillet; the sun and the planet:
+    // the hob's trochoid), drawn inside the space: the outline turns by no
+    // more than its polyline's steps from the root land through the fillet
+    // to the involute, and the fillet never enters the rim beyond the root
+    // circle. A corner there would be a singular point of the body's field.
+    let set = example();
+    for (name, form) in [("sun", set.sun()), ("planet", set.planet()), ("ring", set.ring())] {
+        let o = FlankOutline::new(form, &ProfileDeviation::none());
+        let p = &o.points;
+        let last = o.regions.iter().rposition(|r| matches!(r, Region::Involute(_))).unwrap();
+        let mut worst: f64 = 0.0;
+        for k in 1..last {
+            let a = [p[k][0] - p[k - 1][0], p[k][1] - p[k - 1][1]];
+            let b = [p[k + 1][0] - p[k][0], p[k + 1][1] - p[k][1]];
+            worst = worst.max((a[0] * b[1] - a[1] * b[0]).atan2(a[0] * b[0] + a[1] * b[1]).abs());
+        }
+        let beyond = p
+            .iter()
+            .zip(&o.regions)
+            .filter(|(_, r)| matches!(r, Region::Fillet))
+            .map(|(q, _)| {
+                let r = q[0].hypot(q[1]);
+                if form.kind == GearKind::External {
+                    form.root_radius - r
+                } else {
+                    r - form.root_radius
+                }
+            })
+            .fold(f64::MIN, f64::max);
+        eprintln!(
+            "outline {name}: largest turn between segments, root land to the involute's end, {:.2} deg; fillet beyond the root circle by {:.2e} mm at most",
+            worst.to_degrees(),
+            1e3 * beyond
+        );
+        assert!(worst.to_degrees() < 3.0, "{name}: {}", worst.to_degrees());
+        assert!(beyond < 1e-9, "{name}: {beyond}");
+    }
 }
