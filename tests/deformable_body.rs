@@ -283,6 +283,15 @@ fn fillet_foundation_against_sainsot_velex_duverger() {
                 .collect()
         };
         let (circle, chord) = (formula(form.root_radius), formula(form.root_radius * theta_f.cos()));
+        // This reading of the formula with u_f from the chord is the crate's
+        // (`ToothComplianceCurve`, interpolated between its 301 samples).
+        let same = rolls
+            .iter()
+            .zip(&chord)
+            .map(|(x, f)| (curve.at(*x).foundation / f - 1.0).abs())
+            .fold(0.0, f64::max);
+        eprintln!("foundation {name}: ToothComplianceCurve against this reading, {same:.1e} at most");
+        assert!(same < 1e-3, "{name}: {same}");
         let side = (form.teeth as i32 - 1) / 2;
         let paper = foundation_fe(form, &stress, BaseLine::RootCircle, side, &rolls);
         let show = |what: &str, v: &[f64], reference: &[f64]| {
