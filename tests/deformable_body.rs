@@ -9,11 +9,12 @@
 
 use planetwear::contact::deformable::body::{BodyCompliance, BodyModel, BodySettings};
 use planetwear::contact::deformable::fe::{FeMesh, FeSystem, PlaneStrain, GAUSS3};
-use planetwear::contact::deformable::mesher::MeshDensity;
+use planetwear::contact::deformable::mesher::{BaseLine, GearMesh, MeshDensity};
 use planetwear::contact::deformable::BodyInfluence;
 use planetwear::contact::iso6336::{iso_stiffness, IsoPair};
 use planetwear::contact::stiffness::ToothComplianceCurve;
-use planetwear::model::gear::{GearKind, GearSet, MeshKind, ToothForm};
+use planetwear::geometry::profile::{FlankOutline, ProfileDeviation, Region};
+use planetwear::model::gear::{GearKind, GearSet, Material, MeshKind, ToothForm};
 use planetwear::scene::Scene;
 
 fn example() -> GearSet {
@@ -111,21 +112,23 @@ fn work_of_the_loads_equals_the_strain_energy() {
     }
 }
 
-/// Self coefficients of the centre tooth at the pitch point and at the
-/// grid point nearest the tip, at refinement `level`.
-fn self_coefficients(form: &ToothForm, set: &GearSet, pitch: f64, level: usize) -> (f64, f64, usize) {
-    let s = BodySettings { level, ..BodySettings::default() };
-    let b = BodyCompliance::new(form, set.material(), &s).unwrap();
-    let r = b.rolls();
-    let tip = if form.kind == GearKind::External { r[r.len() - 2] } else { r[1] };
-    (b.coefficient(0, pitch, 0, pitch), b.coefficient(0, tip, 0, tip), b.degrees_of_freedom())
+/// The body at refinement `level`, default settings otherwise.
+fn at_level(form: &ToothForm, set: &GearSet, level: usize) -> BodyCompliance {
+    BodyCompliance::new(form, set.material(), &BodySettings { level, ..BodySettings::default() }).unwrap()
+}
+
+/// The observed order of three readings at levels 1, 2, 4 [-].
+fn observed_order(c: &[f64]) -> f64 {
+    ((c[1] - c[0]) / (c[2] - c[1])).abs().log2()
 }
 
 #[test]
 fn coefficients_converge_with_mesh_refinement() {
     // Levels 1, 2, 4: the differences shrink at a steady rate, and the
     // default level's error estimated by Richardson extrapolation from the
-    // three is at most 1 %.
+    // three is at most 1 %. The observed order along the flank (five points,
+    // form circle to the involute's end) is printed: a corner of the outline
+    // (a singular point) would lower it at every point.
     let set = example();
     let default_level = BodySettings::default().level;
     for (name, form, mesh) in [
@@ -134,21 +137,37 @@ fn coefficients_converge_with_mesh_refinement() {
         ("ring", set.ring(), MeshKind::RingPlanet),
     ] {
         let pitch = pitch_roll(&set, mesh);
-        let runs: Vec<_> = [1, 2, 4].iter().map(|l| self_coefficients(form, &set, pitch, *l)).collect();
-        for (what, pick) in [("pitch", 0), ("tip", 1)] {
-            let c: Vec<f64> = runs.iter().map(|r| if pick == 0 { r.0 } else { r.1 }).collect();
-            let order = ((c[1] - c[0]) / (c[2] - c[1])).abs().log2();
+        let runs: Vec<BodyCompliance> = [1, 2, 4].iter().map(|l| at_level(form, &set, *l)).collect();
+        let r = runs[0].rolls();
+        let tip = if form.kind == GearKind::External { r[r.len() - 2] } else { r[1] };
+        for (what, x) in [("pitch", pitch), ("tip", tip)] {
+            let c: Vec<f64> = runs.iter().map(|b| b.coefficient(0, x, 0, x)).collect();
+            let order = observed_order(&c);
             let limit = c[2] + (c[2] - c[1]) / (2f64.powf(order) - 1.0);
             let error = |v: f64| (v / limit - 1.0).abs();
+            let dofs: Vec<usize> = runs.iter().map(BodyCompliance::degrees_of_freedom).collect();
             eprintln!(
                 "convergence {name} {what}: L1 {:.5e} L2 {:.5e} L4 {:.5e} m/N (dofs {} {} {}), order {order:.2}, limit {limit:.5e}, errors {:.2} % {:.2} % {:.2} %",
-                c[0], c[1], c[2], runs[0].2, runs[1].2, runs[2].2,
+                c[0], c[1], c[2], dofs[0], dofs[1], dofs[2],
                 100.0 * error(c[0]), 100.0 * error(c[1]), 100.0 * error(c[2])
             );
             assert!((c[2] - c[1]).abs() < (c[1] - c[0]).abs(), "differences do not shrink: {c:?}");
             let at_default = c[[1, 2, 4].iter().position(|l| *l == default_level).unwrap()];
             assert!(error(at_default) <= 0.01, "{name} {what}: default error {}", error(at_default));
         }
+        let (lo, hi) = (r[0], r[r.len() - 1]);
+        let orders: Vec<String> = [0.03, 0.25, 0.5, 0.75, 0.97]
+            .iter()
+            .map(|t| {
+                let x = lo + (hi - lo) * t;
+                let c: Vec<f64> = runs.iter().map(|b| b.coefficient(0, x, 0, x)).collect();
+                format!("{:.2}", observed_order(&c))
+            })
+            .collect();
+        eprintln!(
+            "convergence {name}: order at 3, 25, 50, 75, 97 % of the roll range: {}",
+            orders.join(", ")
+        );
     }
 }
 
@@ -187,45 +206,142 @@ fn the_cut_faces_effect_fades_with_more_buffer_teeth() {
     }
 }
 
-#[test]
-#[ignore = "fails: the FE foundation lies 22-30 % below Sainsot's formula (docs/DEFORMABLE.md)"]
-fn fillet_foundation_against_sainsot_velex_duverger() {
-    // Sainsot et al. (2004): the foundation deflection is that of the full
-    // body minus that of the tooth alone built in at its root. Both FE
-    // models read the load point's displacement along the load, so the
-    // local field under the load cancels; the formula (with the
-    // coefficients of crate::contact::stiffness) was fitted to within a few
-    // per cent of its authors' FE; a different discretisation and base line
-    // justify 15 %.
-    let set = example();
+/// Plane stress with the constants of `m` is plane strain with these.
+fn plane_stress(m: &Material) -> Material {
+    let nu = m.poisson_ratio;
+    Material {
+        youngs_modulus: m.youngs_modulus * (1.0 + 2.0 * nu) / (1.0 + nu).powi(2),
+        poisson_ratio: nu / (1.0 + nu),
+        ..*m
+    }
+}
+
+/// The FE foundation compliance at `rolls` [m/N]: the sector of teeth
+/// −`side`..=`side` minus tooth 0 alone held along `base`, both read at the
+/// load point along the load.
+fn foundation_fe(form: &ToothForm, m: &Material, base: BaseLine, side: i32, rolls: &[f64]) -> Vec<f64> {
+    foundation_fe_at(form, m, base, side, 2, rolls)
+}
+
+/// [`foundation_fe`] at refinement `level`.
+fn foundation_fe_at(
+    form: &ToothForm,
+    m: &Material,
+    base: BaseLine,
+    side: i32,
+    level: usize,
+    rolls: &[f64],
+) -> Vec<f64> {
     let d = MeshDensity::default();
+    let mesh = GearMesh::sector_on(form, &d, level, side, base);
+    let full = BodyModel::from_mesh(form, m, mesh).unwrap();
+    let alone = BodyModel::from_mesh(form, m, GearMesh::tooth_alone_on(form, &d, level, base)).unwrap();
+    let uf = full.system.solve(&rolls.iter().map(|x| full.unit_load(0, *x)).collect::<Vec<_>>());
+    let ua = alone.system.solve(&rolls.iter().map(|x| alone.unit_load(0, *x)).collect::<Vec<_>>());
+    let width = form.face_width;
+    rolls
+        .iter()
+        .enumerate()
+        .map(|(c, x)| {
+            (full.surface_displacement(&uf, c, 0, *x) - alone.surface_displacement(&ua, c, 0, *x)) / width
+        })
+        .collect()
+}
+
+#[test]
+fn fillet_foundation_against_sainsot_velex_duverger() {
+    // Sainsot et al. (2004): the foundation deflection is that of the body
+    // minus that of the tooth alone built in at the root circle, u_f
+    // measured along the centreline from the root circle, S_f = 2 r_f θ_f
+    // the root circle's arc under the tooth, h_f = r_f / r_bore, E Young's
+    // modulus. The FE in that setting: the tooth patches end on the root
+    // circle, plane stress (the formula carries E; in plane strain the FE
+    // reads 6-9 % lower), the widest sector the teeth allow ((Z − 1)/2 teeth
+    // each side: the cut faces at ±3 teeth make it 7-19 % stiffer), the bore
+    // held (the body needs a support; the formula has the bore radius as its
+    // parameter). Both FE models read the load point's displacement along
+    // the load, so the local field under the load cancels. Tolerance 5 %:
+    // the formula is a six-term polynomial fit to its authors' model,
+    // halving the sector's teeth each side still changes the FE by a few
+    // per cent, refining the mesh to level 4 by under 0.05 % (printed); the
+    // plane-strain reading and the ±3-teeth sector each fall outside it.
+    let set = example();
+    let m = *set.material();
+    let stress = plane_stress(&m);
     let mut worst: f64 = 0.0;
     for (name, form) in [("sun", set.sun()), ("planet", set.planet())] {
-        let full = BodyModel::sector(form, set.material(), &d, 2, 3).unwrap();
-        let alone = BodyModel::tooth_alone(form, set.material(), &d, 2).unwrap();
-        let curve = ToothComplianceCurve::new(form, set.material());
+        let theta_f = FlankOutline::new(form, &ProfileDeviation::none()).root_half_angle;
+        let curve = ToothComplianceCurve::new(form, &m);
         let (x0, x1) = (curve.roll[0], curve.roll[curve.roll.len() - 1]);
         let rolls: Vec<f64> = (0..5).map(|k| x0 + (x1 - x0) * (0.1 + 0.2 * k as f64)).collect();
-        let cases_full: Vec<_> = rolls.iter().map(|x| full.unit_load(0, *x)).collect();
-        let cases_alone: Vec<_> = rolls.iter().map(|x| alone.unit_load(0, *x)).collect();
-        let (uf, ua) = (full.system.solve(&cases_full), alone.system.solve(&cases_alone));
+        let probe = BodyModel::tooth_alone(form, &m, &MeshDensity::default(), 1).unwrap();
+        let e = m.youngs_modulus;
+        let formula = |origin: f64| -> Vec<f64> {
+            rolls
+                .iter()
+                .map(|x| sainsot_at(form, *x, probe.inward_normal(0, *x), origin, e, theta_f))
+                .collect()
+        };
+        let (circle, chord) = (formula(form.root_radius), formula(form.root_radius * theta_f.cos()));
+        // This reading of the formula with u_f from the chord is the crate's
+        // (`ToothComplianceCurve`, interpolated between its 301 samples).
+        let same = rolls
+            .iter()
+            .zip(&chord)
+            .map(|(x, f)| (curve.at(*x).foundation / f - 1.0).abs())
+            .fold(0.0, f64::max);
+        eprintln!("foundation {name}: ToothComplianceCurve against this reading, {same:.1e} at most");
+        assert!(same < 1e-3, "{name}: {same}");
+        let side = (form.teeth as i32 - 1) / 2;
+        let paper = foundation_fe(form, &stress, BaseLine::RootCircle, side, &rolls);
+        let show = |what: &str, v: &[f64], reference: &[f64]| {
+            let rel: Vec<String> =
+                v.iter().zip(reference).map(|(a, b)| format!("{:+.1}", 100.0 * (a / b - 1.0))).collect();
+            eprintln!("foundation {name}, {what}: {} %", rel.join(", "));
+        };
+        eprintln!(
+            "foundation {name}: θ_f {theta_f:.5} rad, h_f {:.3}, S_f {:.4} mm, r_f(1 − cos θ_f) {:.4} mm, sector ±{side} teeth",
+            planetwear::contact::stiffness::foundation_ratio(form),
+            2e3 * form.root_radius * theta_f,
+            1e3 * form.root_radius * (1.0 - theta_f.cos())
+        );
         for (c, x) in rolls.iter().enumerate() {
-            let width = form.face_width;
-            let fe = (full.surface_displacement(&uf, c, 0, *x) - alone.surface_displacement(&ua, c, 0, *x))
-                / width;
-            let tooth = alone.surface_displacement(&ua, c, 0, *x) / width;
-            let formula = curve.at(*x);
-            let rel = fe / formula.foundation - 1.0;
+            let rel = paper[c] / circle[c] - 1.0;
             eprintln!(
-                "foundation {name} roll {x:.4}: FE {fe:.4e} m/N, Sainsot {:.4e} m/N ({:+.1} %); tooth alone FE {tooth:.4e}, energy method bending+shear+axial {:.4e} m/N",
-                formula.foundation,
-                100.0 * rel,
-                formula.bending + formula.shear + formula.axial
+                "foundation {name} roll {x:.4}: FE {:.4e} m/N, Sainsot {:.4e} m/N ({:+.1} %)",
+                paper[c],
+                circle[c],
+                100.0 * rel
             );
             worst = worst.max(rel.abs());
         }
+        // Each difference of the former comparison, one at a time.
+        show("formula with u_f from the root chord over from the root circle", &chord, &circle);
+        let strain = foundation_fe(form, &m, BaseLine::RootCircle, side, &rolls);
+        show("FE plane strain over plane stress", &strain, &paper);
+        let chord_fe = foundation_fe(form, &stress, BaseLine::RootChord, side, &rolls);
+        show("FE tooth held on the root chord's base line over the root circle", &chord_fe, &paper);
+        let half = foundation_fe(form, &stress, BaseLine::RootCircle, side / 2, &rolls);
+        show(&format!("FE sector ±{} teeth over the widest", side / 2), &half, &paper);
+        let narrow = foundation_fe(form, &stress, BaseLine::RootCircle, 3, &rolls);
+        show("FE sector ±3 teeth over the widest", &narrow, &paper);
+        let (fine, coarse) = (
+            foundation_fe_at(form, &stress, BaseLine::RootCircle, 3, 4, &rolls),
+            foundation_fe_at(form, &stress, BaseLine::RootCircle, 3, 2, &rolls),
+        );
+        let refined = fine.iter().zip(&coarse).map(|(a, b)| (a / b - 1.0).abs()).fold(0.0, f64::max);
+        eprintln!("foundation {name}, FE level 4 over level 2 (±3 teeth): {:.3} % at most", 100.0 * refined);
+        // The pair model's own split: its tooth from the root chord, plane strain.
+        let pair = foundation_fe(form, &m, BaseLine::RootChord, side, &rolls);
+        show("pair model's formula (u_f from the chord) over the FE in its split (chord, plane strain, widest)", &chord, &pair);
+        let old = foundation_fe(form, &m, BaseLine::RootChord, 3, &rolls);
+        show(
+            "former comparison (chord, plane strain, ±3 teeth; u_f from the chord) against its formula",
+            &old,
+            &chord,
+        );
     }
-    assert!(worst < 0.15, "{worst}");
+    assert!(worst < 0.05, "{worst}");
 }
 
 /// Johnson's line-contact approach of the surfaces to points at depths
@@ -357,8 +473,7 @@ fn the_mesh_is_conforming() {
     // outline of the sector (its length against the polar estimate).
     let set = example();
     for form in [set.sun(), set.ring()] {
-        let g =
-            planetwear::contact::deformable::mesher::GearMesh::sector(form, &MeshDensity::default(), 1, 1);
+        let g = GearMesh::sector(form, &MeshDensity::default(), 1, 1);
         let m = &g.mesh;
         let mut near = 0;
         for i in 0..m.nodes.len() {
@@ -376,5 +491,65 @@ fn the_mesh_is_conforming() {
             m.elements.len()
         );
         assert_eq!(near, 0);
+    }
+}
+
+/// Sainsot, Velex & Duverger (2004), eq. for the fillet-foundation
+/// deflection per unit force, at roll `x` of `form`'s upper flank, the load
+/// along the inward normal `n` (tooth frame), u_f measured from the radius
+/// `origin` on the centreline, modulus `e` [m/N].
+fn sainsot_at(form: &ToothForm, x: f64, n: [f64; 2], origin: f64, e: f64, theta_f: f64) -> f64 {
+    use planetwear::contact::stiffness::{foundation_ratio, sainsot_coefficients};
+    let r = planetwear::model::involute::radius_at_roll(x, form.base_radius());
+    let phi = form.involute_half_angle(r);
+    let (px, py) = (r * phi.cos(), r * phi.sin());
+    let x_cross = px - py * n[0] / n[1];
+    let dir = if form.kind == GearKind::External { 1.0 } else { -1.0 };
+    let u = dir * (x_cross - origin) / (2.0 * form.root_radius * theta_f);
+    let c = sainsot_coefficients(theta_f, foundation_ratio(form));
+    let tan2 = (n[0] / n[1]).powi(2);
+    n[1] * n[1] / (e * form.face_width) * (c[0] * u * u + c[1] * u + c[2] * (1.0 + c[3] * tan2))
+}
+
+#[test]
+#[ignore = "fails: the ring's fillet is drawn in the rim with an 89° corner; the fix moves the calibrated examples (docs/DEFORMABLE.md, Convergence)"]
+fn the_outline_is_smooth_from_the_root_land_to_the_involute() {
+    // The fillet is a circle tangent to the root circle and to the involute
+    // (GearKind::Internal: ToothForm::ring_fillet; the sun and the planet:
+    // the hob's trochoid), drawn inside the space: the outline turns by no
+    // more than its polyline's steps from the root land through the fillet
+    // to the involute, and the fillet never enters the rim beyond the root
+    // circle. A corner there would be a singular point of the body's field.
+    let set = example();
+    for (name, form) in [("sun", set.sun()), ("planet", set.planet()), ("ring", set.ring())] {
+        let o = FlankOutline::new(form, &ProfileDeviation::none());
+        let p = &o.points;
+        let last = o.regions.iter().rposition(|r| matches!(r, Region::Involute(_))).unwrap();
+        let mut worst: f64 = 0.0;
+        for k in 1..last {
+            let a = [p[k][0] - p[k - 1][0], p[k][1] - p[k - 1][1]];
+            let b = [p[k + 1][0] - p[k][0], p[k + 1][1] - p[k][1]];
+            worst = worst.max((a[0] * b[1] - a[1] * b[0]).atan2(a[0] * b[0] + a[1] * b[1]).abs());
+        }
+        let beyond = p
+            .iter()
+            .zip(&o.regions)
+            .filter(|(_, r)| matches!(r, Region::Fillet))
+            .map(|(q, _)| {
+                let r = q[0].hypot(q[1]);
+                if form.kind == GearKind::External {
+                    form.root_radius - r
+                } else {
+                    r - form.root_radius
+                }
+            })
+            .fold(f64::MIN, f64::max);
+        eprintln!(
+            "outline {name}: largest turn between segments, root land to the involute's end, {:.2} deg; fillet beyond the root circle by {:.2e} mm at most",
+            worst.to_degrees(),
+            1e3 * beyond
+        );
+        assert!(worst.to_degrees() < 3.0, "{name}: {}", worst.to_degrees());
+        assert!(beyond < 1e-9, "{name}: {beyond}");
     }
 }

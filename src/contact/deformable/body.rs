@@ -188,7 +188,8 @@ impl BodyModel {
         Self::from_mesh(form, material, GearMesh::tooth_alone(form, density, level))
     }
 
-    fn from_mesh(form: &ToothForm, material: &Material, mesh: GearMesh) -> Result<Self, BodyError> {
+    /// The model of a given mesh (its held nodes as set in it).
+    pub fn from_mesh(form: &ToothForm, material: &Material, mesh: GearMesh) -> Result<Self, BodyError> {
         let elastic = PlaneStrain::new(material.youngs_modulus, material.poisson_ratio)?;
         let system = FeSystem::new(&mesh.mesh, &elastic)?;
         Ok(Self { mesh, system, elastic, form: form.clone() })

@@ -325,8 +325,23 @@ fn flank_grid(
     (points, rolls, tip, foot)
 }
 
+/// Where the tooth patch ends toward the body: the line along which the
+/// tooth alone ([`GearMesh::tooth_alone`]) is held.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BaseLine {
+    /// From the middle of the root chord (the chord between the points where
+    /// the fillets meet the root circle) straight to the foot's end.
+    #[default]
+    RootChord,
+    /// Along the root circle from the centreline, rising to the foot's end
+    /// (a few hundredths of a millimetre above the root circle) in its last
+    /// part: the tooth of Sainsot, Velex & Duverger (2004), built in at the
+    /// root circle.
+    RootCircle,
+}
+
 /// The two patches of the upper half of a tooth, tooth frame.
-fn half_grids(form: &ToothForm, d: &MeshDensity, r_layer: f64) -> HalfGrids {
+fn half_grids(form: &ToothForm, d: &MeshDensity, r_layer: f64, base: BaseLine) -> HalfGrids {
     let outline = FlankOutline::new(form, &ProfileDeviation::none());
     let (flank, rolls, tip, foot) = flank_grid(form, &outline, d);
     let f0 = flank[0];
@@ -334,7 +349,10 @@ fn half_grids(form: &ToothForm, d: &MeshDensity, r_layer: f64) -> HalfGrids {
     // The chord side runs from the root chord's middle (on the centreline)
     // to the foot's end: the root chord itself meets the fillet at a zero
     // angle (both tangent to the root circle there).
-    let c0 = [foot[foot.len() - 1][0], 0.0];
+    let c0 = match base {
+        BaseLine::RootChord => [foot[foot.len() - 1][0], 0.0],
+        BaseLine::RootCircle => [form.root_radius, 0.0],
+    };
     // The centreline side follows the flank's arc length from the base line
     // to the tip, so the lines across stay short and never cross.
     let arc: Vec<f64> = std::iter::once(0.0)
@@ -347,7 +365,14 @@ fn half_grids(form: &ToothForm, d: &MeshDensity, r_layer: f64) -> HalfGrids {
     let u: Vec<f64> = arc.iter().map(|s| s / total).collect();
     let centre: Vec<Point> = u.iter().map(|s| [c0[0] + s * (t[0] - c0[0]), 0.0]).collect();
     let v = graded(d.across, d.flank_grading);
-    let chord: Vec<Point> = v.iter().map(|s| lerp(c0, f0, *s)).collect();
+    let (rf0, af0) = (f0[0].hypot(f0[1]), f0[1].atan2(f0[0]));
+    let chord: Vec<Point> = v
+        .iter()
+        .map(|s| match base {
+            BaseLine::RootChord => lerp(c0, f0, *s),
+            BaseLine::RootCircle => polar(c0[0] + s.powi(4) * (rf0 - c0[0]), s * af0),
+        })
+        .collect();
     let tip_side: Vec<Point> = v.iter().map(|s| along(&tip, *s)).collect();
     let tooth = coons(&u, &v, &centre, &flank, &chord, &tip_side);
 
@@ -355,7 +380,6 @@ fn half_grids(form: &ToothForm, d: &MeshDensity, r_layer: f64) -> HalfGrids {
     // v from r_layer (0) to the chord and root land (1).
     let half_space = form.angular_pitch() / 2.0;
     let g0 = foot[foot.len() - 1];
-    debug_assert!((g0[0] - c0[0]).abs() < 1e-15);
     let (r0, a0) = (g0[0].hypot(g0[1]), g0[1].atan2(g0[0]));
     let mut top = chord.clone();
     for k in 1..=2 * d.foot {
@@ -399,9 +423,20 @@ impl GearMesh {
     /// The sector of teeth −`side`..=`side` of a gear body at refinement
     /// `level`, its bore (or outside) and radial cut faces held.
     pub fn sector(form: &ToothForm, density: &MeshDensity, level: usize, side: i32) -> Self {
+        Self::sector_on(form, density, level, side, BaseLine::RootChord)
+    }
+
+    /// [`Self::sector`] with the teeth's patches ending on `base`.
+    pub fn sector_on(
+        form: &ToothForm,
+        density: &MeshDensity,
+        level: usize,
+        side: i32,
+        base: BaseLine,
+    ) -> Self {
         let d = density.at_level(level);
         let r_layer = layer_radius(form);
-        let half = half_grids(form, &d, r_layer);
+        let half = half_grids(form, &d, r_layer, base);
         let pitch = form.angular_pitch();
         let mut b = Builder::new();
         let mut teeth = Vec::new();
@@ -456,8 +491,13 @@ impl GearMesh {
     /// the tooth as a cantilever on a rigid foundation, meshed as in
     /// [`Self::sector`].
     pub fn tooth_alone(form: &ToothForm, density: &MeshDensity, level: usize) -> Self {
+        Self::tooth_alone_on(form, density, level, BaseLine::RootChord)
+    }
+
+    /// [`Self::tooth_alone`] held along `base`.
+    pub fn tooth_alone_on(form: &ToothForm, density: &MeshDensity, level: usize, base: BaseLine) -> Self {
         let d = density.at_level(level);
-        let half = half_grids(form, &d, layer_radius(form));
+        let half = half_grids(form, &d, layer_radius(form), base);
         let mut b = Builder::new();
         let (ids, upper_elements) = b.patch(&half.tooth);
         let (low, _) = b.patch(&placed(&half.tooth, 0.0, true));
