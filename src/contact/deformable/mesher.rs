@@ -380,6 +380,8 @@ fn half_grids(form: &ToothForm, d: &MeshDensity, r_layer: f64, base: BaseLine) -
     // v from r_layer (0) to the chord and root land (1).
     let half_space = form.angular_pitch() / 2.0;
     let g0 = foot[foot.len() - 1];
+    // On the root chord's base line the chord side starts at the foot's end's radius.
+    debug_assert!(base != BaseLine::RootChord || (g0[0] - c0[0]).abs() < 1e-15);
     let (r0, a0) = (g0[0].hypot(g0[1]), g0[1].atan2(g0[0]));
     let mut top = chord.clone();
     for k in 1..=2 * d.foot {

@@ -110,8 +110,7 @@ pub(super) fn follow(
         None => follow_branch(&mut solver, &settings, |_| {}),
     }?;
     let orbits = std::mem::take(&mut solver.orbits);
-    let broken = solver.broken_restarts();
-    let cyclic = broken == 0 && cb.symmetry() == Symmetry::Cyclic;
+    let cyclic = solver.broken_restarts() == 0 && cb.symmetry() == Symmetry::Cyclic;
     let mut points = Vec::with_capacity(orbits.len());
     let mut ends = Vec::with_capacity(orbits.len());
     let mut nearest: Vec<Option<(f64, CurvePoint, State)>> = vec![None; spots.len()];
