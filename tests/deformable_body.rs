@@ -512,7 +512,6 @@ fn sainsot_at(form: &ToothForm, x: f64, n: [f64; 2], origin: f64, e: f64, theta_
 }
 
 #[test]
-#[ignore = "fails: the ring's fillet is drawn in the rim with an 89° corner; the fix moves the calibrated examples (docs/DEFORMABLE.md, Convergence)"]
 fn the_outline_is_smooth_from_the_root_land_to_the_involute() {
     // The fillet is a circle tangent to the root circle and to the involute
     // (GearKind::Internal: ToothForm::ring_fillet; the sun and the planet:

@@ -252,8 +252,11 @@ impl FlankOutline {
                     let r_form = form.form_radius();
                     (form.involute_half_angle(r_form) + rho / form.root_radius, form.roll_at(r_form))
                 };
+                // The fillet's centre lies in the space, tangent to the root
+                // circle from inside it: r_f − ρ for an internal gear (where
+                // `ToothForm::ring_fillet` places it), r_f + ρ for an external one.
                 let sign = if form.kind == GearKind::Internal { -1.0 } else { 1.0 };
-                let rc = form.root_radius - sign * rho;
+                let rc = form.root_radius + sign * rho;
                 let c = polar(rc, phi_c);
                 let t = polar(radius_at_roll(xi_t, form.base_radius()), {
                     let r = radius_at_roll(xi_t, form.base_radius());
