@@ -414,11 +414,11 @@ fn a_face_cut_in_slices_runs_and_gives_the_same_steady_state() {
 
 /// A state periodic in the mesh cycle has the same mesh-order harmonics over
 /// one mesh cycle as over the two-revolution window: the short window of
-/// `Window::Periodic` is taken at 3000 rpm (off resonance, torsional) and its
+/// `Window::Periodic` is taken at 3300 rpm (off resonance, torsional) and its
 /// harmonics agree with the whole window's to 5e-4 of the first harmonic,
 /// half the E_h budget of docs/ACCURACY.md: cycles agreeing to 1e-5 of the
 /// mean force (about 9e-5 of the first harmonic here) leave the state within
-/// that change over 1 − |μ₁| ≈ 0.53 of the periodic one, about 2e-4.
+/// that change over 1 − |μ₁| ≈ 0.50 of the periodic one, about 2e-4.
 #[test]
 fn a_periodic_point_measured_over_one_mesh_cycle_has_the_whole_windows_harmonics() {
     use planetwear::dynamics::response::{steady_state_windowed, Window};
@@ -426,14 +426,20 @@ fn a_periodic_point_measured_over_one_mesh_cycle_has_the_whole_windows_harmonics
     scene.dynamics.fidelity = Fidelity::Torsional;
     // A point whose run-in settles within the revolution: at the example's
     // ζ_m = 0.02 the absolute coordinates' error allowance keeps successive
-    // cycles from agreeing to 1e-5 (docs/PERFORMANCE.md, "The route").
+    // cycles from agreeing to 1e-5 (docs/PERFORMANCE.md, "The route"). At
+    // 3300 rpm the cycle-to-cycle change of the mesh forces falls steadily
+    // to 2e-6 of the mean by the 13th cycle. At 3000 rpm, the point before
+    // the ring fillet fix's refit, it stays at 3e-5 to 8e-5 from the 12th
+    // cycle to the revolution's end (measured; with the former inertias it
+    // fell below 1e-5 there); it does not settle at 2800, 2900, 3100 or
+    // 3250 rpm either.
     scene.dynamics.mesh_damping_ratio = 0.03;
     let (set, run, model) = build(&scene);
-    let whole = steady_state(&mut model.clone(), &set, &run, 3000.0 * RPM, None).unwrap();
+    let whole = steady_state(&mut model.clone(), &set, &run, 3300.0 * RPM, None).unwrap();
     let window = Window::Periodic { cycles: 1, tolerance: 1e-5 };
     let short =
-        steady_state_windowed(&mut model.clone(), &set, &run, 3000.0 * RPM, None, window, |_, _| {}).unwrap();
-    assert_eq!(short.cycles, 1, "the run-in settles at 3000 rpm");
+        steady_state_windowed(&mut model.clone(), &set, &run, 3300.0 * RPM, None, window, |_, _| {}).unwrap();
+    assert_eq!(short.cycles, 1, "the run-in settles at 3300 rpm");
     assert_eq!(whole.cycles, 68);
     assert!(
         short.stats.steps * 3 < whole.stats.steps,
