@@ -92,7 +92,7 @@ fn every_bound_of_the_model_description_is_the_instance_s_own() {
             checked += 1;
         }
     }
-    assert_eq!(checked, 55, "bounds checked");
+    assert_eq!(checked, 59, "bounds checked");
 }
 
 /// Variables whose value is not the example's by design: none may differ

@@ -301,9 +301,9 @@ fn the_rayleigh_keys_are_checked() {
     assert_eq!(back.value_at("dynamics.rayleigh_stiffness_s").unwrap(), 5.0301e-7);
 }
 
-/// The FMU has no parameters of its own for μ and η: a scene file named by
-/// `sceneFile` carries them, and the instance's scene keeps the file's
-/// damping model, coefficients and planet bearings.
+/// A scene file named by `sceneFile` brings its damping model, coefficients
+/// and planet bearings into the FMU: the instance's scene keeps the file's
+/// (the FMU's damping parameters act on it only where the importer sets them).
 #[test]
 fn a_scene_file_brings_rayleigh_damping_into_the_fmu() {
     use planetwear::fmi::instance::Instance;
@@ -321,4 +321,48 @@ fn a_scene_file_brings_rayleigh_damping_into_the_fmu() {
     assert_eq!(scene.dynamics.rayleigh_stiffness_s, flexible.dynamics.rayleigh_stiffness_s);
     assert_eq!(scene.supports.planet_bearing_n_per_m, flexible.supports.planet_bearing_n_per_m);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The FMU's own damping parameters: the built-in example's start values
+/// are its damping ratios (`dampingModel = 0`, no coefficients);
+/// `dampingModel = 1` with the importer's coefficients gives Rayleigh
+/// damping; back to 0 with a coefficient still set, any other code, and a
+/// negative coefficient are each refused naming the parameter and what is
+/// allowed.
+#[test]
+fn the_fmu_parameters_choose_the_damping_model() {
+    use planetwear::fmi::instance::Instance;
+    use planetwear::fmi::variables::vr;
+    let i = Instance::new("damping", None);
+    let scene = i.scene().map_err(|e| e.message).unwrap();
+    let example = Scene::example_2004().dynamics;
+    assert_eq!(scene.dynamics.damping, example.damping);
+    assert_eq!(scene.dynamics.damping, DampingModel::Ratio);
+    assert_eq!((scene.dynamics.rayleigh_mass_per_s, scene.dynamics.rayleigh_stiffness_s), (0.0, 0.0));
+
+    let mut i = Instance::new("rayleigh", None);
+    i.set_integer(vr::DAMPING_MODEL, 1).unwrap();
+    i.set_real(vr::RAYLEIGH_MASS_COEFFICIENT, 250.0).unwrap();
+    i.set_real(vr::RAYLEIGH_STIFFNESS_COEFFICIENT, 1.5e-7).unwrap();
+    let scene = i.scene().map_err(|e| e.message).unwrap();
+    assert_eq!(scene.dynamics.damping, DampingModel::Rayleigh);
+    assert_eq!((scene.dynamics.rayleigh_mass_per_s, scene.dynamics.rayleigh_stiffness_s), (250.0, 1.5e-7));
+    // Back to the ratio model with a coefficient still set: refused when the
+    // model is built, naming the coefficient.
+    i.enter_initialization();
+    i.set_integer(vr::DAMPING_MODEL, 0).unwrap();
+    let e = i.exit_initialization().map_err(|e| e.message).unwrap_err();
+    assert!(e.contains("rayleighMassCoefficient = 250 1/s") && e.contains("\"rayleigh\""), "{e}");
+
+    let mut i = Instance::new("bad", None);
+    i.set_integer(vr::DAMPING_MODEL, 2).unwrap();
+    let e = i.scene().map(|_| ()).map_err(|e| e.message).unwrap_err();
+    assert!(e.contains("dampingModel = 2") && e.contains("1 (Rayleigh)"), "{e}");
+    // A negative coefficient is refused when the model is built.
+    let mut i = Instance::new("negative", None);
+    i.enter_initialization();
+    i.set_integer(vr::DAMPING_MODEL, 1).unwrap();
+    i.set_real(vr::RAYLEIGH_STIFFNESS_COEFFICIENT, -1e-7).unwrap();
+    let e = i.exit_initialization().map_err(|e| e.message).unwrap_err();
+    assert!(e.contains("rayleighStiffnessCoefficient = -0.0000001 s") && e.contains("at least 0"), "{e}");
 }

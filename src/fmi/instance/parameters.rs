@@ -20,7 +20,9 @@ use crate::fmi::variables::{SceneField, Settable, Special, Start, Target, Variab
 use crate::model::gear::{Drive, IntegratorKind, Member};
 use crate::model::lumped::Fidelity;
 use crate::scene::Response;
-use crate::scene::{default_chamfer, ChamferSpec, GearData, PlanetLayoutSpec, Problem, Scene, SceneError};
+use crate::scene::{
+    default_chamfer, ChamferSpec, DampingModel, GearData, PlanetLayoutSpec, Problem, Scene, SceneError,
+};
 
 /// The values the importer holds, read by variable.
 pub(super) struct Values<'a> {
@@ -174,6 +176,17 @@ fn apply_special(p: Special, values: &Values, scene: &mut Scene) -> Result<(), S
         | Special::SunTipDiameter
         | Special::PlanetTipDiameter
         | Special::RingTipDiameter => gear_data(values, scene)?,
+        Special::DampingModel => {
+            scene.dynamics.damping = match values.int(v) {
+                0 => DampingModel::Ratio,
+                1 => DampingModel::Rayleigh,
+                x => return Err(format!("dampingModel = {x}: allowed are 0 (damping ratios), 1 (Rayleigh)")),
+            }
+        }
+        // Written as set: under dampingModel = 0 a nonzero coefficient is
+        // refused by the scene's check, naming the variable.
+        Special::RayleighMassCoefficient => scene.dynamics.rayleigh_mass_per_s = r,
+        Special::RayleighStiffnessCoefficient => scene.dynamics.rayleigh_stiffness_s = r,
         Special::LoadBalance => {
             scene.dynamics.load_balance = match values.int(v) {
                 0 => false,
@@ -417,6 +430,12 @@ fn special_value(
                 .unwrap_or(crate::scene::STEADY_TORQUE_STEP * scene.operation.input_torque_nm.abs()),
         ),
         Special::LoadBalance => Start::Integer(i32::from(d.load_balance)),
+        Special::DampingModel => Start::Integer(match d.damping {
+            DampingModel::Ratio => 0,
+            DampingModel::Rayleigh => 1,
+        }),
+        Special::RayleighMassCoefficient => Start::Real(d.rayleigh_mass_per_s),
+        Special::RayleighStiffnessCoefficient => Start::Real(d.rayleigh_stiffness_s),
     })
 }
 
