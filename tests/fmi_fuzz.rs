@@ -33,7 +33,10 @@ fn random_call_sequences_never_crash_and_every_refusal_is_logged() {
         .ok()
         .map(|v| v.parse().unwrap_or_else(|_| panic!("PLANETWEAR_FUZZ_CALLS = {v}: must be an integer")))
         .unwrap_or(100_000);
-    let cfg = FuzzConfig { seed, calls, builds: 30, torsional: 0.7, hang_after: Duration::from_secs(120) };
+    // 40 builds: the default seed's stream spends 30 on 8 successful
+    // initializations and 448 accepted steps, below the coverage asserted
+    // below; 40 give 22 and 2700 (docs/FUZZING.md).
+    let cfg = FuzzConfig { seed, calls, builds: 40, torsional: 0.7, hang_after: Duration::from_secs(120) };
     let fmu = fmu();
     println!(
         "fmi fuzz: {}, seed {seed:#x} (PLANETWEAR_FUZZ_SEED overrides), {calls} calls",

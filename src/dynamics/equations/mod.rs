@@ -540,8 +540,8 @@ impl PlanetaryDynamics {
     /// jump is η times the mesh's tangent stiffness at its last evaluation
     /// in contact; the damping η ∂F/∂δ δ̇ also jumps where a pair enters or
     /// leaves a mesh that stays in contact (the tangent stiffness jumps
-    /// there), and those jumps are not switches of this kind: the periodic
-    /// solvers' Floquet multipliers leave them out.
+    /// there): [`Self::add_rayleigh_jump`] gives those, which the saltations
+    /// of shooting and of the harmonic balance's multipliers carry too.
     pub fn add_damping_switch(&self, i: usize, on: bool, f: &mut [f64]) {
         let link = &self.links[i];
         let c = link.damping_at(self.mesh_stiffness_damping, self.touch_stiffness[i]);
@@ -550,6 +550,29 @@ impl PlanetaryDynamics {
         for (j, b) in &link.b_nz {
             f[*j] += sign * b * jump;
         }
+    }
+
+    /// Adds to `f` the change of the generalized forces [N or N·m] where a
+    /// pair enters or leaves mesh `i` while the mesh stays in contact, under
+    /// Rayleigh damping: the damping force η K_t δ̇ jumps with the tangent
+    /// stiffness, from η `before` δ̇ to η `after` δ̇ (N/m), δ̇ of the last
+    /// evaluation. Nothing under the ratio model, whose damping does not
+    /// change while a pair touches.
+    pub fn add_rayleigh_jump(&self, i: usize, [before, after]: [f64; 2], f: &mut [f64]) {
+        let eta = self.mesh_stiffness_damping;
+        if eta == 0.0 || before <= 0.0 || after <= 0.0 {
+            return;
+        }
+        let jump = eta * (after - before) * self.meshes[i].approach_rate;
+        for (j, b) in &self.links[i].b_nz {
+            f[*j] -= b * jump;
+        }
+    }
+
+    /// Whether the damping is Rayleigh's (η > 0 on the meshes), whose force
+    /// jumps at every pair switch ([`Self::add_rayleigh_jump`]).
+    pub fn rayleigh_meshes(&self) -> bool {
+        self.mesh_stiffness_damping > 0.0
     }
 
     fn model(&self, kind: MeshKind) -> &MeshModel {

@@ -662,7 +662,9 @@ impl PeriodicProblem {
             let t = rk.time();
             let (q, mut v) = (rk.q().to_vec(), rk.v().to_vec());
             let now = system.touching(t, &q, &v);
-            if now != touching {
+            // Under Rayleigh damping every pair switch is a jump of the
+            // damping force, not only a mesh's contact starting or ending.
+            if now != touching || system.rayleigh_meshes() {
                 let steps = (1e-6 * period, self.q_scale);
                 if system.saltation(t, &q, &mut v, (&touching, &now), &events, steps) {
                     let controller = rk.controller_state();

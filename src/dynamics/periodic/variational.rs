@@ -101,6 +101,12 @@ impl<'a, 'b> Variational<'a, 'b> {
         (qa, va)
     }
 
+    /// Whether the model's mesh damping is Rayleigh's, whose force jumps at
+    /// every pair switch.
+    pub(super) fn rayleigh_meshes(&self) -> bool {
+        self.frame.model().rayleigh_meshes()
+    }
+
     /// Whether each mesh has a pair in contact at the augmented state (q, v)
     /// at time `t` \[s\] (the flow's part of it decides).
     pub(super) fn touching(&mut self, t: f64, q: &[f64], v: &[f64]) -> Vec<bool> {
@@ -138,16 +144,39 @@ impl<'a, 'b> Variational<'a, 'b> {
         let mut changed = false;
         let mut g = Vec::new();
         let mut qp = q[..n].to_vec();
+        let rayleigh = self.frame.model().rayleigh_meshes();
         for (i, (&was, &is)) in before.iter().zip(now).enumerate() {
-            if was == is {
+            // A mesh that stays in contact jumps under Rayleigh damping only.
+            if was == is && !(rayleigh && is) {
                 continue;
             }
             let Some(e) = events.iter().rev().find(|e| self.frame.model().event_mesh(e.index) == Some(i))
             else {
                 continue;
             };
+            // Under Rayleigh damping, the tangent stiffness just before the
+            // switching surface (a step τ back along the flow).
+            let stiffness_before = if was == is {
+                for k in 0..n {
+                    qp[k] = q[k] - tau * v[k];
+                }
+                self.frame.events(t - tau, &qp, &v[..n], &mut g);
+                self.frame.model().meshes[i].stiffness
+            } else {
+                0.0
+            };
             self.frame.events(t, &q[..n], &v[..n], &mut g);
             let h1 = g[e.index];
+            // A pair's switch in a mesh that stays in contact: the jump at
+            // the landing's state.
+            let mut jump = vec![0.0; n];
+            if was == is {
+                let after = self.frame.model().meshes[i].stiffness;
+                self.frame.model().add_rayleigh_jump(i, [stiffness_before, after], &mut jump);
+                if jump.iter().all(|a| *a == 0.0) {
+                    continue;
+                }
+            }
             for k in 0..n {
                 qp[k] = q[k] + tau * v[k];
             }
@@ -156,9 +185,11 @@ impl<'a, 'b> Variational<'a, 'b> {
             if !(rate.is_finite() && rate != 0.0) {
                 continue;
             }
-            // δ̇ of the evaluations above, all at the landing's velocities.
-            let mut jump = vec![0.0; n];
-            self.frame.model().add_damping_switch(i, is, &mut jump);
+            // A mesh's contact starting or ending: δ̇ of the evaluations
+            // above, all at the landing's velocities.
+            if was != is {
+                self.frame.model().add_damping_switch(i, is, &mut jump);
+            }
             for (a, mass) in jump.iter_mut().zip(&self.mass) {
                 *a /= mass;
             }

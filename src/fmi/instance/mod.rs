@@ -938,8 +938,12 @@ mod tests {
         // when the gear data give one (the example's planet has none); the
         // speed-driven member only when it is not the input member; the
         // response only when steady, the steady grid's keys only when not
-        // their defaults.
+        // their defaults; the damping model only when Rayleigh's, its
+        // coefficients only when not 0.
         let optional = [
+            "dynamics.damping",
+            "dynamics.rayleigh_mass_per_s",
+            "dynamics.rayleigh_stiffness_s",
             "planets.angles_deg",
             "supports.planet_bearings_n_per_m",
             "dynamics.load_balance",

@@ -183,10 +183,19 @@ fn apply_special(p: Special, values: &Values, scene: &mut Scene) -> Result<(), S
                 x => return Err(format!("dampingModel = {x}: allowed are 0 (damping ratios), 1 (Rayleigh)")),
             }
         }
-        // Written as set: under dampingModel = 0 a nonzero coefficient is
-        // refused by the scene's check, naming the variable.
-        Special::RayleighMassCoefficient => scene.dynamics.rayleigh_mass_per_s = r,
-        Special::RayleighStiffnessCoefficient => scene.dynamics.rayleigh_stiffness_s = r,
+        // Read only with dampingModel = 1 (as stepsPerMeshCycle only by
+        // generalized-α), but checked either way.
+        Special::RayleighMassCoefficient | Special::RayleighStiffnessCoefficient => {
+            if !(r.is_finite() && r >= 0.0) {
+                return Err(format!("{} = {r}: must be a finite number, at least 0", v.name()));
+            }
+            if scene.dynamics.damping == DampingModel::Rayleigh {
+                *match p {
+                    Special::RayleighMassCoefficient => &mut scene.dynamics.rayleigh_mass_per_s,
+                    _ => &mut scene.dynamics.rayleigh_stiffness_s,
+                } = r;
+            }
+        }
         Special::LoadBalance => {
             scene.dynamics.load_balance = match values.int(v) {
                 0 => false,

@@ -23,6 +23,10 @@ struct DampingSwitch {
     on: bool,
     /// The event (tooth pair and flank) whose value crosses zero there.
     event: usize,
+    /// Whether the mesh touches on both sides: a pair entering or leaving
+    /// a mesh in contact, a jump of the damping force under Rayleigh damping
+    /// only.
+    within: bool,
 }
 
 /// The monodromy of the balance's variational equations, built interval by
@@ -304,10 +308,17 @@ impl<'o> Propagation<'o> {
         pairs.push(time);
         let Some(i) = frame.model().event_mesh(e) else { return };
         let (was, is) = (self.mesh_events(frame, ta)[i], self.mesh_events(frame, tb)[i]);
-        if (was.0 > 0.0) != (is.0 > 0.0)
+        let within = was.0 > 0.0 && is.0 > 0.0 && frame.model().rayleigh_meshes();
+        if ((was.0 > 0.0) != (is.0 > 0.0) || within)
             && !switches.iter().any(|s| s.mesh == i && (s.time - time).abs() <= 1e-9 * h)
         {
-            switches.push(DampingSwitch { time, mesh: i, on: is.0 > 0.0, event: is.1 });
+            switches.push(DampingSwitch {
+                time,
+                mesh: i,
+                on: is.0 > 0.0,
+                event: if within { e } else { is.1 },
+                within,
+            });
         }
     }
 
@@ -354,10 +365,27 @@ impl<'o> Propagation<'o> {
             let minus = value(self, frame, t, &qp, &v0);
             *out = (plus - minus) / (2.0 * eps);
         }
+        // Under Rayleigh damping, within a mesh in contact: the tangent
+        // stiffness on either side of the instant.
+        let stiffness = if switch.within {
+            let mut at = |walk: &mut Self, t: f64| {
+                walk.state_at(t);
+                let (q, v) = (walk.q.clone(), walk.v.clone());
+                frame.events(t, &q, &v, &mut walk.events);
+                frame.model().meshes[switch.mesh].stiffness
+            };
+            [at(self, t - tau), at(self, t + tau)]
+        } else {
+            [0.0; 2]
+        };
         // The jump at the switch's own state: the mesh's approach rate of this evaluation.
         frame.events(t, &q0, &v0, &mut self.events);
         let mut jump = vec![0.0; n];
-        frame.model().add_damping_switch(switch.mesh, switch.on, &mut jump);
+        if switch.within {
+            frame.model().add_rayleigh_jump(switch.mesh, stiffness, &mut jump);
+        } else {
+            frame.model().add_damping_switch(switch.mesh, switch.on, &mut jump);
+        }
         let projected: Vec<f64> = (0..m).map(|a| (0..n).map(|i| self.p[i + n * a] * jump[i]).sum()).collect();
         let w = self.scale.unwrap_or(1.0);
         let kick: Vec<f64> = (0..m)
