@@ -176,25 +176,8 @@ fn apply_special(p: Special, values: &Values, scene: &mut Scene) -> Result<(), S
         | Special::SunTipDiameter
         | Special::PlanetTipDiameter
         | Special::RingTipDiameter => gear_data(values, scene)?,
-        Special::DampingModel => {
-            scene.dynamics.damping = match values.int(v) {
-                0 => DampingModel::Ratio,
-                1 => DampingModel::Rayleigh,
-                x => return Err(format!("dampingModel = {x}: allowed are 0 (damping ratios), 1 (Rayleigh)")),
-            }
-        }
-        // Read only with dampingModel = 1 (as stepsPerMeshCycle only by
-        // generalized-α), but checked either way.
-        Special::RayleighMassCoefficient | Special::RayleighStiffnessCoefficient => {
-            if !(r.is_finite() && r >= 0.0) {
-                return Err(format!("{} = {r}: must be a finite number, at least 0", v.name()));
-            }
-            if scene.dynamics.damping == DampingModel::Rayleigh {
-                *match p {
-                    Special::RayleighMassCoefficient => &mut scene.dynamics.rayleigh_mass_per_s,
-                    _ => &mut scene.dynamics.rayleigh_stiffness_s,
-                } = r;
-            }
+        Special::DampingModel | Special::RayleighMassCoefficient | Special::RayleighStiffnessCoefficient => {
+            damping(p, values, scene)?
         }
         Special::LoadBalance => {
             scene.dynamics.load_balance = match values.int(v) {
@@ -206,6 +189,36 @@ fn apply_special(p: Special, values: &Values, scene: &mut Scene) -> Result<(), S
                          1 (load balance: a speed controller holds the output at its kinematic speed)"
                     ))
                 }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The damping model (`dampingModel`) and Rayleigh's coefficients, read
+/// only with dampingModel = 1 (as stepsPerMeshCycle only by generalized-α)
+/// but checked either way.
+fn damping(p: Special, values: &Values, scene: &mut Scene) -> Result<(), String> {
+    let v = Settable::from(p).variable();
+    let d = &mut scene.dynamics;
+    match p {
+        Special::DampingModel => {
+            d.damping = match values.int(v) {
+                0 => DampingModel::Ratio,
+                1 => DampingModel::Rayleigh,
+                x => return Err(format!("dampingModel = {x}: allowed are 0 (damping ratios), 1 (Rayleigh)")),
+            }
+        }
+        _ => {
+            let r = values.real(v);
+            if !(r.is_finite() && r >= 0.0) {
+                return Err(format!("{} = {r}: must be a finite number, at least 0", v.name()));
+            }
+            if d.damping == DampingModel::Rayleigh {
+                *match p {
+                    Special::RayleighMassCoefficient => &mut d.rayleigh_mass_per_s,
+                    _ => &mut d.rayleigh_stiffness_s,
+                } = r;
             }
         }
     }
