@@ -27,6 +27,8 @@
 //! coordinates with the planets' cyclic symmetry
 //! (`analysis::condensed_branch::CondensedBranch`), and with `--broken-symmetry`
 //! a restart that reaches a state breaking the symmetry goes on with every mesh.
+//! `-- --scene=NAME` draws it for another built-in scene on the example's
+//! geometry (`example-2004-flexible`: the study's bearings and damping).
 //! The wear model that makes the states runs first and is timed apart (the
 //! figure starts from the states, as the study's does).
 //! docs/PERFORMANCE.md records the figures.
@@ -59,10 +61,15 @@ const PERIODIC_TOLERANCE: f64 = 1e-5;
 
 fn main() {
     let arg = |name: &str| std::env::args().any(|a| a == name);
-    let mut scene = Scene::example_2004();
+    let name = std::env::args().find_map(|a| a.strip_prefix("--scene=").map(str::to_string));
+    let mut scene = match name.as_deref() {
+        None => Scene::example_2004(),
+        Some(n) => Scene::builtin(n).unwrap_or_else(|| panic!("--scene={n}: not a built-in scene")),
+    };
     if arg("--torsional") {
         scene.dynamics.fidelity = Fidelity::Torsional;
     }
+    println!("scene {}", scene.name);
     let window = if arg("--full-window") {
         Window::Fixed
     } else {
@@ -136,7 +143,7 @@ fn main() {
         format!("marching in absolute coordinates (the sweep's RK 5(4) at 3e-6), window {window:?}")
     };
     println!(
-        "Fig. 11: example-2004, {:?}, κ = {KAPPAS:?}, {n} speeds × 2 directions, {} threads, {route}",
+        "Fig. 11: {:?}, κ = {KAPPAS:?}, {n} speeds × 2 directions, {} threads, {route}",
         set.fidelity(),
         rayon::current_num_threads()
     );
@@ -259,7 +266,7 @@ fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool, (condensed
     let points: usize = runs.iter().map(|r| r.2.points.len()).sum();
     let evaluations: u64 = runs.iter().map(|r| r.2.work.rhs_evaluations).sum();
     println!(
-        "Fig. 11 as the continuation's equivalent: example-2004, {:?}, κ = {KAPPAS:?}, 500–15 000 rpm up and down, \
+        "Fig. 11 as the continuation's equivalent: {:?}, κ = {KAPPAS:?}, 500–15 000 rpm up and down, \
          nominal step {step} rpm, {}, {} threads, {}",
         set.fidelity(),
         match (condensed, broken) {
