@@ -197,7 +197,10 @@ fn apply_special(p: Special, values: &Values, scene: &mut Scene) -> Result<(), S
 
 /// The damping model (`dampingModel`) and Rayleigh's coefficients, read
 /// only with dampingModel = 1 (as stepsPerMeshCycle only by generalized-α)
-/// but checked either way.
+/// but checked either way: the scene's own check (`dynamics.rayleigh_*`)
+/// sees a coefficient only where it is written. The coefficients read the
+/// scene's damping model, which `dampingModel` (value reference 64, before
+/// theirs in `Settable::ALL`, the table's order) has already set.
 fn damping(p: Special, values: &Values, scene: &mut Scene) -> Result<(), String> {
     let v = Settable::from(p).variable();
     let d = &mut scene.dynamics;
