@@ -223,6 +223,12 @@ fn continuation(set: &GearSet, step: f64, no_check: bool, join: bool, (condensed
                 None => follow_branch(&mut solver, &settings, |_| {}),
             }
             .expect("continuation");
+            eprintln!(
+                "  κ = {} {a:.0} → {b:.0} rpm: {} points checked at twice their harmonics, {} kept them",
+                KAPPAS[i],
+                solver.spectral_checks(),
+                solver.spectral_resolves()
+            );
             let orbits = std::mem::take(&mut solver.orbits);
             hb = cb.into_balance();
             (branch, orbits)

@@ -5,9 +5,11 @@
 //! Floquet multipliers the whole model's (so an orbit of the planets' symmetry that loses
 //! stability to one that breaks it shows as a multiplier leaving the unit circle).
 
+use crate::analysis::accuracy::harmonic_error;
 use crate::analysis::continuation::{balance_point, march, BranchSolver};
 use crate::dynamics::periodic::{
     CondensedArc, CondensedBalance, HarmonicOrbit, PeriodicError, PeriodicOrbit, Symmetry,
+    CONDENSED_MAX_HARMONICS,
 };
 use crate::dynamics::response::Work;
 
@@ -29,6 +31,15 @@ pub const MARCHED_ASYMMETRY: f64 = 1e-2;
 /// symmetry by more than this (Newton's tolerance is 1e-7 of the coefficients).
 pub const BROKEN_SYMMETRY: f64 = 1e-4;
 
+/// A branch point whose spectrum asks for more harmonics keeps twice them where the mesh
+/// forces' harmonics there differ from its own by more than this (E_h of the one against
+/// the other, docs/ACCURACY.md): half the 1e-3 the periodic states are held to.
+pub const SPECTRAL_ESTIMATE: f64 = 5e-4;
+
+/// A check that found a point within [`SPECTRAL_ESTIMATE`] at its own harmonics stands for
+/// points within this share of its speed whose top quarter holds no more.
+pub const SPECTRAL_SPAN: f64 = 0.1;
+
 /// Continuation on a [`CondensedBalance`].
 pub struct CondensedBranch<'a> {
     balance: &'a mut CondensedBalance,
@@ -45,6 +56,16 @@ pub struct CondensedBranch<'a> {
     /// The orbits of the points accepted, in the full balance's coordinates, in the order of
     /// the branch's points (for their forces: `HarmonicBalance::steady_state`).
     pub orbits: Vec<HarmonicOrbit>,
+    /// The last accepted point's coordinates where it was solved again at the harmonics its
+    /// spectrum asked ([`BranchSolver::resolved`]).
+    resolved: Option<Vec<f64>>,
+    /// Points solved again at more harmonics than the rule's ([`Self::spectral_resolves`]).
+    spectral_resolves: usize,
+    /// Solves at twice a point's harmonics that checked it ([`Self::spectral_checks`]).
+    spectral_checks: usize,
+    /// The speed [rad/s] and top-quarter share of the last point a check found within
+    /// [`SPECTRAL_ESTIMATE`] at its own harmonics.
+    checked: Option<(f64, f64)>,
 }
 
 impl<'a> CondensedBranch<'a> {
@@ -58,7 +79,22 @@ impl<'a> CondensedBranch<'a> {
             broken_restarts: 0,
             balance,
             orbits: Vec::new(),
+            resolved: None,
+            spectral_resolves: 0,
+            spectral_checks: 0,
+            checked: None,
         }
+    }
+
+    /// How many branch points were solved again at more harmonics because their spectrum
+    /// asked for them ([`HarmonicOrbit::spectral_harmonics`]).
+    pub fn spectral_resolves(&self) -> usize {
+        self.spectral_resolves
+    }
+
+    /// How many branch points were checked by a solve at twice their harmonics.
+    pub fn spectral_checks(&self) -> usize {
+        self.spectral_checks
     }
 
     /// Whether a restart whose march reaches a state that breaks the planets' symmetry goes
@@ -96,6 +132,86 @@ impl<'a> CondensedBranch<'a> {
 }
 
 impl CondensedBranch<'_> {
+    /// The coordinates `x` at `omega` [rad/s] (at the balance's H), or the point solved again
+    /// at twice the harmonics (up to [`CONDENSED_MAX_HARMONICS`]) where its spectrum asks for
+    /// them ([`HarmonicOrbit::spectral_harmonics`]) and the mesh forces' harmonics at twice
+    /// the harmonics differ from the point's by more than [`SPECTRAL_ESTIMATE`] (E_h of the
+    /// one against the other: an estimate of the point's own). A check that finds the point's
+    /// forces within it lets points within [`SPECTRAL_SPAN`] of its speed whose top quarter
+    /// holds no more go unchecked. A point kept at more harmonics sets the floor of the next
+    /// steps' H ([`CondensedBalance::set_harmonic_floor`]), lowered where its spectrum says
+    /// half of them would do. Where a solve at more harmonics fails, or breaks the planets'
+    /// symmetry, the point stays at the H it was found at.
+    fn spectral(
+        &mut self,
+        omega: f64,
+        x: &[f64],
+        work: &mut Work,
+    ) -> Result<Option<Vec<f64>>, PeriodicError> {
+        // The coordinates kept so far (`None`: `x`) and the harmonics they are at.
+        let mut resolved: Option<Vec<f64>> = None;
+        loop {
+            let kept = self.balance.harmonics();
+            let at = resolved.as_deref().unwrap_or(x);
+            let mut evaluations = 0;
+            let orbit = self.balance.orbit_at(omega, at, 0, &mut evaluations)?;
+            work.rhs_evaluations += evaluations;
+            let asked = orbit.spectral_harmonics().min(CONDENSED_MAX_HARMONICS);
+            let tail = orbit.band_share(3 * kept / 4, kept);
+            let tolerated = self.checked.is_some_and(|(speed, share)| {
+                (omega - speed).abs() <= SPECTRAL_SPAN * speed && tail <= share
+            });
+            let floor = self.balance.harmonic_floor();
+            if asked <= kept || tolerated {
+                // A floor the spectrum set earlier goes where half its harmonics would do.
+                if asked < kept && floor > asked {
+                    self.balance.set_harmonic_floor(asked);
+                }
+                return Ok(resolved);
+            }
+            let before = self.balance.balance().steady_state(&orbit)?;
+            self.balance.set_harmonic_floor(asked);
+            self.balance.arc_fit(omega)?;
+            let guess = self.balance.fitted(at);
+            let symmetry = self.balance.symmetry();
+            let solved = match self.balance.solve(omega, Some(&guess)) {
+                Ok((doubled, report)) if self.balance.symmetry() == symmetry => {
+                    work.rhs_evaluations += report.law_evaluations;
+                    work.newton_iterations += report.iterations as u64;
+                    Some(doubled)
+                }
+                _ => None,
+            };
+            self.spectral_checks += 1;
+            let estimate = match &solved {
+                Some(doubled) => {
+                    let after = self.balance.balance().steady_state(doubled)?;
+                    let meshes = |s: &crate::dynamics::response::SteadyState| -> Vec<_> {
+                        s.meshes.iter().map(|m| m.harmonics.clone()).collect()
+                    };
+                    harmonic_error(&meshes(&before), &meshes(&after))
+                }
+                None => 0.0,
+            };
+            match solved {
+                Some(doubled) if estimate > SPECTRAL_ESTIMATE => {
+                    resolved = Some(self.balance.coordinates_of(&doubled)?);
+                }
+                _ => {
+                    // The point's own harmonics do (or no more can be had): back to them.
+                    if solved.is_some() {
+                        self.checked = Some((omega, tail));
+                    }
+                    self.balance.restore_symmetry(symmetry, omega)?;
+                    self.balance.set_harmonic_floor(kept);
+                    self.balance.arc_fit(omega)?;
+                    self.balance.set_harmonic_floor(if resolved.is_some() { kept } else { floor });
+                    return Ok(resolved);
+                }
+            }
+        }
+    }
+
     /// [`BranchSolver::restart`] once `from` is in the run's symmetry and `z` is its state.
     fn restarted(
         &mut self,
@@ -173,6 +289,9 @@ impl BranchSolver for CondensedBranch<'_> {
             ..Work::default()
         };
         let x = self.balance.coordinates_of(&solved)?;
+        let resolved = self.spectral(omega, &x, &mut work)?;
+        self.spectral_resolves += usize::from(resolved.is_some());
+        let x = resolved.unwrap_or(x);
         let mut evaluations = 0;
         let linear = self.balance.arc_linearize(omega, &x, unit, &mut evaluations)?;
         work.rhs_evaluations += evaluations;
@@ -244,11 +363,19 @@ impl BranchSolver for CondensedBranch<'_> {
         corrections: usize,
         (work, flows): (&mut Work, &mut usize),
     ) -> Result<(PeriodicOrbit, CondensedArc), PeriodicError> {
+        let resolved = self.spectral(omega, x, work)?;
+        self.spectral_resolves += usize::from(resolved.is_some());
+        let x = resolved.as_deref().unwrap_or(x);
         let mut evaluations = 0;
         let linear = self.balance.arc_linearize(omega, x, unit, &mut evaluations)?;
         work.rhs_evaluations += evaluations;
         let orbit = self.orbit(omega, x, (corrections, linear.residual()), (work, flows))?;
+        self.resolved = resolved;
         Ok((orbit, linear))
+    }
+
+    fn resolved(&mut self) -> Option<Vec<f64>> {
+        self.resolved.take()
     }
 
     /// The linear part is built once per speed: a step's corrections share it.

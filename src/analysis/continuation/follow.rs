@@ -382,10 +382,10 @@ impl<'a, L> Run<'a, L> {
         (mut work, mut step_flows): (Work, usize),
         progress: &mut impl FnMut(&BranchPoint),
     ) -> bool {
-        let Found { x, corrections, gap, last } = found;
-        let (unit, m) = (self.unit, step.m);
+        let Found { mut x, corrections, gap, last } = found;
+        let (unit, mut m) = (self.unit, step.m);
         self.refresh = false;
-        let k = x.len() - 1;
+        let mut k = x.len() - 1;
         let omega = x[k] * unit;
         let accepted = solver.accept((&x[..k], omega, unit), corrections, (&mut work, &mut step_flows));
         add(&mut self.total, &work);
@@ -397,6 +397,17 @@ impl<'a, L> Run<'a, L> {
                 return false;
             }
         };
+        if let Some(resolved) = solver.resolved() {
+            // The point was solved again at more harmonics: the run's vectors follow.
+            let lambda = x[k];
+            x = resolved;
+            x.push(lambda);
+            if let Err(e) = solver.fit((omega, omega), &mut [&mut self.y, &mut self.t, &mut self.furthest]) {
+                self.ended = format!("stopped at {omega:.4} rad/s: {e}");
+                return false;
+            }
+            (m, k) = (self.y.len() - 1, x.len() - 1);
+        }
         let mut seed = vec![0.0; x.len()];
         seed[k] = self.direction;
         let orient = if gap == Some(GapKind::Restart) { &seed } else { &self.t };

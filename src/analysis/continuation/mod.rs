@@ -473,6 +473,14 @@ pub trait BranchSolver {
     fn fit(&mut self, _speeds: (f64, f64), _vectors: &mut [&mut Vec<f64>]) -> Result<bool, PeriodicError> {
         Ok(false)
     }
+
+    /// The x the last [`Self::accept`] took its point at, where that is not the corrected
+    /// x it was given (the balance solved the point again at the harmonics its spectrum
+    /// asked); `None` where the point is the corrected x. The run then brings its vectors
+    /// to the new unknowns ([`Self::fit`] at the point's speed).
+    fn resolved(&mut self) -> Option<Vec<f64>> {
+        None
+    }
 }
 
 impl BranchSolver for PeriodicProblem {

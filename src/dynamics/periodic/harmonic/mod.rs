@@ -298,6 +298,53 @@ pub struct HarmonicOrbit {
     pub crossings: Vec<(f64, usize)>,
 }
 
+/// The orbit's own spectrum asks for more harmonics where its top quarter of harmonics
+/// (above 3H/4) holds more than this share of its oscillation (root-sum-square over every
+/// coordinate, relative to that of harmonics 1 to H; [`HarmonicOrbit::spectral_harmonics`]).
+/// The mode rule ([`HARMONICS_PER_MODE_ORDER`]) follows the highest natural frequency, but a
+/// narrow force peak at a contact switch asks for more where the modes are soft (the
+/// example's flexible planet bearings). Measured on the condensed balance against long
+/// marching on `example-2004-flexible`, κ = 0 and 6, every 1000 rpm, H = 32, 64 and 128
+/// (docs/PERIODIC.md §3): where E_h exceeds 1e-3 the top quarter holds 6.6e-4 or more
+/// (κ = 6, 2000 rpm, H = 64: E_h 1.5e-3; κ = 0, 5000 rpm, H = 32: 2.3e-3), and at 2.9e-4
+/// or less E_h is at most 8.8e-4. The share alone does not decide (a stiff model's high
+/// modes ring in it without harm), so the continuation checks such a point at 2H.
+pub const SPECTRAL_TAIL: f64 = 2e-4;
+
+impl HarmonicOrbit {
+    /// The root-sum-square of the coefficients of harmonics `lo + 1 ..= hi` over every
+    /// coordinate, relative to that of harmonics 1 to H (0 for an orbit without
+    /// oscillation).
+    pub fn band_share(&self, lo: usize, hi: usize) -> f64 {
+        let h = self.harmonics;
+        let m = self.coefficients.len() / (2 * h + 1);
+        let power = |k: usize| -> f64 {
+            let (a, b) = ((2 * k - 1) * m, 2 * k * m);
+            (0..m).map(|c| self.coefficients[a + c].powi(2) + self.coefficients[b + c].powi(2)).sum()
+        };
+        let all: f64 = (1..=h).map(power).sum();
+        if all <= 0.0 {
+            return 0.0;
+        }
+        ((lo + 1..=hi.min(h)).map(power).sum::<f64>() / all).sqrt()
+    }
+
+    /// The harmonics the orbit's spectrum asks: 2H where its top quarter
+    /// ([`Self::band_share`] above 3H/4) holds more than [`SPECTRAL_TAIL`]; H/2 (at least
+    /// [`MIN_HARMONICS`]) where the quarter H/2 would keep on top, 3H/8 to H/2, holds less
+    /// than half of it (the margin keeps a count from going back and forth); H otherwise.
+    pub fn spectral_harmonics(&self) -> usize {
+        let h = self.harmonics;
+        if self.band_share(3 * h / 4, h) > SPECTRAL_TAIL {
+            2 * h
+        } else if h / 2 >= MIN_HARMONICS && self.band_share(3 * h / 8, h / 2) < 0.5 * SPECTRAL_TAIL {
+            h / 2
+        } else {
+            h
+        }
+    }
+}
+
 /// The highest natural frequency \[Hz\] of the model linearized at its
 /// static state at `omega` [rad/s] (tangent stiffness symmetrized, damping
 /// left out).

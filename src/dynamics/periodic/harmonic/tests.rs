@@ -378,3 +378,59 @@ fn synthesis_and_analysis_are_inverse() {
         assert!((a - b).abs() < 1e-12);
     }
 }
+
+/// An orbit of `m` coordinates whose harmonic k has amplitude `amplitude(k)` in each.
+fn orbit_with(h: usize, m: usize, amplitude: impl Fn(usize) -> f64) -> HarmonicOrbit {
+    let mut coefficients = vec![0.0; m * (2 * h + 1)];
+    for k in 1..=h {
+        for c in 0..m {
+            // Split between cosine and sine: the share reads the amplitude.
+            coefficients[(2 * k - 1) * m + c] = 0.6 * amplitude(k);
+            coefficients[2 * k * m + c] = 0.8 * amplitude(k);
+        }
+    }
+    coefficients[0] = 5.0;
+    HarmonicOrbit {
+        speed: 100.0,
+        period: 1e-3,
+        cycles: 1,
+        harmonics: h,
+        coefficients,
+        iterations: 0,
+        residual: 0.0,
+        last_step: 0.0,
+        factorizations: 0,
+        products: 0,
+        force_evaluations: 0,
+        march_steps: 0,
+        neighbour: None,
+        crossings: Vec::new(),
+    }
+}
+
+/// The band share is the root-sum-square of the band's amplitudes over that of all of them
+/// (the mean left out): with amplitudes 2^-k, harmonics 3 and 4 of 1..=4 hold
+/// sqrt((4^-3 + 4^-4) / Σ 4^-k). The count doubles where the top quarter holds more than
+/// SPECTRAL_TAIL, halves where the quarter below H/2 holds less than half of it, and stays
+/// in between.
+#[test]
+fn the_spectrum_asks_for_harmonics_by_its_top_quarter() {
+    let orbit = orbit_with(4, 3, |k| 0.5_f64.powi(k as i32));
+    let all: f64 = (1..=4).map(|k| 0.25_f64.powi(k)).sum();
+    let expected = ((0.25_f64.powi(3) + 0.25_f64.powi(4)) / all).sqrt();
+    assert!((orbit.band_share(2, 4) - expected).abs() < 1e-14, "{}", orbit.band_share(2, 4));
+    assert!((orbit.band_share(0, 4) - 1.0).abs() < 1e-14);
+    // Geometric decay by r per harmonic: the top quarter of 64 holds about r^48 of the whole.
+    let h = 64;
+    let asked = |r: f64| orbit_with(h, 2, |k| r.powi(k as i32)).spectral_harmonics();
+    let share = |r: f64| orbit_with(h, 2, |k| r.powi(k as i32)).band_share(3 * h / 4, h);
+    assert!(share(0.9) > SPECTRAL_TAIL && asked(0.9) == 2 * h, "{}", share(0.9));
+    assert!(share(0.5) < 0.5 * SPECTRAL_TAIL && asked(0.5) == h / 2);
+    // Between: the top quarter within the tail, the quarter below H/2 not within half of it.
+    let r = 0.8;
+    assert!(share(r) <= SPECTRAL_TAIL, "{}", share(r));
+    assert!(orbit_with(h, 2, |k| r.powi(k as i32)).band_share(3 * h / 8, h / 2) >= 0.5 * SPECTRAL_TAIL);
+    assert_eq!(asked(r), h);
+    // Never below MIN_HARMONICS.
+    assert_eq!(orbit_with(MIN_HARMONICS, 2, |k| 0.1_f64.powi(k as i32)).spectral_harmonics(), MIN_HARMONICS);
+}

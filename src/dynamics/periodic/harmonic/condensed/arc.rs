@@ -152,11 +152,18 @@ impl CondensedBalance {
         })
     }
 
-    /// Takes the harmonics (and samples) the rule gives at `omega` [rad/s], held at
-    /// [`CONDENSED_MAX_HARMONICS`]; whether they
-    /// changed (coefficients taken before are then brought to them by [`refit`]).
+    /// Takes the harmonics (and samples) the rule gives at `omega` [rad/s], at least the
+    /// floor the branch's spectrum set ([`Self::set_harmonic_floor`]), held at
+    /// [`CONDENSED_MAX_HARMONICS`]; whether they changed (coefficients taken before are then
+    /// brought to them by [`refit`]).
     pub fn arc_fit(&mut self, omega: f64) -> Result<bool, PeriodicError> {
-        let wanted = held(self.balance.settings_for_speed(omega));
+        let rule = self.balance.settings_for_speed(omega);
+        let wanted = if self.floor > rule.harmonics {
+            let per = rule.samples / rule.harmonics.max(1);
+            held(HarmonicSettings { harmonics: self.floor, samples: per * self.floor, ..rule })
+        } else {
+            held(rule)
+        };
         if wanted.harmonics == self.balance.settings.harmonics {
             return Ok(false);
         }
@@ -169,6 +176,23 @@ impl CondensedBalance {
         self.linear = None;
         self.spare = None;
         Ok(true)
+    }
+
+    /// Sets the fewest harmonics [`Self::arc_fit`] takes (0: the rule's alone): a branch
+    /// point's spectrum asks for more than the rule where a narrow force peak needs them
+    /// ([`HarmonicOrbit::spectral_harmonics`]).
+    pub fn set_harmonic_floor(&mut self, harmonics: usize) {
+        self.floor = harmonics;
+    }
+
+    /// The floor [`Self::set_harmonic_floor`] set (0: none).
+    pub fn harmonic_floor(&self) -> usize {
+        self.floor
+    }
+
+    /// The harmonics H the balance keeps now.
+    pub fn harmonics(&self) -> usize {
+        self.balance.settings.harmonics
     }
 
     /// Solves with `symmetry` again where a solve had given it up (a march's state that broke

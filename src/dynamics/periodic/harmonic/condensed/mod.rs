@@ -301,6 +301,9 @@ pub struct CondensedBalance {
     spare: Option<Linear>,
     /// The last symmetry check's orbit with every mesh (contact coordinates).
     expanded: Option<Vec<f64>>,
+    /// The fewest harmonics [`Self::arc_fit`] takes whatever the rule: what the last
+    /// branch point's spectrum asked ([`HarmonicOrbit::spectral_harmonics`]); 0 at first.
+    floor: usize,
 }
 
 /// A solve's work: mesh-law evaluations, Newton iterations and factorisations.
@@ -402,7 +405,16 @@ impl CondensedBalance {
         if settings != balance.settings {
             balance.set_settings(settings).expect("fewer harmonics of valid settings are valid");
         }
-        Self { balance, symmetry, projected: true, layout: None, linear: None, spare: None, expanded: None }
+        Self {
+            balance,
+            symmetry,
+            projected: true,
+            layout: None,
+            linear: None,
+            spare: None,
+            expanded: None,
+            floor: 0,
+        }
     }
 
     /// Whether solves project the contact switches (the default) or stop at the plain
