@@ -91,13 +91,17 @@ fn reading(speed: f64, meshes: &[MeshResponse]) -> CurvePoint {
 /// check. With `joining`, an earlier run of the same model from `to`
 /// towards `from`, the run ends where it joins that run's unbroken stretch
 /// (`follow_joining`: beyond, it would retrace it). Also gives the branch.
+/// Each point's forces are sampled at `samples` per mesh cycle, the marching
+/// reading's: where a force has a narrow peak its sampled harmonics depend
+/// on the grid, and the branch and marching are compared on one grid.
 pub(super) fn follow(
     model: &PlanetaryDynamics,
     (from, to, step): (f64, f64, f64),
-    spots: &[f64],
+    (spots, samples): (&[f64], usize),
     joining: Option<&Branch>,
 ) -> Result<(Continued, Branch), StudyError> {
-    let problem = PeriodicProblem::new(model.clone(), ShootingSettings::default(), from)?;
+    let shooting = ShootingSettings { samples_per_mesh_cycle: samples, ..ShootingSettings::default() };
+    let problem = PeriodicProblem::new(model.clone(), shooting, from)?;
     let hb = HarmonicBalance::new(problem, HarmonicSettings::default())?;
     let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
     let settings = ContinuationSettings::new(from, to, step);
@@ -265,12 +269,12 @@ impl Continuing<'_> {
     /// and read.
     fn state(&self, s: usize) -> Result<[Read; 2], StudyError> {
         let model = self.models[s];
-        let (up, branch) = follow(model, (self.first, self.last, self.step), &self.spots, None)?;
+        let grid = (&self.spots[..], self.run.samples_per_mesh_cycle());
+        let (up, branch) = follow(model, (self.first, self.last, self.step), grid, None)?;
         let (up, down) = rayon::join(
             || self.read(s, up, Direction::Up),
             || {
-                let (down, _) =
-                    follow(model, (self.last, self.first, self.step), &self.spots, Some(&branch))?;
+                let (down, _) = follow(model, (self.last, self.first, self.step), grid, Some(&branch))?;
                 self.read(s, down, Direction::Down)
             },
         );
