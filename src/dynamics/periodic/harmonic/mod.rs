@@ -312,6 +312,32 @@ pub struct HarmonicOrbit {
 pub const SPECTRAL_TAIL: f64 = 2e-4;
 
 impl HarmonicOrbit {
+    /// The orbit of `coefficients` (H = `harmonics`) at `speed` [rad/s], its `period` \[s\]
+    /// of `cycles` mesh cycles, with no solve's work recorded.
+    pub fn of_coefficients(
+        speed: f64,
+        (period, cycles): (f64, usize),
+        harmonics: usize,
+        coefficients: Vec<f64>,
+    ) -> Self {
+        Self {
+            speed,
+            period,
+            cycles,
+            harmonics,
+            coefficients,
+            iterations: 0,
+            residual: 0.0,
+            last_step: 0.0,
+            factorizations: 0,
+            products: 0,
+            force_evaluations: 0,
+            march_steps: 0,
+            neighbour: None,
+            crossings: Vec::new(),
+        }
+    }
+
     /// The root-sum-square of the coefficients of harmonics `lo + 1 ..= hi` over every
     /// coordinate, relative to that of harmonics 1 to H (0 for an orbit without
     /// oscillation).

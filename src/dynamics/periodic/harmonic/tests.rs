@@ -390,22 +390,7 @@ fn orbit_with(h: usize, m: usize, amplitude: impl Fn(usize) -> f64) -> HarmonicO
         }
     }
     coefficients[0] = 5.0;
-    HarmonicOrbit {
-        speed: 100.0,
-        period: 1e-3,
-        cycles: 1,
-        harmonics: h,
-        coefficients,
-        iterations: 0,
-        residual: 0.0,
-        last_step: 0.0,
-        factorizations: 0,
-        products: 0,
-        force_evaluations: 0,
-        march_steps: 0,
-        neighbour: None,
-        crossings: Vec::new(),
-    }
+    HarmonicOrbit::of_coefficients(100.0, (1e-3, 1), h, coefficients)
 }
 
 /// The band share is the root-sum-square of the band's amplitudes over that of all of them

@@ -943,22 +943,12 @@ impl CondensedBalance {
     /// [rad/s] as an orbit without work.
     fn series(&self, omega: f64, coefficients: Vec<f64>) -> HarmonicOrbit {
         let problem = &self.balance.problem;
-        HarmonicOrbit {
-            speed: omega,
-            period: problem.period(omega),
-            cycles: problem.cycles(),
-            harmonics: self.balance.settings.harmonics,
+        HarmonicOrbit::of_coefficients(
+            omega,
+            (problem.period(omega), problem.cycles()),
+            self.balance.settings.harmonics,
             coefficients,
-            iterations: 0,
-            residual: 0.0,
-            last_step: 0.0,
-            factorizations: 0,
-            products: 0,
-            force_evaluations: 0,
-            march_steps: 0,
-            neighbour: None,
-            crossings: Vec::new(),
-        }
+        )
     }
 
     /// Solves with `symmetry` from now on: the layout and linear parts of another are dropped.
