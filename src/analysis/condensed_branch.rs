@@ -40,6 +40,98 @@ pub const SPECTRAL_ESTIMATE: f64 = 5e-4;
 /// points within this share of its speed whose top quarter holds no more.
 pub const SPECTRAL_SPAN: f64 = 0.1;
 
+/// The checks of [`spectral_harmonics`] along a run.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Checks {
+    /// The speed [rad/s] and top-quarter share of the last point a check found within
+    /// [`SPECTRAL_ESTIMATE`] at its own harmonics.
+    pub passed: Option<(f64, f64)>,
+    /// Solves at twice a point's harmonics.
+    pub count: usize,
+}
+
+/// The coordinates `x` at `omega` [rad/s] (at the balance's H), or the point solved again
+/// at twice the harmonics (up to [`CONDENSED_MAX_HARMONICS`]) where its spectrum asks for
+/// them ([`HarmonicOrbit::spectral_harmonics`]) and the mesh forces' harmonics at twice
+/// the harmonics differ from the point's by more than [`SPECTRAL_ESTIMATE`] (E_h of the
+/// one against the other: an estimate of the point's own). A check that finds the point's
+/// forces within it lets points within [`SPECTRAL_SPAN`] of its speed whose top quarter
+/// holds no more go unchecked. A point kept at more harmonics sets the floor of the next
+/// steps' H ([`CondensedBalance::set_harmonic_floor`]), lowered where its spectrum says
+/// half of them would do. Where a solve at more harmonics fails, or breaks the planets'
+/// symmetry, the point stays at the H it was found at. `checks` counts the solves at
+/// twice the harmonics and keeps the last check that passed.
+pub fn spectral_harmonics(
+    balance: &mut CondensedBalance,
+    omega: f64,
+    x: &[f64],
+    checks: &mut Checks,
+    work: &mut Work,
+) -> Result<Option<Vec<f64>>, PeriodicError> {
+    // The coordinates kept so far (`None`: `x`) and the harmonics they are at.
+    let mut resolved: Option<Vec<f64>> = None;
+    loop {
+        let kept = balance.harmonics();
+        let at = resolved.as_deref().unwrap_or(x);
+        let mut evaluations = 0;
+        let orbit = balance.orbit_at(omega, at, 0, &mut evaluations)?;
+        work.rhs_evaluations += evaluations;
+        let asked = orbit.spectral_harmonics().min(CONDENSED_MAX_HARMONICS);
+        let tail = orbit.band_share(3 * kept / 4, kept);
+        let tolerated = checks
+            .passed
+            .is_some_and(|(speed, share)| (omega - speed).abs() <= SPECTRAL_SPAN * speed && tail <= share);
+        let floor = balance.harmonic_floor();
+        if asked <= kept || tolerated {
+            // A floor the spectrum set earlier goes where half its harmonics would do.
+            if asked < kept && floor > asked {
+                balance.set_harmonic_floor(asked);
+            }
+            return Ok(resolved);
+        }
+        let before = balance.balance().steady_state(&orbit)?;
+        balance.set_harmonic_floor(asked);
+        balance.arc_fit(omega)?;
+        let guess = balance.fitted(at);
+        let symmetry = balance.symmetry();
+        let solved = match balance.solve(omega, Some(&guess)) {
+            Ok((doubled, report)) if balance.symmetry() == symmetry => {
+                work.rhs_evaluations += report.law_evaluations;
+                work.newton_iterations += report.iterations as u64;
+                Some(doubled)
+            }
+            _ => None,
+        };
+        checks.count += 1;
+        let estimate = match &solved {
+            Some(doubled) => {
+                let after = balance.balance().steady_state(doubled)?;
+                let meshes = |s: &crate::dynamics::response::SteadyState| -> Vec<_> {
+                    s.meshes.iter().map(|m| m.harmonics.clone()).collect()
+                };
+                harmonic_error(&meshes(&before), &meshes(&after))
+            }
+            None => 0.0,
+        };
+        match solved {
+            Some(doubled) if estimate > SPECTRAL_ESTIMATE => {
+                resolved = Some(balance.coordinates_of(&doubled)?);
+            }
+            _ => {
+                // The point's own harmonics do (or no more can be had): back to them.
+                if solved.is_some() {
+                    checks.passed = Some((omega, tail));
+                }
+                balance.restore_symmetry(symmetry, omega)?;
+                balance.set_harmonic_floor(kept);
+                balance.arc_fit(omega)?;
+                balance.set_harmonic_floor(if resolved.is_some() { kept } else { floor });
+                return Ok(resolved);
+            }
+        }
+    }
+}
+
 /// Continuation on a [`CondensedBalance`].
 pub struct CondensedBranch<'a> {
     balance: &'a mut CondensedBalance,
@@ -132,84 +224,18 @@ impl<'a> CondensedBranch<'a> {
 }
 
 impl CondensedBranch<'_> {
-    /// The coordinates `x` at `omega` [rad/s] (at the balance's H), or the point solved again
-    /// at twice the harmonics (up to [`CONDENSED_MAX_HARMONICS`]) where its spectrum asks for
-    /// them ([`HarmonicOrbit::spectral_harmonics`]) and the mesh forces' harmonics at twice
-    /// the harmonics differ from the point's by more than [`SPECTRAL_ESTIMATE`] (E_h of the
-    /// one against the other: an estimate of the point's own). A check that finds the point's
-    /// forces within it lets points within [`SPECTRAL_SPAN`] of its speed whose top quarter
-    /// holds no more go unchecked. A point kept at more harmonics sets the floor of the next
-    /// steps' H ([`CondensedBalance::set_harmonic_floor`]), lowered where its spectrum says
-    /// half of them would do. Where a solve at more harmonics fails, or breaks the planets'
-    /// symmetry, the point stays at the H it was found at.
+    /// [`spectral_harmonics`] for a branch point, its checks counted and its last passed
+    /// check kept for the next points.
     fn spectral(
         &mut self,
         omega: f64,
         x: &[f64],
         work: &mut Work,
     ) -> Result<Option<Vec<f64>>, PeriodicError> {
-        // The coordinates kept so far (`None`: `x`) and the harmonics they are at.
-        let mut resolved: Option<Vec<f64>> = None;
-        loop {
-            let kept = self.balance.harmonics();
-            let at = resolved.as_deref().unwrap_or(x);
-            let mut evaluations = 0;
-            let orbit = self.balance.orbit_at(omega, at, 0, &mut evaluations)?;
-            work.rhs_evaluations += evaluations;
-            let asked = orbit.spectral_harmonics().min(CONDENSED_MAX_HARMONICS);
-            let tail = orbit.band_share(3 * kept / 4, kept);
-            let tolerated = self.checked.is_some_and(|(speed, share)| {
-                (omega - speed).abs() <= SPECTRAL_SPAN * speed && tail <= share
-            });
-            let floor = self.balance.harmonic_floor();
-            if asked <= kept || tolerated {
-                // A floor the spectrum set earlier goes where half its harmonics would do.
-                if asked < kept && floor > asked {
-                    self.balance.set_harmonic_floor(asked);
-                }
-                return Ok(resolved);
-            }
-            let before = self.balance.balance().steady_state(&orbit)?;
-            self.balance.set_harmonic_floor(asked);
-            self.balance.arc_fit(omega)?;
-            let guess = self.balance.fitted(at);
-            let symmetry = self.balance.symmetry();
-            let solved = match self.balance.solve(omega, Some(&guess)) {
-                Ok((doubled, report)) if self.balance.symmetry() == symmetry => {
-                    work.rhs_evaluations += report.law_evaluations;
-                    work.newton_iterations += report.iterations as u64;
-                    Some(doubled)
-                }
-                _ => None,
-            };
-            self.spectral_checks += 1;
-            let estimate = match &solved {
-                Some(doubled) => {
-                    let after = self.balance.balance().steady_state(doubled)?;
-                    let meshes = |s: &crate::dynamics::response::SteadyState| -> Vec<_> {
-                        s.meshes.iter().map(|m| m.harmonics.clone()).collect()
-                    };
-                    harmonic_error(&meshes(&before), &meshes(&after))
-                }
-                None => 0.0,
-            };
-            match solved {
-                Some(doubled) if estimate > SPECTRAL_ESTIMATE => {
-                    resolved = Some(self.balance.coordinates_of(&doubled)?);
-                }
-                _ => {
-                    // The point's own harmonics do (or no more can be had): back to them.
-                    if solved.is_some() {
-                        self.checked = Some((omega, tail));
-                    }
-                    self.balance.restore_symmetry(symmetry, omega)?;
-                    self.balance.set_harmonic_floor(kept);
-                    self.balance.arc_fit(omega)?;
-                    self.balance.set_harmonic_floor(if resolved.is_some() { kept } else { floor });
-                    return Ok(resolved);
-                }
-            }
-        }
+        let mut checks = Checks { passed: self.checked, count: 0 };
+        let resolved = spectral_harmonics(self.balance, omega, x, &mut checks, work);
+        (self.checked, self.spectral_checks) = (checks.passed, self.spectral_checks + checks.count);
+        resolved
     }
 
     /// [`BranchSolver::restart`] once `from` is in the run's symmetry and `z` is its state.

@@ -321,9 +321,11 @@ fn condensed_point(
     omega: f64,
     held: &str,
 ) -> Result<(SteadyState, String, serde_json::Value)> {
+    use planetwear::analysis::condensed_branch::{spectral_harmonics, Checks};
     use planetwear::dynamics::periodic::{
         all_inside_unit_circle, CondensedBalance, Symmetry, CONDENSED_MAX_HARMONICS,
     };
+    use planetwear::dynamics::response::Work;
     let rpm = rad_per_s_to_rpm(omega);
     let wanted = *hb.settings();
     let mut cb = CondensedBalance::new(hb, Symmetry::Cyclic);
@@ -352,6 +354,21 @@ fn condensed_point(
             (orbit, report, true)
         }
     };
+    // The harmonics the orbit's own spectrum asks, where the rule's fall short.
+    let (rule, jacobians) = (settings.harmonics, orbit.factorizations);
+    let mut checks = Checks::default();
+    let x = cb.coordinates_of(&orbit)?;
+    let orbit = match spectral_harmonics(&mut cb, omega, &x, &mut checks, &mut Work::default())? {
+        Some(x) => cb.orbit_at(omega, &x, report.iterations, &mut 0)?,
+        None => orbit,
+    };
+    let settings = *cb.balance().settings();
+    let unknowns = report.coordinates * (2 * settings.harmonics + 1);
+    let spectrum = match (settings.harmonics > rule, checks.count) {
+        (true, _) => format!(" (its spectrum asked for them: the rule's {rule} checked at twice)"),
+        (false, 0) => String::new(),
+        (false, _) => format!(" (its spectrum checked at {} harmonics: these suffice)", 2 * rule),
+    };
     let multipliers = cb.balance().floquet_multipliers(&orbit, settings.samples)?;
     let mu = multipliers.first().map_or(0.0, |m| m.modulus());
     let stable = all_inside_unit_circle(&multipliers);
@@ -361,15 +378,15 @@ fn condensed_point(
         _ => "every mesh".to_string(),
     };
     let line = format!(
-        "harmonic balance condensed onto {} contact coordinates ({meshes}): H = {} harmonics{held}, N = {} samples, \
-         {} unknowns, {} Newton iterations, {} Jacobians{}; largest Floquet multiplier |μ| = {mu:.4} of the whole \
-         model ({})",
+        "harmonic balance condensed onto {} contact coordinates ({meshes}): H = {} harmonics{held}{spectrum}, N = {} \
+         samples, {} unknowns, {} Newton iterations, {} Jacobians{}; largest Floquet multiplier |μ| = {mu:.4} of the \
+         whole model ({})",
         report.coordinates,
         settings.harmonics,
         settings.samples,
-        report.unknowns,
+        unknowns,
         report.iterations,
-        orbit.factorizations,
+        jacobians,
         if from_full { " (from the full balance's orbit)" } else { "" },
         if stable { "stable" } else { "unstable: time marching leaves this orbit" }
     );
@@ -377,14 +394,16 @@ fn condensed_point(
         "method": "harmonic-balance",
         "balance": "condensed",
         "harmonics": settings.harmonics,
+        "rule_harmonics": rule,
+        "spectrum_checks": checks.count,
         "samples": settings.samples,
         "contact_coordinates": report.coordinates,
-        "unknowns": report.unknowns,
+        "unknowns": unknowns,
         "symmetry": report.symmetry,
         "symmetry_residual": report.symmetry_residual,
         "cyclic_refused": report.cyclic_refused,
         "newton_iterations": report.iterations,
-        "jacobians": orbit.factorizations,
+        "jacobians": jacobians,
         "from_full_balance": from_full,
         "floquet_multipliers": multipliers.iter().map(|m| [m.re, m.im]).collect::<Vec<_>>(),
         "stable": stable,
