@@ -1660,7 +1660,8 @@ fn the_run_command_takes_the_harmonics_the_spectrum_asks() {
     let bin = env!("CARGO_BIN_EXE_planetwear");
     let run = |method: &str| -> serde_json::Value {
         let out = std::process::Command::new(bin)
-            .args(["run", "--scene", "example-2004-flexible", "--speed", "2743", "--json", "--method", method])
+            .args(["run", "--scene", "example-2004-flexible", "--speed", "2743", "--json"])
+            .args(["--method", method])
             .output()
             .unwrap();
         assert!(out.status.success(), "{method}: {}", String::from_utf8_lossy(&out.stderr));
