@@ -153,11 +153,8 @@ pub struct CondensedBranch<'a> {
     resolved: Option<Vec<f64>>,
     /// Points solved again at more harmonics than the rule's ([`Self::spectral_resolves`]).
     spectral_resolves: usize,
-    /// Solves at twice a point's harmonics that checked it ([`Self::spectral_checks`]).
-    spectral_checks: usize,
-    /// The speed [rad/s] and top-quarter share of the last point a check found within
-    /// [`SPECTRAL_ESTIMATE`] at its own harmonics.
-    checked: Option<(f64, f64)>,
+    /// The run's checks at twice a point's harmonics ([`spectral_harmonics`]).
+    checks: Checks,
 }
 
 impl<'a> CondensedBranch<'a> {
@@ -173,8 +170,7 @@ impl<'a> CondensedBranch<'a> {
             orbits: Vec::new(),
             resolved: None,
             spectral_resolves: 0,
-            spectral_checks: 0,
-            checked: None,
+            checks: Checks::default(),
         }
     }
 
@@ -186,7 +182,7 @@ impl<'a> CondensedBranch<'a> {
 
     /// How many branch points were checked by a solve at twice their harmonics.
     pub fn spectral_checks(&self) -> usize {
-        self.spectral_checks
+        self.checks.count
     }
 
     /// Whether a restart whose march reaches a state that breaks the planets' symmetry goes
@@ -224,18 +220,14 @@ impl<'a> CondensedBranch<'a> {
 }
 
 impl CondensedBranch<'_> {
-    /// [`spectral_harmonics`] for a branch point, its checks counted and its last passed
-    /// check kept for the next points.
+    /// [`spectral_harmonics`] for a branch point, with the run's checks.
     fn spectral(
         &mut self,
         omega: f64,
         x: &[f64],
         work: &mut Work,
     ) -> Result<Option<Vec<f64>>, PeriodicError> {
-        let mut checks = Checks { passed: self.checked, count: 0 };
-        let resolved = spectral_harmonics(self.balance, omega, x, &mut checks, work);
-        (self.checked, self.spectral_checks) = (checks.passed, self.spectral_checks + checks.count);
-        resolved
+        spectral_harmonics(self.balance, omega, x, &mut self.checks, work)
     }
 
     /// [`BranchSolver::restart`] once `from` is in the run's symmetry and `z` is its state.
