@@ -220,14 +220,17 @@ impl<'a> CondensedBranch<'a> {
 }
 
 impl CondensedBranch<'_> {
-    /// [`spectral_harmonics`] for a branch point, with the run's checks.
+    /// [`spectral_harmonics`] for a branch point, with the run's checks; a point solved
+    /// again is counted.
     fn spectral(
         &mut self,
         omega: f64,
         x: &[f64],
         work: &mut Work,
     ) -> Result<Option<Vec<f64>>, PeriodicError> {
-        spectral_harmonics(self.balance, omega, x, &mut self.checks, work)
+        let resolved = spectral_harmonics(self.balance, omega, x, &mut self.checks, work)?;
+        self.spectral_resolves += usize::from(resolved.is_some());
+        Ok(resolved)
     }
 
     /// [`BranchSolver::restart`] once `from` is in the run's symmetry and `z` is its state.
@@ -308,7 +311,6 @@ impl BranchSolver for CondensedBranch<'_> {
         };
         let x = self.balance.coordinates_of(&solved)?;
         let resolved = self.spectral(omega, &x, &mut work)?;
-        self.spectral_resolves += usize::from(resolved.is_some());
         let x = resolved.unwrap_or(x);
         let mut evaluations = 0;
         let linear = self.balance.arc_linearize(omega, &x, unit, &mut evaluations)?;
@@ -382,7 +384,6 @@ impl BranchSolver for CondensedBranch<'_> {
         (work, flows): (&mut Work, &mut usize),
     ) -> Result<(PeriodicOrbit, CondensedArc), PeriodicError> {
         let resolved = self.spectral(omega, x, work)?;
-        self.spectral_resolves += usize::from(resolved.is_some());
         let x = resolved.as_deref().unwrap_or(x);
         let mut evaluations = 0;
         let linear = self.balance.arc_linearize(omega, x, unit, &mut evaluations)?;
