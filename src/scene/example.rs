@@ -12,16 +12,45 @@ use super::{
 const EXAMPLE_PROFILE_SHIFT: f64 = 7.0 / 24.0;
 
 impl Scene {
-    /// The study's example system, calibrated to the study's own figures:
-    /// the geometry of [`Scene::example_2004_annulus`], sun and planet
-    /// inertias and the chamfer height fitted to the study's torsional
-    /// natural frequencies and its loaded sun–planet double contact of about
-    /// 1/5, chamfer edges that carry no load, the ring with its output drum,
-    /// rigid planet pins and mesh damping 0.02 (each choice and its reason:
-    /// docs/PARAMETERS.md).
+    /// The study's example system, calibrated to the study's own figures and
+    /// carrying what the study says of its own model: the geometry of
+    /// [`Scene::example_2004_annulus`], sun and planet inertias and the
+    /// chamfer height fitted to the study's torsional natural frequencies and
+    /// its loaded sun–planet double contact of about 1/5, chamfer edges that
+    /// carry no load, the ring with its output drum, planets on needle
+    /// bearings and pins of the radial stiffness their geometry and load give
+    /// (the study's radially flexible planet bearings), and Rayleigh damping
+    /// C = μM + ηK with ζ = 0.02 at the first two rotational modes (each
+    /// choice and its reason: docs/PARAMETERS.md).
     pub fn example_2004() -> Self {
-        let mut s = Self::example_2004_annulus();
+        let mut s = Self::example_2004_stiff_pins();
         s.name = "example-2004".into();
+        // The needle bearing and pin of `NeedleBearing::example_2004` at the
+        // example's load (model::planet_bearing; tests/planet_bearing.rs).
+        s.supports.planet_bearing_n_per_m = 2.4611e8;
+        // Rayleigh damping by the two-frequency rule at ζ = 0.02 (the mesh
+        // damping ratio, which the rule reads) on the first two rotational
+        // modes, 4119.6 and 8536.7 Hz: `planetwear modes` prints the rule,
+        // tests/rayleigh.rs checks these values against it.
+        s.dynamics.damping = super::DampingModel::Rayleigh;
+        s.dynamics.rayleigh_mass_per_s = 698.36;
+        s.dynamics.rayleigh_stiffness_s = 5.0301e-7;
+        // On these bearings the sun–planet force has a narrow peak where a
+        // pair leaves contact; its harmonics 1 to 6 sampled 60 times per mesh
+        // cycle read F^(rms) up to 4 % low, 240 times within 0.1 % of 1024
+        // (docs/ACCURACY.md, "Samples per mesh cycle").
+        s.dynamics.samples_per_mesh_cycle = 240;
+        s
+    }
+
+    /// The calibrated example where it departs from the study's statements
+    /// about its model: rigid planet pins (3e10 N/m, so that its
+    /// transverse–torsional rotational modes stay the torsional ones the
+    /// calibration meets) and a damping ratio of 0.02 per mesh and bearing,
+    /// the rest as [`Scene::example_2004`] (docs/PARAMETERS.md).
+    pub fn example_2004_stiff_pins() -> Self {
+        let mut s = Self::example_2004_annulus();
+        s.name = "example-2004-stiff-pins".into();
         // `planetwear calibrate --plan example-2004` (the plan:
         // src/scene/example-2004.calibration.toml; values to five digits).
         let chamfer =
@@ -33,29 +62,6 @@ impl Scene {
         s.inertia.ring_inertia_kg_m2 = Some(1.8193e-2);
         s.supports.planet_bearing_n_per_m = 3.0e10;
         s.dynamics.mesh_damping_ratio = 0.02;
-        s
-    }
-
-    /// The calibrated example with the study's own statements about its
-    /// model where [`Scene::example_2004`] departs from them: planets on
-    /// needle bearings and pins of the stiffness their geometry and load
-    /// give (not rigid pins), and Rayleigh damping C = μM + ηK with ζ = 0.02
-    /// at the first two rotational modes (not a damping ratio per mesh and
-    /// bearing). Each choice, its derivation and what it does to the modes:
-    /// docs/PARAMETERS.md.
-    pub fn example_2004_flexible() -> Self {
-        let mut s = Self::example_2004();
-        s.name = "example-2004-flexible".into();
-        // The needle bearing and pin of `NeedleBearing::example_2004` at the
-        // example's load (model::planet_bearing; tests/planet_bearing.rs).
-        s.supports.planet_bearing_n_per_m = 2.4611e8;
-        // Rayleigh damping by the two-frequency rule at ζ = 0.02 (the mesh
-        // damping ratio, which the rule reads) on the first two rotational
-        // modes, 4119.6 and 8536.7 Hz: `planetwear modes` prints the rule,
-        // tests/rayleigh.rs checks these values against it.
-        s.dynamics.damping = super::DampingModel::Rayleigh;
-        s.dynamics.rayleigh_mass_per_s = 698.36;
-        s.dynamics.rayleigh_stiffness_s = 5.0301e-7;
         s
     }
 
@@ -76,6 +82,10 @@ impl Scene {
         s.planet.tip_chamfer = Some(chamfer);
         s.inertia.sun_inertia_kg_m2 = Some(1.4693e-4);
         s.inertia.planet_inertia_kg_m2 = Some(1.1058e-5);
+        // The two-frequency rule at ζ = 0.02 on this law's own first two
+        // rotational modes, 3944.9 and 8488.4 Hz (`planetwear modes`).
+        s.dynamics.rayleigh_mass_per_s = 676.88;
+        s.dynamics.rayleigh_stiffness_s = 5.1203e-7;
         s
     }
 

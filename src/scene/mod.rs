@@ -543,7 +543,7 @@ impl Scene {
             "example-2004" => Some(Self::example_2004()),
             "example-2004-annulus" => Some(Self::example_2004_annulus()),
             "example-2004-gear-data" => Some(Self::example_2004_gear_data()),
-            "example-2004-flexible" => Some(Self::example_2004_flexible()),
+            "example-2004-stiff-pins" => Some(Self::example_2004_stiff_pins()),
             "example-2004-deformable" => Some(Self::example_2004_deformable()),
             _ => None,
         }
@@ -554,7 +554,7 @@ impl Scene {
         "example-2004",
         "example-2004-annulus",
         "example-2004-gear-data",
-        "example-2004-flexible",
+        "example-2004-stiff-pins",
         "example-2004-deformable",
     ];
 

@@ -196,7 +196,8 @@ fn apply_special(p: Special, values: &Values, scene: &mut Scene) -> Result<(), S
 }
 
 /// The damping model (`dampingModel`) and Rayleigh's coefficients, read
-/// only with dampingModel = 1 (as stepsPerMeshCycle only by generalized-α)
+/// only with dampingModel = 1 (as stepsPerMeshCycle only by generalized-α;
+/// 0 in the scene otherwise)
 /// but checked either way: the scene's own check (`dynamics.rayleigh_*`)
 /// sees a coefficient only where it is written. The coefficients read the
 /// scene's damping model, which `dampingModel` (value reference 64, before
@@ -217,12 +218,13 @@ fn damping(p: Special, values: &Values, scene: &mut Scene) -> Result<(), String>
             if !(r.is_finite() && r >= 0.0) {
                 return Err(format!("{} = {r}: must be a finite number, at least 0", v.name()));
             }
-            if d.damping == DampingModel::Rayleigh {
-                *match p {
-                    Special::RayleighMassCoefficient => &mut d.rayleigh_mass_per_s,
-                    _ => &mut d.rayleigh_stiffness_s,
-                } = r;
-            }
+            // Under the ratio model the coefficients are cleared, so a scene
+            // switched from the example's Rayleigh damping keeps none of its
+            // coefficients (the scene's check refuses them there).
+            *match p {
+                Special::RayleighMassCoefficient => &mut d.rayleigh_mass_per_s,
+                _ => &mut d.rayleigh_stiffness_s,
+            } = if d.damping == DampingModel::Rayleigh { r } else { 0.0 };
         }
     }
     Ok(())
