@@ -91,7 +91,7 @@ fn baseline(python: &str, script: &str, rpm: f64) -> Option<(f64, f64)> {
 }
 
 fn main() {
-    let mut scene = Scene::example_2004();
+    let mut scene = Scene::example_2004_stiff_pins();
     scene.dynamics.fidelity = Fidelity::Torsional;
     let (set, run) = scene.validate_with_run().expect("the example is valid");
     let dir = std::env::temp_dir().join(format!("planetwear-baseline-{}", std::process::id()));

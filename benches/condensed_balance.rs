@@ -59,14 +59,14 @@ fn timed<T>(mut f: impl FnMut() -> T) -> (f64, T) {
 }
 
 fn scenes() -> Vec<(&'static str, Scene)> {
-    let mut torsional = Scene::example_2004();
+    let mut torsional = Scene::example_2004_stiff_pins();
     torsional.dynamics.fidelity = Fidelity::Torsional;
     // A floating sun: a sun bearing five orders below the meshes' stiffness.
-    let mut floating = Scene::example_2004_flexible();
+    let mut floating = Scene::example_2004();
     floating.supports.sun_radial_n_per_m = 1.0e3;
     vec![
         ("torsional", torsional),
-        ("transverse–torsional (example-2004)", Scene::example_2004()),
+        ("transverse–torsional (example-2004-stiff-pins)", Scene::example_2004_stiff_pins()),
         ("flexible planet bearings, floating sun", floating),
     ]
 }
@@ -131,7 +131,7 @@ fn points() {
 }
 
 fn forced_response() {
-    let scene = Scene::example_2004();
+    let scene = Scene::example_2004_stiff_pins();
     let (set, run) = scene.validate_with_run().expect("valid scene");
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
     let (from, to, step) = (500.0, 15000.0, 50.0);
@@ -167,7 +167,9 @@ fn forced_response() {
         .collect();
     let marching = started.elapsed().as_secs_f64();
     println!();
-    println!("forced response, example-2004, κ = 0, {from}–{to} rpm at {step} rpm, both directions:");
+    println!(
+        "forced response, example-2004-stiff-pins, κ = 0, {from}–{to} rpm at {step} rpm, both directions:"
+    );
     println!(
         "  continuation on the cyclic condensed balance: {continuation:.1} s wall ({} and {} points; {:.1} and {:.1} s)",
         branches[0].0, branches[1].0, branches[0].1, branches[1].1
@@ -178,7 +180,7 @@ fn forced_response() {
 
 /// E_h against shooting and wall time of the cyclic condensed balance at held H (part 3).
 fn held_harmonics() {
-    let scene = Scene::example_2004();
+    let scene = Scene::example_2004_stiff_pins();
     let set = scene.validate().expect("valid scene");
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
     let held = [128, 160, 192, 256];

@@ -28,7 +28,7 @@
 //! (`analysis::condensed_branch::CondensedBranch`), and with `--broken-symmetry`
 //! a restart that reaches a state breaking the symmetry goes on with every mesh.
 //! `-- --scene=NAME` draws it for another built-in scene on the example's
-//! geometry (`example-2004-flexible`: the study's bearings and damping).
+//! geometry (`example-2004`: the study's bearings and damping).
 //! The wear model that makes the states runs first and is timed apart (the
 //! figure starts from the states, as the study's does).
 //! docs/PERFORMANCE.md records the figures.

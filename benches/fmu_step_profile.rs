@@ -68,7 +68,7 @@ enum Tolerances {
 }
 
 fn profile(fidelity: Fidelity, tolerances: Tolerances) {
-    let mut scene = Scene::example_2004();
+    let mut scene = Scene::example_2004_stiff_pins();
     scene.dynamics.fidelity = fidelity;
     let (set, run) = scene.validate_with_run().expect("valid");
     let mut model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");

@@ -14,7 +14,7 @@ use planetwear::scene::Scene;
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    let mut scene = Scene::example_2004();
+    let mut scene = Scene::example_2004_stiff_pins();
     if std::env::args().any(|a| a == "--torsional") {
         scene.dynamics.fidelity = planetwear::scene::Fidelity::Torsional;
     }

@@ -25,12 +25,12 @@ fn main() -> anyhow::Result<()> {
     if speeds.is_empty() {
         speeds = vec![3000.0, 5000.0];
     }
-    let (set, run) = Scene::example_2004().validate_with_run()?;
+    let (set, run) = Scene::example_2004_stiff_pins().validate_with_run()?;
     let wear = WearModel::with_run(&set, &run, WearSettings::for_set(&set))?;
     let state = wear.unworn();
     let face_mm = set.sun().face_width.min(set.planet().face_width) * 1e3;
     println!(
-        "example-2004 ({:?}), unworn (κ = 0), R = {}, k = {:e} m²/N; wear per tooth cycle [pm], mean over the planets",
+        "example-2004-stiff-pins ({:?}), unworn (κ = 0), R = {}, k = {:e} m²/N; wear per tooth cycle [pm], mean over the planets",
         set.fidelity(),
         wear.settings().positions,
         wear.settings().archard_coefficient

@@ -16,7 +16,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let rpm: f64 = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(3000.0);
     let factor: f64 = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(1.0);
-    let (set, run) = Scene::example_2004().validate_with_run().expect("the example is valid");
+    let (set, run) = Scene::example_2004_stiff_pins().validate_with_run().expect("the example is valid");
     let set = set.with_input_torque(set.input_torque() * factor).expect("a finite torque");
     let omega = rpm * std::f64::consts::PI / 30.0;
     let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("the example's model");

@@ -203,9 +203,17 @@ fn the_built_in_plans_reproduce_the_examples() {
 }
 
 /// Rows of the reduced validation whose verdict is a known finding: they
-/// fail, and the report says why (docs/MODEL_CHOICES.md). A row that starts
+/// fail, and the report says why (docs/MODEL_CHOICES.md: the tips' wear;
+/// docs/PARAMETERS.md: on the study's flexible planet bearings the
+/// transverse–torsional modes are not the torsional ones). A row that starts
 /// to pass, or one more that fails, fails this test: the change moved a row.
-const KNOWN_FAILING: [&str; 1] = ["wear-tips"];
+const KNOWN_FAILING: [&str; 5] = [
+    "wear-tips",
+    "frequency-tt-first-rotational",
+    "frequency-tt-planet-modes",
+    "frequency-tt-second-rotational",
+    "frequency-tt-no-new-low-mode",
+];
 
 #[test]
 fn the_reduced_validation_keeps_its_frequency_and_wear_shape_rows() {
@@ -258,7 +266,7 @@ fn the_reduced_validation_keeps_its_frequency_and_wear_shape_rows() {
     let label = |id: &str| v.row(id).map(|r| r.evidence);
     assert_eq!(label("frequency-torsional-planet-modes"), Some(Evidence::Fitted));
     assert_eq!(label("double-contact-sun-planet"), Some(Evidence::Fitted));
-    assert_eq!(label("frequency-tt-first-rotational"), Some(Evidence::Identity));
+    assert_eq!(label("frequency-tt-first-rotational"), Some(Evidence::Independent));
     assert_eq!(label("wear-total"), Some(Evidence::Identity));
     assert_eq!(label("double-contact-ring-planet"), Some(Evidence::Independent));
     assert_eq!(label("magnitude-2750-worn"), Some(Evidence::Independent));
@@ -277,7 +285,8 @@ fn the_reduced_validation_keeps_its_frequency_and_wear_shape_rows() {
 #[test]
 fn the_marching_reading_reads_the_sweeps_twice_from_below_the_jump() {
     let plan = ValidationPlan { sweep: vec![(6000.0, 10000.0, 100.0)], ..ValidationPlan::quick().marching() };
-    let v = validate(&Scene::example_2004(), &plan).unwrap();
+    // The stiff-pin reading, whose sweeps jump in this stretch.
+    let v = validate(&Scene::example_2004_stiff_pins(), &plan).unwrap();
     let from = v.check_from.expect("the marching plan reads the sweeps twice");
     let jump = v.row("jump-softening").and_then(|r| r.value).expect("the sweeps jump");
     assert!(from < jump, "second reading from {from} rpm, the jump's branches from {jump} rpm");

@@ -80,7 +80,7 @@ fn bad_input_gets_a_clear_error() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("neither a built-in scene (example-2004, example-2004-annulus, example-2004-gear-data, example-2004-flexible, example-2004-deformable) nor an existing file"),
+        err.contains("neither a built-in scene (example-2004, example-2004-annulus, example-2004-gear-data, example-2004-stiff-pins, example-2004-deformable) nor an existing file"),
         "{err}"
     );
     let dir = tempfile::tempdir().unwrap();

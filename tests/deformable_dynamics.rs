@@ -144,8 +144,8 @@ fn the_energy_balance_holds_on_the_deformable_law() {
 /// `dynamics.contact`: the stiffness scales are refused with it (naming the
 /// key), it is written to and read from the file only when not the pair
 /// model, an unknown law is refused, and the built-in
-/// `example-2004-deformable` differs from `example-2004` in the law and the
-/// calibration's three fitted values only.
+/// `example-2004-deformable` differs from `example-2004` in the law, the
+/// calibration's three fitted values and the Rayleigh rule's coefficients only.
 #[test]
 fn the_scene_key_is_checked_and_read_back() {
     // The stiffness scales correct the pair model only.
@@ -162,7 +162,8 @@ fn the_scene_key_is_checked_and_read_back() {
     let bad = text.replace("contact = \"deformable\"", "contact = \"rigid\"");
     let e = Scene::from_toml(&bad).unwrap_err().to_string();
     assert!(e.contains("contact") && e.contains("deformable"), "{e}");
-    // Only the contact law and the three values its calibration fits differ from the example.
+    // Only the contact law, the three values its calibration fits and the Rayleigh
+    // coefficients of its own modes' rule differ from the example.
     let mut same = Scene::example_2004_deformable();
     let example = Scene::example_2004();
     same.name = example.name.clone();
@@ -170,6 +171,8 @@ fn the_scene_key_is_checked_and_read_back() {
     same.sun.tip_chamfer = example.sun.tip_chamfer;
     same.planet.tip_chamfer = example.planet.tip_chamfer;
     same.inertia = example.inertia;
+    same.dynamics.rayleigh_mass_per_s = example.dynamics.rayleigh_mass_per_s;
+    same.dynamics.rayleigh_stiffness_s = example.dynamics.rayleigh_stiffness_s;
     assert_eq!(same, example);
 }
 

@@ -146,7 +146,8 @@ fn both_integrators_agree_on_a_steady_state_with_separation() {
 
 #[test]
 fn undamped_energy_balance_includes_the_work_of_the_time_varying_stiffness() {
-    let mut s = Scene::example_2004();
+    // The reading with damping ratios (the example's Rayleigh damping would stay).
+    let mut s = Scene::example_2004_stiff_pins();
     s.dynamics.fidelity = Fidelity::Torsional;
     s.dynamics.mesh_damping_ratio = 0.0;
     s.supports.bearing_damping_ratio = 0.0;
@@ -422,9 +423,9 @@ fn a_face_cut_in_slices_runs_and_gives_the_same_steady_state() {
 #[test]
 fn a_periodic_point_measured_over_one_mesh_cycle_has_the_whole_windows_harmonics() {
     use planetwear::dynamics::response::{steady_state_windowed, Window};
-    let mut scene = Scene::example_2004();
+    let mut scene = Scene::example_2004_stiff_pins();
     scene.dynamics.fidelity = Fidelity::Torsional;
-    // A point whose run-in settles within the revolution: at the example's
+    // A point whose run-in settles within the revolution: at the stiff-pin reading's
     // ζ_m = 0.02 the absolute coordinates' error allowance keeps successive
     // cycles from agreeing to 1e-5 (docs/PERFORMANCE.md, "The route"). At
     // 3300 rpm the cycle-to-cycle change of the mesh forces falls steadily

@@ -37,7 +37,7 @@ fn stribeck_and_palmgren_give_their_published_numbers() {
 /// flexible example's planet bearing is the derived stiffness to 0.5 %.
 #[test]
 fn the_documented_planet_bearing_stiffness_is_the_derived_one() {
-    let scene = Scene::example_2004_flexible();
+    let scene = Scene::example_2004();
     let set = scene.validate().unwrap();
     let s = planet_support(&set, &NeedleBearing::example_2004());
     for (marker, value) in [

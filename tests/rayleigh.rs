@@ -225,7 +225,7 @@ fn the_energy_balance_holds_with_rayleigh_damping() {
 /// modes (to the five digits the scene writes: 1e-4).
 #[test]
 fn the_examples_coefficients_follow_the_two_frequency_rule() {
-    let scene = Scene::example_2004_flexible();
+    let scene = Scene::example_2004();
     let model = model_of(&scene);
     let modes = planetwear::analysis::modes::natural_modes(&model.lumped);
     let rule = planetwear::analysis::modes::rayleigh_rule(&modes, scene.dynamics.mesh_damping_ratio).unwrap();
@@ -244,7 +244,7 @@ fn the_examples_coefficients_follow_the_two_frequency_rule() {
 #[test]
 fn the_low_rank_jacobian_carries_the_rayleigh_damping() {
     for fidelity in [Fidelity::TransverseTorsional, Fidelity::Torsional] {
-        let mut s = Scene::example_2004_flexible();
+        let mut s = Scene::example_2004();
         s.dynamics.fidelity = fidelity;
         let (set, run) = s.validate_with_run().unwrap();
         let mut model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
@@ -295,9 +295,9 @@ fn the_rayleigh_keys_are_checked() {
     let e = s.validate().unwrap_err().to_string();
     assert!(e.contains("dynamics.rayleigh_mass_per_s") && e.contains("\"rayleigh\""), "{e}");
     // The file form: keys under [dynamics], read back as written.
-    let text = Scene::example_2004_flexible().to_toml();
+    let text = Scene::example_2004().to_toml();
     let back = Scene::from_toml(&text).unwrap();
-    assert_eq!(back.dynamics, Scene::example_2004_flexible().dynamics);
+    assert_eq!(back.dynamics, Scene::example_2004().dynamics);
     assert_eq!(back.value_at("dynamics.rayleigh_stiffness_s").unwrap(), 5.0301e-7);
 }
 
@@ -310,23 +310,41 @@ fn a_scene_file_brings_rayleigh_damping_into_the_fmu() {
     use planetwear::fmi::variables::vr;
     let dir = std::env::temp_dir().join(format!("planetwear-rayleigh-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("flexible.toml");
-    std::fs::write(&path, Scene::example_2004_flexible().to_toml()).unwrap();
+    // The stiff-pin reading: its ratio model and stiff pins replace the
+    // FMU's start values (the example's Rayleigh damping and needle bearings).
+    let path = dir.join("stiff-pins.toml");
+    std::fs::write(&path, Scene::example_2004_stiff_pins().to_toml()).unwrap();
+    let mut i = Instance::new("ratio", None);
+    i.set_string(vr::SCENE_FILE, &path.display().to_string()).unwrap();
+    let scene = i.scene().map_err(|e| e.message).unwrap();
+    let stiff = Scene::example_2004_stiff_pins();
+    assert_eq!(scene.dynamics.damping, DampingModel::Ratio);
+    assert_eq!((scene.dynamics.rayleigh_mass_per_s, scene.dynamics.rayleigh_stiffness_s), (0.0, 0.0));
+    assert_eq!(scene.dynamics.mesh_damping_ratio, stiff.dynamics.mesh_damping_ratio);
+    assert_eq!(scene.supports.planet_bearing_n_per_m, stiff.supports.planet_bearing_n_per_m);
+    // A file with Rayleigh damping and another rule's coefficients keeps them.
+    let mut rayleigh = Scene::example_2004_stiff_pins();
+    rayleigh.dynamics.damping = DampingModel::Rayleigh;
+    rayleigh.dynamics.rayleigh_mass_per_s = 1723.4;
+    rayleigh.dynamics.rayleigh_stiffness_s = 1.9384e-7;
+    let path = dir.join("rayleigh.toml");
+    std::fs::write(&path, rayleigh.to_toml()).unwrap();
     let mut i = Instance::new("rayleigh", None);
     i.set_string(vr::SCENE_FILE, &path.display().to_string()).unwrap();
     let scene = i.scene().map_err(|e| e.message).unwrap();
-    let flexible = Scene::example_2004_flexible();
     assert_eq!(scene.dynamics.damping, DampingModel::Rayleigh);
-    assert_eq!(scene.dynamics.rayleigh_mass_per_s, flexible.dynamics.rayleigh_mass_per_s);
-    assert_eq!(scene.dynamics.rayleigh_stiffness_s, flexible.dynamics.rayleigh_stiffness_s);
-    assert_eq!(scene.supports.planet_bearing_n_per_m, flexible.supports.planet_bearing_n_per_m);
+    assert_eq!(
+        (scene.dynamics.rayleigh_mass_per_s, scene.dynamics.rayleigh_stiffness_s),
+        (1723.4, 1.9384e-7)
+    );
+    assert_eq!(scene.supports.planet_bearing_n_per_m, 3.0e10);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The FMU's own damping parameters: the built-in example's start values
-/// are its damping ratios (`dampingModel = 0`, no coefficients);
-/// `dampingModel = 1` with the importer's coefficients gives Rayleigh
-/// damping; back to 0 the coefficients are not read; any other code, and a
+/// are its Rayleigh damping (`dampingModel = 1`, the example's
+/// coefficients); `dampingModel = 1` with the importer's coefficients gives
+/// those; at 0 the coefficients are not read and the scene carries none; any other code, and a
 /// negative coefficient under either model, are each refused naming the
 /// parameter and what is allowed.
 #[test]
@@ -337,8 +355,11 @@ fn the_fmu_parameters_choose_the_damping_model() {
     let scene = i.scene().map_err(|e| e.message).unwrap();
     let example = Scene::example_2004().dynamics;
     assert_eq!(scene.dynamics.damping, example.damping);
-    assert_eq!(scene.dynamics.damping, DampingModel::Ratio);
-    assert_eq!((scene.dynamics.rayleigh_mass_per_s, scene.dynamics.rayleigh_stiffness_s), (0.0, 0.0));
+    assert_eq!(scene.dynamics.damping, DampingModel::Rayleigh);
+    assert_eq!(
+        (scene.dynamics.rayleigh_mass_per_s, scene.dynamics.rayleigh_stiffness_s),
+        (example.rayleigh_mass_per_s, example.rayleigh_stiffness_s)
+    );
 
     let mut i = Instance::new("rayleigh", None);
     i.set_integer(vr::DAMPING_MODEL, 1).unwrap();
@@ -347,7 +368,7 @@ fn the_fmu_parameters_choose_the_damping_model() {
     let scene = i.scene().map_err(|e| e.message).unwrap();
     assert_eq!(scene.dynamics.damping, DampingModel::Rayleigh);
     assert_eq!((scene.dynamics.rayleigh_mass_per_s, scene.dynamics.rayleigh_stiffness_s), (250.0, 1.5e-7));
-    // Back to the ratio model: the coefficients are not read.
+    // The ratio model: the coefficients are not read.
     i.set_integer(vr::DAMPING_MODEL, 0).unwrap();
     let scene = i.scene().map_err(|e| e.message).unwrap();
     assert_eq!(scene.dynamics.damping, DampingModel::Ratio);

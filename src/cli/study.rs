@@ -252,7 +252,7 @@ pub(crate) fn steady_accuracy(out: &Path, quick: bool) -> Result<()> {
     }
     let mut ramps = Vec::new();
     if !quick {
-        let scene = planetwear::scene::Scene::example_2004();
+        let scene = planetwear::scene::Scene::example_2004_stiff_pins();
         let mut balanced = scene.clone();
         balanced.dynamics.load_balance = true;
         let (set, run) = balanced.validate_with_run()?;

@@ -251,7 +251,9 @@ def test_the_window_is_order_tracked_and_its_time_sampled_counterpart_is_the_nat
     exe = os.environ.get("PLANETWEAR_BIN", str(REPO / "target" / "release" / "planetwear"))
     scene = subprocess.run([exe, "scene", "show", "example-2004"], capture_output=True, text=True,
                            check=True).stdout
-    for key, value in [("integrator", '"rk45"'), ("relative_tolerance", "1e-8"), ("steady_tolerance", "0.0")]:
+    # 60 samples per mesh cycle, as the FMU's time-sampled forces below.
+    for key, value in [("integrator", '"rk45"'), ("relative_tolerance", "1e-8"), ("steady_tolerance", "0.0"),
+                       ("samples_per_mesh_cycle", "60")]:
         scene, count = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", scene)
         assert count == 1, key
     (tmp_path / "scene.toml").write_text(scene)

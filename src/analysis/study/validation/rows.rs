@@ -1139,8 +1139,8 @@ mod tests {
     #[test]
     fn the_tt_frequency_rows_are_identities_on_stiff_pins_only() {
         for (scene, expected) in [
-            (Scene::example_2004(), Evidence::Identity),
-            (Scene::example_2004_flexible(), Evidence::Independent),
+            (Scene::example_2004_stiff_pins(), Evidence::Identity),
+            (Scene::example_2004(), Evidence::Independent),
         ] {
             let set = scene.validate().unwrap();
             let modes = Modes::compute(&scene, &SetModel::new(&set)).unwrap();

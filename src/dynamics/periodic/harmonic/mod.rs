@@ -304,7 +304,7 @@ pub struct HarmonicOrbit {
 /// The mode rule ([`HARMONICS_PER_MODE_ORDER`]) follows the highest natural frequency, but a
 /// narrow force peak at a contact switch asks for more where the modes are soft (the
 /// example's flexible planet bearings). Measured on the condensed balance against long
-/// marching on `example-2004-flexible`, κ = 0 and 6, every 1000 rpm, H = 32, 64 and 128
+/// marching on `example-2004`, κ = 0 and 6, every 1000 rpm, H = 32, 64 and 128
 /// (docs/PERIODIC.md §3): where E_h exceeds 1e-3 the top quarter holds 6.6e-4 or more
 /// (κ = 6, 2000 rpm, H = 64: E_h 1.5e-3; κ = 0, 5000 rpm, H = 32: 2.3e-3), and at 2.9e-4
 /// or less E_h is at most 8.8e-4. The share alone does not decide (a stiff model's high

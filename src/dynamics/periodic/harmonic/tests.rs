@@ -90,7 +90,7 @@ fn the_jacobian_is_the_derivative_of_the_residual() {
 /// the product was off by 2.4e-5 of its size).
 #[test]
 fn the_jacobian_is_the_derivative_of_the_residual_under_rayleigh_damping() {
-    jacobian_is_the_derivative(balance_of(Scene::example_2004_flexible(), 8, 128, 3000.0));
+    jacobian_is_the_derivative(balance_of(Scene::example_2004(), 8, 128, 3000.0));
 }
 
 /// Central differences along three directions agree with the Jacobian's

@@ -1490,7 +1490,7 @@ mod tests_support {
         rpm: f64,
         symmetry: Symmetry,
     ) -> (CondensedBalance, f64) {
-        let mut scene = Scene::example_2004();
+        let mut scene = Scene::example_2004_stiff_pins();
         scene.dynamics.fidelity = fidelity;
         let set = scene.validate().unwrap();
         let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
