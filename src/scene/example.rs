@@ -68,8 +68,8 @@ impl Scene {
     /// The example on deformable-tooth contact (the study's deformable gear
     /// bodies), calibrated on that law to the same targets with the same
     /// free parameters and choices as [`Scene::example_2004`]: what differs
-    /// from it is the contact law and the three values the calibration
-    /// fits on it (docs/DEFORMABLE.md).
+    /// from it is the contact law, the three values the calibration fits on
+    /// it and the Rayleigh coefficients of its own modes (docs/DEFORMABLE.md).
     pub fn example_2004_deformable() -> Self {
         let mut s = Self::example_2004();
         s.name = "example-2004-deformable".into();
