@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -50,11 +51,6 @@ def test_the_traces_follow_the_vehicle():
     assert all(s >= 0.0 for s in speeds)
 
 
-# The stiff-pin reading (`example-2004-stiff-pins`) through the FMU's own parameters:
-# the ratio model's damping ratios (0.02, the start values), rigid pins, 60 samples.
-STIFF_PINS = {"dampingModel": 0, "planet.bearingStiffness": 3.0e10, "samplesPerMeshCycle": 60}
-
-
 def _steady_state_frms(md, unzipdir, fidelity, seconds, settings=None):
     vrs = {v.name: v.valueReference for v in md.modelVariables}
     s = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier,
@@ -64,7 +60,9 @@ def _steady_state_frms(md, unzipdir, fidelity, seconds, settings=None):
         s.setupExperiment(startTime=0.0)
         s.setInteger([vrs["fidelity"]], [fidelity])
         for name, value in (settings or {}).items():
-            if isinstance(value, int):
+            if isinstance(value, str):
+                s.setString([vrs[name]], [value])
+            elif isinstance(value, int):
                 s.setInteger([vrs[name]], [value])
             else:
                 s.setReal([vrs[name]], [value])
@@ -79,7 +77,7 @@ def _steady_state_frms(md, unzipdir, fidelity, seconds, settings=None):
         s.freeInstance()
 
 
-def test_steady_fidelity_agrees_with_the_time_domain(fmu):
+def test_steady_fidelity_agrees_with_the_time_domain(fmu, tmp_path):
     """At the example's operating point (3000 rpm, 750 N·m) the steady fidelity's F^(rms),
     mean and largest sun–planet force match the time-domain fidelity's after its window
     filled (34 mesh cycles after 0.3 s of run-in): within 4 % for F^(rms) (on different
@@ -90,10 +88,13 @@ def test_steady_fidelity_agrees_with_the_time_domain(fmu):
     3000 rpm is a node: at the default 200 rpm it is the centre of the 2900–3100 rpm cell,
     answered by interpolation across the peak at 2950 rpm (F^(rms) 296.3 against 311.2 N,
     largest 10 854 against 11 325 N at the node; docs/STEADY.md, open points).
-    On the stiff-pin reading (its parameters set through the FMU's) at the defaults."""
+    On the stiff-pin reading (`example-2004-stiff-pins` as the scene file) at the defaults."""
     md, unzipdir = fmu
     node = {"steadySpeedStep": 250.0 * math.pi / 30.0}
-    for settings in (node, STIFF_PINS):
+    stiff_pins = tmp_path / "stiff-pins.toml"
+    stiff_pins.write_text(subprocess.run([EXE, "scene", "show", "example-2004-stiff-pins"], capture_output=True,
+                                         text=True, check=True).stdout)
+    for settings in (node, {"sceneFile": str(stiff_pins)}):
         steady = _steady_state_frms(md, unzipdir, 3, 0.01, settings)
         marched = _steady_state_frms(md, unzipdir, 1, 0.4, settings)
         print(f"{settings}: F^(rms) {steady[0]:.1f} against {marched[0]:.1f} N, mean {steady[1]:.1f} against "
