@@ -279,8 +279,9 @@ pub struct DynamicsSpec {
         skip_serializing_if = "is_default_steady_speed_floor"
     )]
     pub steady_speed_floor: f64,
-    /// ... the largest interpolation error a cell may have, estimated at its centre, as a
-    /// fraction of the static mesh load (and of the separation fraction) \[-\].
+    /// ... the largest interpolation error a cell may have, estimated at its centre and at
+    /// the midpoint of its edge nearest the request, as a fraction of the static mesh load
+    /// (and of the separation fraction) \[-\].
     #[serde(skip_serializing_if = "is_default_steady_agreement")]
     pub steady_agreement: f64,
     /// ... the halvings of a cell whose interpolation error is larger.

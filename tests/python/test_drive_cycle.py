@@ -84,17 +84,17 @@ def test_steady_fidelity_agrees_with_the_time_domain(fmu, tmp_path):
     sample grids: on the stiff-pin reading's 60 samples per mesh cycle the force's harmonics
     near 60 alias onto 1 to 6 differently, measured 3 %), 0.2 % for the mean, 0.5 % for the
     largest.
-    On the example the cache's nodes lie every 250 rpm from its 500 rpm floor, so that
-    3000 rpm is a node: at the default 200 rpm it is the centre of the 2900–3100 rpm cell,
-    answered by interpolation across the peak at 2950 rpm (F^(rms) 296.3 against 311.2 N,
-    largest 10 854 against 11 325 N at the node; docs/STEADY.md, open points).
+    On the example at the cache's defaults 3000 rpm is the midpoint of the 2900–3100 rpm
+    edge of a coarsest cell, across the peak at 2950 rpm: the estimate at that edge's
+    midpoint halves the cell, and 3000 rpm is a node of the half (interpolated across the
+    peak, it read F^(rms) 296.3 against 311.2 N, largest 10 854 against 11 325 N;
+    docs/STEADY.md, "The cache").
     On the stiff-pin reading (`example-2004-stiff-pins` as the scene file) at the defaults."""
     md, unzipdir = fmu
-    node = {"steadySpeedStep": 250.0 * math.pi / 30.0}
     stiff_pins = tmp_path / "stiff-pins.toml"
     stiff_pins.write_text(subprocess.run([EXE, "scene", "show", "example-2004-stiff-pins"], capture_output=True,
                                          text=True, check=True).stdout)
-    for settings in (node, {"sceneFile": str(stiff_pins)}):
+    for settings in ({}, {"sceneFile": str(stiff_pins)}):
         steady = _steady_state_frms(md, unzipdir, 3, 0.01, settings)
         marched = _steady_state_frms(md, unzipdir, 1, 0.4, settings)
         print(f"{settings}: F^(rms) {steady[0]:.1f} against {marched[0]:.1f} N, mean {steady[1]:.1f} against "

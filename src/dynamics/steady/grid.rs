@@ -3,8 +3,9 @@
 //!
 //! Nodes lie at speed ±(ω_floor + i Δω / 2^L) and torque j ΔT / 2^L (i ≥ 0, j signed, L
 //! the refinements). A request is interpolated bilinearly in the coarsest cell whose error,
-//! estimated at its centre (a node: the corners' mean against the centre's own state, each
-//! mesh's largest, smallest and mean force and planet 1's F^(rms) over the centre's static
+//! estimated at its centre and at the midpoint of its edge nearest the request (nodes: the
+//! corners' mean, or the edge's two corners' mean, against the node's own state, each
+//! mesh's largest, smallest and mean force and planet 1's F^(rms) over the node's static
 //! mesh load, each mesh's separation fraction), is at most the agreement. A cell whose
 //! estimate is larger is halved, down to L times; the finest cell takes a quarter of its
 //! parent's estimate, and a request whose estimate is still larger is counted as
@@ -35,7 +36,9 @@ pub struct Blend {
     /// Refinement level of the cell interpolated in (0 the coarsest).
     pub level: u32,
     /// The interpolation's estimated error: the largest difference, normalised by the
-    /// static mesh load, between the cell's centre node and its corners' mean [-]; NaN
+    /// static mesh load, between the cell's centre node and its corners' mean, or the
+    /// midpoint node of the edge nearest the request and that edge's corners' mean [-]
+    /// (at the finest level, a quarter of the parent cell's); NaN
     /// where there is no estimate (a low-load or unsettled cell).
     pub estimate: f64,
 }
@@ -250,13 +253,19 @@ impl SteadyGrid {
                 corners.retain(|(_, w)| *w > 0.0);
                 return Ok(Blend { corners, speed, torque, level, estimate: f64::NAN });
             }
-            // The bilinear interpolation's error estimated at the cell's centre, where it is
-            // largest for a smooth response; the finest cell (no node at its centre) takes a
-            // quarter of its parent's (the error of a bilinear interpolation goes with the
-            // square of the cell).
+            // The bilinear interpolation's error estimated at the cell's centre and at the
+            // midpoint of the cell's edge nearest the request (on an edge the interpolation
+            // is linear between that edge's corners alone, and a peak that moves with the
+            // torque can be missed at the centre); the finest cell (no nodes inside) takes
+            // a quarter of its parent's (the error of a bilinear interpolation goes with
+            // the square of the cell).
             let error = if !finest {
                 let centre = self.node((sign, i0 + c / 2, j0 + c / 2))?;
-                self.centre_error(&corners, &centre)
+                let at_centre = self.interpolation_error(&corners, &centre);
+                let (ends, middle) = nearest_edge(wa, wb);
+                let edge = [corners[ends[0]].clone(), corners[ends[1]].clone()];
+                let middle = self.node((sign, i0 + middle.0 * c / 2, j0 + middle.1 * c / 2))?;
+                at_centre.max(self.interpolation_error(&edge, &middle))
             } else {
                 parent / 4.0
             };
@@ -273,11 +282,12 @@ impl SteadyGrid {
         unreachable!("the finest level always answers")
     }
 
-    /// The largest difference between the corners' mean (the bilinear interpolation at the
-    /// cell's centre) and the centre's own steady state, of each mesh's largest, smallest
-    /// and mean force and planet 1's F^(rms) over the centre's static mesh load, and of each
+    /// The largest difference between the mean of `ends` (the cell's corners, or an edge's
+    /// two: the bilinear interpolation at the cell's centre or the edge's midpoint) and
+    /// the steady state of the node `centre` there, of each mesh's largest, smallest and
+    /// mean force and planet 1's F^(rms) over the node's static mesh load, and of each
     /// mesh's separation fraction.
-    fn centre_error(&self, corners: &[(Arc<SteadyPoint>, f64)], centre: &SteadyPoint) -> f64 {
+    fn interpolation_error(&self, ends: &[(Arc<SteadyPoint>, f64)], centre: &SteadyPoint) -> f64 {
         let measures = |p: &SteadyPoint| -> Vec<f64> {
             let mut m: Vec<f64> = p.meshes.iter().flat_map(|s| [s.max, s.min, s.mean]).collect();
             m.extend(p.window.iter().map(|(h, _)| h.rms));
@@ -285,14 +295,15 @@ impl SteadyGrid {
         };
         let separations = |p: &SteadyPoint| -> Vec<f64> { p.meshes.iter().map(|s| s.separation).collect() };
         let load = (centre.torque * self.load_per_nm).abs().max(f64::MIN_POSITIVE);
-        let quarter = |f: &dyn Fn(&SteadyPoint) -> Vec<f64>| -> Vec<f64> {
+        let share = 1.0 / ends.len() as f64;
+        let mean = |f: &dyn Fn(&SteadyPoint) -> Vec<f64>| -> Vec<f64> {
             let mut sum = vec![0.0; f(centre).len()];
-            for (p, _) in corners {
-                sum.iter_mut().zip(f(p)).for_each(|(s, x)| *s += 0.25 * x);
+            for (p, _) in ends {
+                sum.iter_mut().zip(f(p)).for_each(|(s, x)| *s += share * x);
             }
             sum
         };
-        let (forces, separation) = (quarter(&measures), quarter(&separations));
+        let (forces, separation) = (mean(&measures), mean(&separations));
         let forces = forces.iter().zip(measures(centre)).map(|(a, b)| (a - b).abs() / load);
         let separation = separation.iter().zip(separations(centre)).map(|(a, b)| (a - b).abs());
         forces.chain(separation).fold(0.0, f64::max)
@@ -351,6 +362,22 @@ impl SteadyGrid {
     }
 }
 
+/// The cell's edge nearest the point at fractions `wa` of the speed and `wb` of the torque
+/// across it: the indices of its two corners (in the order (0, 0), (1, 0), (0, 1), (1, 1))
+/// and its midpoint in half-cells. Of edges at the same distance the first of bottom, top,
+/// left, right, so that the same request reads the same nodes in every run.
+fn nearest_edge(wa: f64, wb: f64) -> ([usize; 2], (i64, i64)) {
+    let edges =
+        [(wb, [0, 1], (1, 0)), (1.0 - wb, [2, 3], (1, 2)), (wa, [0, 2], (0, 1)), (1.0 - wa, [1, 3], (2, 1))];
+    let mut nearest = edges[0];
+    for e in &edges[1..] {
+        if e.0 < nearest.0 {
+            nearest = *e;
+        }
+    }
+    (nearest.1, nearest.2)
+}
+
 /// The cached node of `node`'s torque row and side nearest to it in speed: of two at the
 /// same distance the lower column, so that the same requests continue from the same node
 /// and give the same outputs, bit for bit, in every run.
@@ -366,7 +393,19 @@ fn nearest_in_row<T: Clone>(nodes: &BTreeMap<Node, T>, (sign, i, j): Node) -> Op
 mod tests {
     use std::collections::BTreeMap;
 
-    use crate::dynamics::steady::grid::nearest_in_row;
+    use crate::dynamics::steady::grid::{nearest_edge, nearest_in_row};
+
+    #[test]
+    fn the_nearest_edge_holds_the_request() {
+        // On the bottom edge (the torque row of corners 0 and 1): its midpoint one half-cell
+        // along the speed.
+        assert_eq!(nearest_edge(0.5, 0.0), ([0, 1], (1, 0)));
+        assert_eq!(nearest_edge(0.3, 0.9), ([2, 3], (1, 2)));
+        assert_eq!(nearest_edge(0.1, 0.4), ([0, 2], (0, 1)));
+        assert_eq!(nearest_edge(0.8, 0.6), ([1, 3], (2, 1)));
+        // At the centre all four are as near: the bottom one, in every run.
+        assert_eq!(nearest_edge(0.5, 0.5), ([0, 1], (1, 0)));
+    }
 
     #[test]
     fn the_nearest_node_of_a_tie_is_the_lower_column() {
