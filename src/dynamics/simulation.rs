@@ -11,6 +11,7 @@
 use serde::{Deserialize, Serialize};
 
 use std::collections::VecDeque;
+use std::sync::OnceLock;
 
 use crate::dynamics::duty::{input_torque_per_mesh_force, DutyBins, LoadDuty};
 use crate::dynamics::equations::PlanetaryDynamics;
@@ -120,10 +121,27 @@ struct Window {
     sun: VecDeque<f64>,
     ring: VecDeque<f64>,
     collected: u64,
+    /// The window's harmonics and separation fraction of each mesh (sun, ring), taken
+    /// once per window content: an FMU reads them several times a step (its outputs and
+    /// its separation check), each a spectrum of cycles × samples per cycle samples.
+    harmonics: [OnceLock<Option<(Harmonics, f64)>>; 2],
 }
 
 impl Window {
     fn push(&mut self, s: f64, fs: f64, fr: f64) {
+        let before = self.collected;
+        self.push_samples(s, fs, fr);
+        if self.collected != before {
+            self.changed();
+        }
+    }
+
+    /// Forgets the harmonics taken of the former content.
+    fn changed(&mut self) {
+        self.harmonics = Default::default();
+    }
+
+    fn push_samples(&mut self, s: f64, fs: f64, fr: f64) {
         if let Some((s0, fs0, fr0)) = self.last {
             let d = self.spacing;
             let mut add = |g: f64| {
@@ -449,6 +467,7 @@ impl Simulation {
                 sun: VecDeque::new(),
                 ring: VecDeque::new(),
                 collected: 0,
+                harmonics: Default::default(),
             },
         })
     }
@@ -476,6 +495,7 @@ impl Simulation {
         self.window.sun.clear();
         self.window.ring.clear();
         self.window.collected = 0;
+        self.window.changed();
         Ok(())
     }
 
@@ -977,12 +997,16 @@ impl Simulation {
         if !self.window.full() {
             return None;
         }
-        let data: Vec<f64> = match mesh {
-            MeshKind::SunPlanet => self.window.sun.iter().copied().collect(),
-            MeshKind::RingPlanet => self.window.ring.iter().copied().collect(),
-        };
-        let h = mesh_harmonics(&data, self.window.cycles, 6).ok()?;
-        Some((h, separation_fraction(&data)))
+        let k = usize::from(mesh == MeshKind::RingPlanet);
+        let taken = self.window.harmonics[k].get_or_init(|| {
+            let data: Vec<f64> = match mesh {
+                MeshKind::SunPlanet => self.window.sun.iter().copied().collect(),
+                MeshKind::RingPlanet => self.window.ring.iter().copied().collect(),
+            };
+            let h = mesh_harmonics(&data, self.window.cycles, 6).ok()?;
+            Some((h, separation_fraction(&data)))
+        });
+        taken.clone()
     }
 
     fn rotation(&self, m: Member, rate: bool) -> f64 {
@@ -1132,6 +1156,7 @@ impl Simulation {
             self.window.ring.clear();
             self.window.last = None;
         }
+        self.window.changed();
         Ok(())
     }
 

@@ -45,8 +45,14 @@ pub enum SpectrumError {
 }
 
 fn spectrum(signal: &[f64]) -> Vec<Complex<f64>> {
+    thread_local! {
+        // The thread's planner keeps the plans it made: planning a length costs more than
+        // the transform itself (an FMU takes a window's spectrum at every step).
+        static PLANNER: std::cell::RefCell<FftPlanner<f64>> = std::cell::RefCell::new(FftPlanner::new());
+    }
     let mut buf: Vec<Complex<f64>> = signal.iter().map(|x| Complex::new(*x, 0.0)).collect();
-    FftPlanner::new().plan_fft_forward(buf.len()).process(&mut buf);
+    let fft = PLANNER.with(|p| p.borrow_mut().plan_fft_forward(buf.len()));
+    fft.process(&mut buf);
     buf
 }
 
