@@ -3,7 +3,8 @@
 //! and the real-time factor, for both fidelity levels and both integrators
 //! (the default RK 5(4) at its tolerance, and generalized-α at its steps per
 //! mesh cycle), and the error E_h of the default's windowed mesh-force
-//! harmonics (the FMU's harmonic outputs) against a tight-tolerance run.
+//! harmonics (the FMU's harmonic outputs) against a tight-tolerance run. The
+//! native runs take `example-2004`, the FMU's default scene, as the FMU does.
 //! Run: `cargo bench --bench fmu_step` (docs/PERFORMANCE.md records the figures).
 
 use std::ffi::CString;
@@ -59,7 +60,7 @@ fn fmu_run(fidelity: i32, integrator: i32, h: f64, span: f64) -> f64 {
 /// cycles) after 34 cycles of run-in, at `rpm`, one mesh cycle per
 /// communication step, RK 5(4) at relative tolerance `rtol`.
 fn window_harmonics(fidelity: Fidelity, rpm: f64, rtol: f64) -> Vec<Vec<f64>> {
-    let mut s = Scene::example_2004_stiff_pins();
+    let mut s = Scene::example_2004();
     s.dynamics.fidelity = fidelity;
     s.dynamics.integrator = IntegratorKind::Rk45;
     s.dynamics.simulation_relative_tolerance = rtol;
@@ -90,7 +91,7 @@ fn harmonic_error(fidelity: Fidelity, rpm: f64, rtol: f64) -> f64 {
 }
 
 fn native_run(fidelity: Fidelity, integrator: IntegratorKind, h: f64, span: f64) -> f64 {
-    let mut s = Scene::example_2004_stiff_pins();
+    let mut s = Scene::example_2004();
     s.dynamics.fidelity = fidelity;
     s.dynamics.integrator = integrator;
     let (set, run) = s.validate_with_run().expect("valid");
@@ -107,7 +108,7 @@ fn native_run(fidelity: Fidelity, integrator: IntegratorKind, h: f64, span: f64)
 fn main() {
     let fm = 34.0 * 3000.0 / 60.0;
     let span = 0.05;
-    let d = Scene::example_2004_stiff_pins().dynamics;
+    let d = Scene::example_2004().dynamics;
     println!("fmi2DoStep at 3000 rpm (f_m = {fm} Hz), {span} s simulated");
     let mut kinds = vec![d.integrator];
     kinds.extend(

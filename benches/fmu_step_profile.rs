@@ -1,7 +1,7 @@
 //! Where the FMU's doStep spends its time with the adaptive integrator at
 //! 3000 rpm: the loop of `Simulation::do_step` (RK 5(4) steps up to the
-//! communication point, dense output at the 120 internal grid points per mesh
-//! cycle, a force evaluation there for the step extremes and the harmonic
+//! communication point, dense output at the internal grid points (`steps_per_mesh_cycle`)
+//! of each mesh cycle, a force evaluation there for the step extremes and the harmonic
 //! window) rebuilt on the public API, with the model wrapped to count and
 //! time its force and event-function evaluations. One communication step of
 //! one mesh cycle, 0.05 s simulated, in three configurations: the former
@@ -11,7 +11,8 @@
 //! frequency, per unit of relative tolerance) at 3e-6; and the FMU's
 //! default, the simulation's own tolerance (`simulation_relative_tolerance`,
 //! 1e-5) with the error weight measured from the rigid-body motion anchored
-//! at the start of every communication step.
+//! at the start of every communication step. On `example-2004`, the FMU's
+//! default scene.
 //! Run: `cargo bench --bench fmu_step_profile` (docs/PERFORMANCE.md records the figures).
 
 use std::time::Instant;
@@ -68,7 +69,7 @@ enum Tolerances {
 }
 
 fn profile(fidelity: Fidelity, tolerances: Tolerances) {
-    let mut scene = Scene::example_2004_stiff_pins();
+    let mut scene = Scene::example_2004();
     scene.dynamics.fidelity = fidelity;
     let (set, run) = scene.validate_with_run().expect("valid");
     let mut model = PlanetaryDynamics::new(&set, SetModel::new(&set)).expect("model");
