@@ -364,10 +364,16 @@ fn condensed_point(
     };
     let settings = *cb.balance().settings();
     let unknowns = report.coordinates * (2 * settings.harmonics + 1);
-    let spectrum = match (settings.harmonics > rule, checks.count) {
-        (true, _) => format!(" (its spectrum asked for them: the rule's {rule} checked at twice)"),
-        (false, 0) => String::new(),
-        (false, _) => format!(" (its spectrum checked at {} harmonics: these suffice)", 2 * rule),
+    // A check that kept the rule's harmonics either found them within the estimate
+    // (`passed`) or could not solve at twice them, and the point keeps what it has.
+    let spectrum = match (settings.harmonics > rule, checks.count, checks.passed) {
+        (true, _, _) => format!(" (its spectrum asked for them: the rule's {rule} checked at twice)"),
+        (false, 0, _) => String::new(),
+        (false, _, Some(_)) => format!(" (its spectrum checked at {} harmonics: these suffice)", 2 * rule),
+        (false, _, None) => format!(
+            " (its spectrum asked for more; the solve at {} harmonics failed, so it keeps these)",
+            2 * rule
+        ),
     };
     let multipliers = cb.balance().floquet_multipliers(&orbit, settings.samples)?;
     let mu = multipliers.first().map_or(0.0, |m| m.modulus());
