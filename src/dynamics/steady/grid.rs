@@ -369,13 +369,8 @@ impl SteadyGrid {
 fn nearest_edge(wa: f64, wb: f64) -> ([usize; 2], (i64, i64)) {
     let edges =
         [(wb, [0, 1], (1, 0)), (1.0 - wb, [2, 3], (1, 2)), (wa, [0, 2], (0, 1)), (1.0 - wa, [1, 3], (2, 1))];
-    let mut nearest = edges[0];
-    for e in &edges[1..] {
-        if e.0 < nearest.0 {
-            nearest = *e;
-        }
-    }
-    (nearest.1, nearest.2)
+    let (_, corners, middle) = edges.into_iter().min_by(|a, b| a.0.total_cmp(&b.0)).expect("four edges");
+    (corners, middle)
 }
 
 /// The cached node of `node`'s torque row and side nearest to it in speed: of two at the
