@@ -282,3 +282,55 @@ fn flanks_that_differ_across_the_face_are_refused() {
     let even = SetModel::with_flanks(&set, &[worn.clone(), worn], &vec![MeshFlanks::default(); 2]);
     assert!(PlanetaryDynamics::new(&set, even).is_ok());
 }
+
+/// The tabulated law's derivatives of its tangent stiffness (what Rayleigh
+/// damping's tangent reads) are those of its interpolated stiffness: at 400
+/// positions over a cycle of each mesh, under the nominal approach and 1.5
+/// times it (inside the table), ∂K_t/∂δ and ∂K_t/∂s equal the central
+/// differences of `force_tangents`' stiffness (1e-5 of the approach, 10 nm)
+/// to 1e-4 of the largest of each met, wherever the one-sided differences
+/// agree to 1e-3 (no cell border within the step).
+#[test]
+fn the_tabulated_laws_stiffness_derivatives_are_its_interpolants() {
+    let set = Scene::example_2004().validate().unwrap();
+    let law = DeformableSet::of_gear_set(&set, &MeshFlanks::default(), &MeshFlanks::default()).unwrap();
+    let load = set.mesh_load_per_planet();
+    for kind in MeshKind::ALL {
+        let t = law.mesh(kind);
+        let p = t.mesh.path().clone();
+        let reach = t.mesh.approach_for(p.start, load).unwrap();
+        let k = |s: f64, d: f64| t.force_tangents(s, d).unwrap().approach_stiffness;
+        let (mut smooth, mut largest, mut worst) = (0, [0.0_f64; 2], [0.0_f64; 2]);
+        for j in 0..400 {
+            for delta in [reach, 1.5 * reach] {
+                let s = p.start + p.base_pitch * (j as f64 + 0.37) / 400.0;
+                let (hs, hd) = (1e-8, 1e-5 * reach);
+                let k0 = k(s, delta);
+                let sides = [
+                    [(k0 - k(s, delta - hd)) / hd, (k(s, delta + hd) - k0) / hd],
+                    [(k0 - k(s - hs, delta)) / hs, (k(s + hs, delta) - k0) / hs],
+                ];
+                if sides.iter().any(|[a, b]| (a - b).abs() > 1e-3 * a.abs().max(b.abs())) {
+                    continue;
+                }
+                smooth += 1;
+                let (d_delta, d_s) = t.stiffness_derivatives(s, delta).unwrap().expect("inside the table");
+                for (i, exact) in [d_delta, d_s].into_iter().enumerate() {
+                    largest[i] = largest[i].max(exact.abs());
+                    worst[i] = worst[i].max((exact - 0.5 * (sides[i][0] + sides[i][1])).abs());
+                }
+            }
+        }
+        eprintln!(
+            "{kind:?}: {smooth} smooth points; ∂K/∂δ ≤ {:.3e} N/m², off ≤ {:.2e}; ∂K/∂s ≤ {:.3e} N/m², off ≤ {:.2e}",
+            largest[0], worst[0], largest[1], worst[1]
+        );
+        assert!(smooth > 600, "{kind:?}: only {smooth} of 800 points away from a cell border");
+        for i in 0..2 {
+            assert!(
+                largest[i] > 0.0 && worst[i] <= 1e-4 * largest[i],
+                "{kind:?} derivative {i}: {worst:?} of {largest:?}"
+            );
+        }
+    }
+}

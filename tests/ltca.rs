@@ -266,3 +266,45 @@ fn the_single_slice_event_path_is_the_general_path_bit_for_bit() {
         }
     }
 }
+
+/// The pair model's derivatives of its tangent stiffness (what Rayleigh
+/// damping's tangent reads) are those of the law it interpolates: at 400
+/// positions over a cycle of each mesh, under the nominal approach and twice
+/// it, ∂K_t/∂s equals the central difference of `force_tangents`' stiffness
+/// (10 nm) to 1e-6 of the largest |∂K_t/∂s| met, and ∂K_t/∂δ is 0 as the
+/// difference in δ is, wherever the two one-sided differences agree (no
+/// table node or contact switch within the step).
+#[test]
+fn the_pair_models_stiffness_derivatives_are_its_laws() {
+    let set = example();
+    let w = per_planet_load(&set);
+    for mesh in MeshKind::ALL {
+        let model = MeshModel::new(&set, mesh, &MeshFlanks::default());
+        let p = model.path().clone();
+        let reach = model.approach_for(p.start, w);
+        let k = |s: f64, d: f64| model.force_tangents(s, d).approach_stiffness;
+        let (mut smooth, mut largest, mut worst_s, mut worst_d) = (0, 0.0_f64, 0.0_f64, 0.0_f64);
+        for j in 0..400 {
+            for delta in [reach, 2.0 * reach] {
+                let s = p.start + p.base_pitch * (j as f64 + 0.37) / 400.0;
+                let (hs, hd) = (1e-8, 1e-4 * reach);
+                let (left, right) =
+                    ((k(s, delta) - k(s - hs, delta)) / hs, (k(s + hs, delta) - k(s, delta)) / hs);
+                let (down, up) =
+                    ((k(s, delta) - k(s, delta - hd)) / hd, (k(s, delta + hd) - k(s, delta)) / hd);
+                if (left - right).abs() > 1e-6 * left.abs().max(right.abs()).max(1.0) || down != up {
+                    continue;
+                }
+                smooth += 1;
+                let (d_delta, d_s) = model.stiffness_derivatives(s, delta);
+                largest = largest.max(d_s.abs());
+                worst_s = worst_s.max((d_s - 0.5 * (left + right)).abs());
+                worst_d = worst_d.max((d_delta - 0.5 * (down + up)).abs());
+            }
+        }
+        eprintln!("{mesh:?}: {smooth} smooth points, |∂K/∂s| ≤ {largest:.3e} N/m², worst {worst_s:.2e}, ∂K/∂δ {worst_d:.2e}");
+        assert!(smooth > 700, "{mesh:?}: only {smooth} of 800 points away from a node");
+        assert!(largest > 0.0 && worst_s <= 1e-6 * largest, "{mesh:?}: ∂K/∂s off by {worst_s}");
+        assert_eq!(worst_d, 0.0, "{mesh:?}: ∂K/∂δ");
+    }
+}

@@ -74,6 +74,8 @@ pub struct PairContact {
 struct PairLaw {
     force: f64,
     stiffness: f64,
+    /// ∂k/∂s of the touching slices' stiffness along the table [N/m²].
+    stiffness_slope: f64,
     position_derivative: f64,
     energy: f64,
     energy_derivative: f64,
@@ -261,6 +263,7 @@ impl MeshModel {
             let dg = slope(g_table) + dr;
             law.force += sign * k * x;
             law.stiffness += k;
+            law.stiffness_slope += dk;
             law.position_derivative += sign * (dk * x - k * dg);
             law.energy += 0.5 * k * x * x;
             law.energy_derivative += 0.5 * dk * x * x - k * x * dg;
@@ -469,6 +472,19 @@ impl MeshModel {
             out.peak_pair_force = out.peak_pair_force.max(pair);
         }
         out
+    }
+
+    /// The derivatives of the tangent stiffness K_t = ∂F/∂δ at (s, δ), contact
+    /// status frozen: (∂K_t/∂δ, ∂K_t/∂s) [N/m², N/m²]. A pair's force is
+    /// linear in its penetration, so ∂K_t/∂δ = 0, and ∂K_t/∂s is the sum of
+    /// the touching pairs' stiffness slopes along their tables: the exact
+    /// derivatives of the interpolated law, which Rayleigh damping's tangent
+    /// reads.
+    pub fn stiffness_derivatives(&self, s: f64, delta: f64) -> (f64, f64) {
+        let pb = self.path().base_pitch;
+        let slope =
+            self.pair_range(s).map(|index| self.pair(s + f64::from(index) * pb, delta).stiffness_slope).sum();
+        (0.0, slope)
     }
 
     /// Elastic energy stored in the mesh's pairs, V = Σ ½k(s_k)(δ − g(s_k))²

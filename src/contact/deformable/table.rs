@@ -83,6 +83,11 @@ fn hermite(u: f64) -> ([f64; 4], [f64; 4]) {
     )
 }
 
+/// The second derivatives of the cubic Hermite basis of [`hermite`] at u.
+fn hermite_second(u: f64) -> [f64; 4] {
+    [12.0 * u - 6.0, 6.0 * u - 4.0, -12.0 * u + 6.0, 6.0 * u - 2.0]
+}
+
 /// The flank's smallest unloaded gap over its pairs at reference position
 /// `s` \[m\]: where its first pair touches; `None` where no pair can touch.
 fn touch_gap(mesh: &DeformableMesh, flank: Flank, s: f64) -> Option<f64> {
@@ -204,6 +209,48 @@ impl FlankTable {
         let fs = hv[0] * ps0 + hv[1] * hx * xs0 + hv[2] * ps1 + hv[3] * hx * xs1;
         let fx = dv[0] * p0 + dv[1] * hx * x0 + dv[2] * p1 + dv[3] * hx * x1;
         (f, fs / hs, fx / hx)
+    }
+
+    /// ∂²P/∂ξ² and ∂²P/∂ξ∂s of the Hermite patch at cell (j, u) in s and grid
+    /// coordinate x = ξ/h_ξ (within the table): the derivatives of the
+    /// patch's ∂P/∂ξ ([`Self::patch`]).
+    fn patch_curvature(&self, j: usize, u: f64, x: f64) -> (f64, f64) {
+        let i = (x as usize).min(self.nx - 2);
+        let v = x - i as f64;
+        let jp = if j + 1 == self.ns { 0 } else { j + 1 };
+        let (hu, du) = hermite(u);
+        let (_, dv) = hermite(v);
+        let d2v = hermite_second(v);
+        let (hs, hx) = (self.hs, self.hx);
+        let (a0, a1) = (&self.nodes[j * self.nx + i], &self.nodes[j * self.nx + i + 1]);
+        let (b0, b1) = (&self.nodes[jp * self.nx + i], &self.nodes[jp * self.nx + i + 1]);
+        let along = |a: &[f64; 4], b: &[f64; 4], w: &[f64; 4]| {
+            (
+                w[0] * a[0] + w[1] * hs * a[2] + w[2] * b[0] + w[3] * hs * b[2],
+                w[0] * a[1] + w[1] * hs * a[3] + w[2] * b[1] + w[3] * hs * b[3],
+            )
+        };
+        let ((p0, x0), (p1, x1)) = (along(a0, b0, &hu), along(a1, b1, &hu));
+        let ((ps0, xs0), (ps1, xs1)) = (along(a0, b0, &du), along(a1, b1, &du));
+        let fxx = d2v[0] * p0 + d2v[1] * hx * x0 + d2v[2] * p1 + d2v[3] * hx * x1;
+        let fxs = dv[0] * ps0 + dv[1] * hx * xs0 + dv[2] * ps1 + dv[3] * hx * xs1;
+        (fxx / (hx * hx), fxs / (hx * hs))
+    }
+
+    /// The flank's part of (∂K_t/∂δ, ∂K_t/∂s) at a cell found by
+    /// [`Self::cell`], K_t = ∂P/∂ξ at ξ = σδ − g(s): (σ P_ξξ, P_ξs − P_ξξ g′);
+    /// `None` beyond the ξ range.
+    fn stiffness_derivatives_in(&self, cell: (usize, f64), delta: f64) -> Option<(f64, f64)> {
+        let site = self.site_in(cell, delta);
+        if site.xi <= 0.0 {
+            return Some((0.0, 0.0));
+        }
+        let x = site.xi * self.inv_hx;
+        if x.is_nan() || x > (self.nx - 1) as f64 {
+            return None;
+        }
+        let (fxx, fxs) = self.patch_curvature(site.j, site.u, x);
+        Some((self.flank.sign() * fxx, fxs - fxx * site.slope))
     }
 
     /// The largest ξ the table covers \[m\].
@@ -333,6 +380,25 @@ impl TabulatedMesh {
             out.peak_pair_force = out.peak_pair_force.max(law.peak_pair_force);
         }
         Ok(out)
+    }
+
+    /// The derivatives of the tangent stiffness K_t = ∂F/∂δ at (s, δ):
+    /// (∂K_t/∂δ, ∂K_t/∂s) [N/m², N/m²], the exact derivatives of the
+    /// interpolated law, which Rayleigh damping's tangent reads; `None` where
+    /// δ lies beyond the table (the law there is solved, not interpolated).
+    pub fn stiffness_derivatives(&self, s: f64, delta: f64) -> Result<Option<(f64, f64)>, DeformableError> {
+        check_finite("position s", s)?;
+        check_finite("approach delta", delta)?;
+        let cell = self.table.flanks[0].cell(s);
+        let mut out = (0.0, 0.0);
+        for t in &self.table.flanks {
+            let Some((d_delta, d_s)) = t.stiffness_derivatives_in(cell, delta) else {
+                return Ok(None);
+            };
+            out.0 += d_delta;
+            out.1 += d_s;
+        }
+        Ok(Some(out))
     }
 
     /// The event values of the two flanks at (s, δ) \[m\]: σδ − g(s) for the

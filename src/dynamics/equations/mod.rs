@@ -667,18 +667,35 @@ impl PlanetaryDynamics {
     /// Rayleigh damping's change of a touching mesh's damping force
     /// η K_t(s, δ) δ̇ with its approach and position: η δ̇ ∂K_t/∂δ and
     /// η δ̇ ∂K_t/∂s, which add to the tangent's stiffness and cross
-    /// coefficients. The law gives no second derivative: central
-    /// differences of its tangent stiffness, at 1e-4 of the mesh's elastic
-    /// deflection F/K_t in δ and 10 nm in s. Where the two sides' stiffness
-    /// differs by more than 5 % a pair enters or leaves contact between
-    /// them (a switch, which the saltation carries): 0 there. Both are 0
-    /// under the ratio model, and for a mesh that does not touch.
+    /// coefficients. The laws give both derivatives of their interpolated
+    /// stiffness exactly, contact status frozen (a pair entering or leaving
+    /// contact is a switch, which the saltation carries), in one evaluation.
+    /// Where the deformable law's approach lies beyond its table (solved
+    /// there, not interpolated) they are central differences of its tangent
+    /// stiffness ([`Self::rayleigh_tangent_by_differences`]). Both are 0 under
+    /// the ratio model, and for a mesh that does not touch.
     fn rayleigh_tangent(&self, kind: MeshKind, state: &MeshState) -> (f64, f64) {
         let eta = self.mesh_stiffness_damping;
-        let k = state.stiffness;
-        if eta == 0.0 || k <= 0.0 || state.approach_rate == 0.0 {
+        if eta == 0.0 || state.stiffness <= 0.0 || state.approach_rate == 0.0 {
             return (0.0, 0.0);
         }
+        let (s, delta) = (state.position, state.approach);
+        let exact = match &self.deformable {
+            Some(d) => d.mesh(kind).stiffness_derivatives(s, delta).unwrap_or(Some((f64::NAN, f64::NAN))),
+            None => Some(self.model(kind).stiffness_derivatives(s, delta)),
+        };
+        let (d_delta, d_s) = exact.unwrap_or_else(|| self.rayleigh_tangent_by_differences(kind, state));
+        let scale = eta * state.approach_rate;
+        (scale * d_delta, scale * d_s)
+    }
+
+    /// (∂K_t/∂δ, ∂K_t/∂s) of a touching mesh by central differences of its
+    /// tangent stiffness, at 1e-4 of the mesh's elastic deflection F/K_t in δ
+    /// and 10 nm in s. Where the two sides' stiffness differs by more than
+    /// 5 % a pair enters or leaves contact between them (a switch, which the
+    /// saltation carries): 0 there.
+    fn rayleigh_tangent_by_differences(&self, kind: MeshKind, state: &MeshState) -> (f64, f64) {
+        let k = state.stiffness;
         let slope = |plus: MeshLaw, minus: MeshLaw, h: f64| {
             let (a, b) = (plus.approach_stiffness, minus.approach_stiffness);
             if a > 0.0 && b > 0.0 && (a - b).abs() <= 0.05 * k {
@@ -693,8 +710,7 @@ impl PlanetaryDynamics {
         let d_delta =
             slope(self.law_at(kind, s, delta + h_delta), self.law_at(kind, s, delta - h_delta), h_delta);
         let d_s = slope(self.law_at(kind, s + h_s, delta), self.law_at(kind, s - h_s, delta), h_s);
-        let scale = eta * state.approach_rate;
-        (scale * d_delta, scale * d_s)
+        (d_delta, d_s)
     }
 
     /// A mesh's state from its law: the damping force acts while a pair touches.
