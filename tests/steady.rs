@@ -118,19 +118,22 @@ fn the_speed_drive_follows_the_reference() {
     assert!(s.input_torque() > set.input_torque(), "accelerating takes more torque: {}", s.input_torque());
 }
 
-/// Steps at one speed and torque are cache hits: no steady state is solved after the first
-/// step's, and the outputs do not change from step to step.
+/// Steps at one speed and torque are cache hits: no steady state is solved and no error
+/// estimated after the first step's, and the outputs do not change from step to step.
 #[test]
 fn repeated_steps_are_cache_hits() {
     let (set, run) = example(|_| {});
     let mut s = steady(&set, &run, 3000.0 * RPM);
     s.do_step(0.0, 1e-3).unwrap();
     let solved = s.steady().unwrap().stats().solved;
+    let estimated = s.steady().unwrap().stats().estimated;
+    assert!(estimated > 0, "the first request estimates its cells' errors");
     let first = s.step_extremes().clone();
     for k in 1..200 {
         s.do_step(k as f64 * 1e-3, 1e-3).unwrap();
     }
     assert_eq!(s.steady().unwrap().stats().solved, solved);
+    assert_eq!(s.steady().unwrap().stats().estimated, estimated);
     assert_eq!(s.step_extremes(), &first);
     assert_eq!(s.steady().unwrap().stats().requests, 201);
 }

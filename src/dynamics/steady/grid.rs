@@ -107,6 +107,9 @@ pub struct GridStats {
     pub requests: u64,
     /// Steady states solved (nodes).
     pub solved: u64,
+    /// Interpolation errors estimated (at a cell's centre or an edge's midpoint); each is
+    /// kept, so a request in a cell already read estimates none.
+    pub estimated: u64,
     /// Of those, found by a march past a fold.
     pub marched: u64,
     /// Of those, found from the static state.
@@ -139,6 +142,10 @@ pub struct SteadyGrid {
     nodes: BTreeMap<Node, Arc<SteadyPoint>>,
     levels: HashMap<i64, TorqueLevel>,
     unloaded: HashMap<(i8, i64), Arc<SteadyPoint>>,
+    /// The interpolation error estimated at a cell's centre or an edge's midpoint, by
+    /// (sign, that node's speed and torque index, the cell's size): nodes are never
+    /// replaced, so an estimate holds for every later request that reads it.
+    estimates: HashMap<(i8, i64, i64, i64), f64>,
     stats: GridStats,
 }
 
@@ -162,6 +169,7 @@ impl SteadyGrid {
             nodes: BTreeMap::new(),
             levels: HashMap::new(),
             unloaded: HashMap::new(),
+            estimates: HashMap::new(),
             stats: GridStats::default(),
         }
     }
@@ -260,12 +268,14 @@ impl SteadyGrid {
             // a quarter of its parent's (the error of a bilinear interpolation goes with
             // the square of the cell).
             let error = if !finest {
-                let centre = self.node((sign, i0 + c / 2, j0 + c / 2))?;
-                let at_centre = self.interpolation_error(&corners, &centre);
+                let at_centre = self.estimate((sign, i0 + c / 2, j0 + c / 2), c, &corners)?;
                 let (ends, middle) = nearest_edge(wa, wb);
                 let edge = [corners[ends[0]].clone(), corners[ends[1]].clone()];
-                let middle = self.node((sign, i0 + middle.0 * c / 2, j0 + middle.1 * c / 2))?;
-                at_centre.max(self.interpolation_error(&edge, &middle))
+                at_centre.max(self.estimate(
+                    (sign, i0 + middle.0 * c / 2, j0 + middle.1 * c / 2),
+                    c,
+                    &edge,
+                )?)
             } else {
                 parent / 4.0
             };
@@ -280,6 +290,22 @@ impl SteadyGrid {
             parent = error;
         }
         unreachable!("the finest level always answers")
+    }
+
+    /// The interpolation error of a cell of size `c` estimated at node `at` (its centre, or
+    /// the midpoint of the edge whose corners are `ends`), solving `at` where it is not
+    /// cached; kept, so that later requests in the cell read it back
+    /// ([`Self::interpolation_error`]).
+    fn estimate(&mut self, at: Node, c: i64, ends: &[(Arc<SteadyPoint>, f64)]) -> Result<f64, PeriodicError> {
+        let key = (at.0, at.1, at.2, c);
+        if let Some(e) = self.estimates.get(&key) {
+            return Ok(*e);
+        }
+        let middle = self.node(at)?;
+        let e = self.interpolation_error(ends, &middle);
+        self.stats.estimated += 1;
+        self.estimates.insert(key, e);
+        Ok(e)
     }
 
     /// The largest difference between the mean of `ends` (the cell's corners, or an edge's
