@@ -444,3 +444,40 @@ fn the_default_holds_e_h_1e_3_at_8000_rpm_torsional_over_a_long_run() {
     println!("torsional, 8000 rpm, {cycles} mesh cycles: E_h {e_h:.2e} at {default_rtol:e}");
     assert!(e_h <= 1e-3, "E_h {e_h:e} > 1e-3");
 }
+
+/// The window's separation fraction read alone (what the FMU's check reads at every
+/// step, without the spectrum) is the one `window_harmonics` gives, to the bit, at every
+/// step of a run whose teeth separate (a twentieth of the example's torque at 10 000 rpm,
+/// torsional), and neither gives one before the window is full.
+#[test]
+fn the_window_separation_alone_is_the_harmonics_one() {
+    let mut s = Scene::example_2004();
+    s.dynamics.fidelity = Fidelity::Torsional;
+    let (set, run) = s.validate_with_run().unwrap();
+    let set = set.with_input_torque(set.input_torque() / 20.0).unwrap();
+    let model = PlanetaryDynamics::new(&set, SetModel::new(&set)).unwrap();
+    let omega = 10_000.0 * std::f64::consts::PI / 30.0;
+    let fm = model.mesh_frequency_per_input_speed * omega;
+    let mut sim = Simulation::new(&set, &run, model, 0.0, omega).unwrap();
+    sim.set_window(8, 60).unwrap();
+    let (mut compared, mut separated) = (0, 0);
+    for _ in 0..40 {
+        sim.do_step(sim.time(), 0.5 / fm).unwrap();
+        for mesh in MeshKind::ALL {
+            let alone = sim.window_separation(mesh);
+            let with = sim.window_harmonics(mesh).map(|(_, s)| s);
+            assert_eq!(alone.map(f64::to_bits), with.map(f64::to_bits), "{mesh:?} at t = {}", sim.time());
+            if let Some(f) = alone {
+                compared += 1;
+                separated += usize::from(f > 0.0);
+            }
+        }
+        // Read alone first and after the spectrum was taken: both paths compared.
+        let _ = sim.window_harmonics(MeshKind::SunPlanet);
+        assert_eq!(
+            sim.window_separation(MeshKind::SunPlanet).map(f64::to_bits),
+            sim.window_harmonics(MeshKind::SunPlanet).map(|(_, s)| s.to_bits())
+        );
+    }
+    assert!(compared > 20 && separated > 0, "{compared} readings, {separated} with separation");
+}

@@ -988,6 +988,32 @@ impl Simulation {
         self.window.sun.len() / self.window.samples_per_cycle
     }
 
+    /// The separation fraction of planet 1's mesh force over the window, once the window
+    /// is full: [`Self::window_harmonics`]' second value (`None` where it gives none),
+    /// without the spectrum, which a reader of the separation alone (the FMU's check at
+    /// every step) does not need.
+    pub fn window_separation(&self, mesh: MeshKind) -> Option<f64> {
+        if self.steady.is_some() {
+            return self.window_harmonics(mesh).map(|(_, s)| s);
+        }
+        if !self.window.full() {
+            return None;
+        }
+        let k = usize::from(mesh == MeshKind::RingPlanet);
+        if let Some(taken) = self.window.harmonics[k].get() {
+            return taken.as_ref().map(|(_, s)| *s);
+        }
+        let data = match mesh {
+            MeshKind::SunPlanet => &self.window.sun,
+            MeshKind::RingPlanet => &self.window.ring,
+        };
+        // The spectrum refuses a window with a non-finite sample, and so gives no fraction.
+        if !data.iter().all(|f| f.is_finite()) {
+            return None;
+        }
+        Some(data.iter().filter(|f| **f == 0.0).count() as f64 / data.len() as f64)
+    }
+
     /// Harmonics 1..6 and separation fraction of planet 1's mesh force over
     /// the window, once the window is full.
     pub fn window_harmonics(&self, mesh: MeshKind) -> Option<(Harmonics, f64)> {

@@ -143,7 +143,7 @@ impl Watch {
         self.note(Condition::RunAway, finding.map(at), &mut out);
         for mesh in MeshKind::ALL {
             let c = Condition::Separation(mesh_index(mesh));
-            let fraction = sim.window_harmonics(mesh).map(|(_, sep)| sep);
+            let fraction = sim.window_separation(mesh);
             let finding = fraction.and_then(|f| check::separation(1, mesh, f, self.margin(c))).map(at);
             self.note(c, finding, &mut out);
             // The most loaded planet of the mesh, at the largest force its
