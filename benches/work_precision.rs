@@ -11,7 +11,9 @@ use std::path::PathBuf;
 
 use planetwear::analysis::accuracy::{IndependentIntegrator, StudyPlan};
 use planetwear::model::lumped::Fidelity;
-use planetwear::report::accuracy::{machine, operating_points, run_study, tables_markdown, write_study};
+use planetwear::report::accuracy::{
+    example_points, machine, operating_points, run_study, tables_markdown, write_study,
+};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -26,6 +28,9 @@ fn main() {
     let mut points = operating_points(Fidelity::Torsional).expect("operating points");
     if !quick {
         points.extend(operating_points(Fidelity::TransverseTorsional).expect("operating points"));
+        for fidelity in [Fidelity::Torsional, Fidelity::TransverseTorsional] {
+            points.extend(example_points(fidelity).expect("operating points"));
+        }
     }
     let dop = independent::Dop853 { rtol: if quick { 1e-11 } else { 1e-12 } };
     let independent: &dyn IndependentIntegrator = &dop;

@@ -184,7 +184,9 @@ pub(crate) fn print_calibration(
 pub(crate) fn work_precision(out: &Path, quick: bool) -> Result<()> {
     use planetwear::analysis::accuracy::StudyPlan;
     use planetwear::model::lumped::Fidelity;
-    use planetwear::report::accuracy::{operating_points, run_study, tables_markdown, write_study};
+    use planetwear::report::accuracy::{
+        example_points, operating_points, run_study, tables_markdown, write_study,
+    };
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let (plan, mut points) = if quick {
         (StudyPlan::quick(), operating_points(Fidelity::Torsional)?)
@@ -193,6 +195,9 @@ pub(crate) fn work_precision(out: &Path, quick: bool) -> Result<()> {
     };
     if !quick {
         points.extend(operating_points(Fidelity::TransverseTorsional)?);
+        for fidelity in [Fidelity::Torsional, Fidelity::TransverseTorsional] {
+            points.extend(example_points(fidelity)?);
+        }
     }
     let study = run_study(&points, &plan, None, |point, run| {
         if run == "reference checks" {
