@@ -48,6 +48,14 @@ pub enum StudyError {
     Json(#[from] serde_json::Error),
 }
 
+/// The suffix of an operating point's name at `fidelity`.
+fn fidelity_tag(fidelity: Fidelity) -> &'static str {
+    match fidelity {
+        Fidelity::Torsional => "torsional",
+        Fidelity::TransverseTorsional => "transverse_torsional",
+    }
+}
+
 fn point(name: &str, description: &str, scene: &Scene, speed_rpm: f64) -> Result<OperatingPoint, StudyError> {
     let (set, run) =
         scene.validate_with_run().map_err(|source| StudyError::Scene { point: name.into(), source })?;
@@ -81,10 +89,7 @@ fn point(name: &str, description: &str, scene: &Scene, speed_rpm: f64) -> Result
 pub fn operating_points(fidelity: Fidelity) -> Result<Vec<OperatingPoint>, StudyError> {
     let mut base = Scene::example_2004_stiff_pins();
     base.dynamics.fidelity = fidelity;
-    let tag = match fidelity {
-        Fidelity::Torsional => "torsional",
-        Fidelity::TransverseTorsional => "transverse_torsional",
-    };
+    let tag = fidelity_tag(fidelity);
     let mut points = Vec::new();
     points.push(point(
         &format!("off_resonance_{tag}"),
@@ -142,10 +147,7 @@ pub fn operating_points(fidelity: Fidelity) -> Result<Vec<OperatingPoint>, Study
 pub fn example_points(fidelity: Fidelity) -> Result<Vec<OperatingPoint>, StudyError> {
     let mut base = Scene::example_2004();
     base.dynamics.fidelity = fidelity;
-    let tag = match fidelity {
-        Fidelity::Torsional => "torsional",
-        Fidelity::TransverseTorsional => "transverse_torsional",
-    };
+    let tag = fidelity_tag(fidelity);
     let mut points = vec![point(
         &format!("example_off_resonance_{tag}"),
         "example-2004 (derived planet bearings, Rayleigh damping), 3000 rpm: off resonance",

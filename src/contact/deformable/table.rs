@@ -182,20 +182,19 @@ impl FlankTable {
         Site { j, u, slope: (g1 - g0) * self.inv_hs, xi: self.flank.sign() * delta - g }
     }
 
-    /// P, ∂P/∂s and ∂P/∂ξ of the Hermite patch at cell (j, u) in s and grid
-    /// coordinate x = ξ/h_ξ (within the table).
+    /// The two ξ lines of the patch's cell at (j, u) in s and grid coordinate x
+    /// = ξ/h_ξ: the fraction v of x in its ξ cell, the lines' values and ξ slopes
+    /// [P₀, P_ξ₀, P₁, P_ξ₁] interpolated along s (Hermite in u with the nodes' s
+    /// slopes and cross derivatives), and the same per unit of u.
     #[inline]
-    fn patch(&self, j: usize, u: f64, x: f64) -> (f64, f64, f64) {
+    fn lines(&self, j: usize, u: f64, x: f64) -> (f64, [f64; 4], [f64; 4]) {
         let i = (x as usize).min(self.nx - 2);
         let v = x - i as f64;
         let jp = if j + 1 == self.ns { 0 } else { j + 1 };
         let (hu, du) = hermite(u);
-        let (hv, dv) = hermite(v);
-        let (hs, hx) = (self.hs, self.hx);
+        let hs = self.hs;
         let (a0, a1) = (&self.nodes[j * self.nx + i], &self.nodes[j * self.nx + i + 1]);
         let (b0, b1) = (&self.nodes[jp * self.nx + i], &self.nodes[jp * self.nx + i + 1]);
-        // Along s first, on the two ξ lines of the cell: the value and the ξ slope, and their
-        // s derivatives (Hermite in u with the nodes' s slopes and cross derivatives).
         let along = |a: &[f64; 4], b: &[f64; 4], w: &[f64; 4]| {
             (
                 w[0] * a[0] + w[1] * hs * a[2] + w[2] * b[0] + w[3] * hs * b[2],
@@ -204,37 +203,37 @@ impl FlankTable {
         };
         let ((p0, x0), (p1, x1)) = (along(a0, b0, &hu), along(a1, b1, &hu));
         let ((ps0, xs0), (ps1, xs1)) = (along(a0, b0, &du), along(a1, b1, &du));
-        // Then along ξ.
-        let f = hv[0] * p0 + hv[1] * hx * x0 + hv[2] * p1 + hv[3] * hx * x1;
-        let fs = hv[0] * ps0 + hv[1] * hx * xs0 + hv[2] * ps1 + hv[3] * hx * xs1;
-        let fx = dv[0] * p0 + dv[1] * hx * x0 + dv[2] * p1 + dv[3] * hx * x1;
-        (f, fs / hs, fx / hx)
+        (v, [p0, x0, p1, x1], [ps0, xs0, ps1, xs1])
+    }
+
+    /// Weights `w` of a Hermite basis in v along ξ applied to the lines `l` of
+    /// [`Self::lines`] (the slopes scaled by h_ξ).
+    #[inline]
+    fn along_xi(&self, w: &[f64; 4], l: &[f64; 4]) -> f64 {
+        let hx = self.hx;
+        w[0] * l[0] + w[1] * hx * l[1] + w[2] * l[2] + w[3] * hx * l[3]
+    }
+
+    /// P, ∂P/∂s and ∂P/∂ξ of the Hermite patch at cell (j, u) in s and grid
+    /// coordinate x = ξ/h_ξ (within the table).
+    #[inline]
+    fn patch(&self, j: usize, u: f64, x: f64) -> (f64, f64, f64) {
+        let (v, line, line_s) = self.lines(j, u, x);
+        let (hv, dv) = hermite(v);
+        let (f, fs, fx) = (self.along_xi(&hv, &line), self.along_xi(&hv, &line_s), self.along_xi(&dv, &line));
+        (f, fs / self.hs, fx / self.hx)
     }
 
     /// ∂²P/∂ξ² and ∂²P/∂ξ∂s of the Hermite patch at cell (j, u) in s and grid
     /// coordinate x = ξ/h_ξ (within the table): the derivatives of the
     /// patch's ∂P/∂ξ ([`Self::patch`]).
     fn patch_curvature(&self, j: usize, u: f64, x: f64) -> (f64, f64) {
-        let i = (x as usize).min(self.nx - 2);
-        let v = x - i as f64;
-        let jp = if j + 1 == self.ns { 0 } else { j + 1 };
-        let (hu, du) = hermite(u);
+        let (v, line, line_s) = self.lines(j, u, x);
         let (_, dv) = hermite(v);
-        let d2v = hermite_second(v);
-        let (hs, hx) = (self.hs, self.hx);
-        let (a0, a1) = (&self.nodes[j * self.nx + i], &self.nodes[j * self.nx + i + 1]);
-        let (b0, b1) = (&self.nodes[jp * self.nx + i], &self.nodes[jp * self.nx + i + 1]);
-        let along = |a: &[f64; 4], b: &[f64; 4], w: &[f64; 4]| {
-            (
-                w[0] * a[0] + w[1] * hs * a[2] + w[2] * b[0] + w[3] * hs * b[2],
-                w[0] * a[1] + w[1] * hs * a[3] + w[2] * b[1] + w[3] * hs * b[3],
-            )
-        };
-        let ((p0, x0), (p1, x1)) = (along(a0, b0, &hu), along(a1, b1, &hu));
-        let ((ps0, xs0), (ps1, xs1)) = (along(a0, b0, &du), along(a1, b1, &du));
-        let fxx = d2v[0] * p0 + d2v[1] * hx * x0 + d2v[2] * p1 + d2v[3] * hx * x1;
-        let fxs = dv[0] * ps0 + dv[1] * hx * xs0 + dv[2] * ps1 + dv[3] * hx * xs1;
-        (fxx / (hx * hx), fxs / (hx * hs))
+        let hx = self.hx;
+        let fxx = self.along_xi(&hermite_second(v), &line);
+        let fxs = self.along_xi(&dv, &line_s);
+        (fxx / (hx * hx), fxs / (hx * self.hs))
     }
 
     /// The flank's part of (∂K_t/∂δ, ∂K_t/∂s) at a cell found by
