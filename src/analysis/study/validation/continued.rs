@@ -52,9 +52,11 @@ pub(super) struct Continued {
     pub doublings: Vec<f64>,
     /// Why the run ended.
     pub ended: String,
-    /// For each speed asked for a spot check, the stable point nearest it:
-    /// its measures and its state at the period's end (where a march from it starts).
-    pub spots: Vec<(CurvePoint, State)>,
+    /// For each speed asked for a spot check, the point nearest it of those
+    /// [`spot_candidates`] allows (each point once):
+    /// its measures, its largest Floquet multiplier |μ| and its state at the
+    /// period's end (where a march from it starts).
+    pub spots: Vec<(CurvePoint, f64, State)>,
     /// The speed \[rad/s\] where the run joined an earlier run's branch and
     /// ended (`None`: it ran to its last speed or stopped for another reason).
     pub joined: Option<f64>,
@@ -87,8 +89,9 @@ fn reading(speed: f64, meshes: &[MeshResponse]) -> CurvePoint {
 
 /// Follows the periodic states of `model` from `from` to `to` \[rad/s\] at
 /// the nominal step `step` \[rad/s\] on the cyclic condensed balance, and
-/// keeps the stable point nearest each of `spots` \[rad/s\] for its spot
-/// check. With `joining`, an earlier run of the same model from `to`
+/// keeps the stable point nearest each of `spots` \[rad/s\] at least half
+/// the step from the run's folds and changes of stability for its spot
+/// check ([`spot_candidates`]). With `joining`, an earlier run of the same model from `to`
 /// towards `from`, the run ends where it joins that run's unbroken stretch
 /// (`follow_joining`: beyond, it would retrace it). Also gives the branch.
 /// Each point's forces are sampled at `samples` per mesh cycle, the marching
@@ -117,23 +120,51 @@ pub(super) fn follow(
     let cyclic = solver.broken_restarts() == 0 && cb.symmetry() == Symmetry::Cyclic;
     let mut points = Vec::with_capacity(orbits.len());
     let mut ends = Vec::with_capacity(orbits.len());
-    let mut nearest: Vec<Option<(f64, CurvePoint, State)>> = vec![None; spots.len()];
-    for (orbit, p) in orbits.iter().zip(&branch.points) {
+    let eligible = spot_candidates(&branch, step / 2.0);
+    let mut nearest: Vec<Option<(f64, usize)>> = vec![None; spots.len()];
+    for (i, (orbit, p)) in orbits.iter().zip(&branch.points).enumerate() {
         let ss = cb.balance().steady_state(orbit)?;
-        let m = measures(&ss);
         for (near, spot) in nearest.iter_mut().zip(spots) {
-            let d = (orbit.speed - spot).abs();
-            if p.stable && near.as_ref().is_none_or(|n| d < n.0) {
-                *near = Some((d, m, ss.end.clone()));
+            let d = (p.orbit.speed - spot).abs();
+            if eligible[i] && near.is_none_or(|n| d < n.0) {
+                *near = Some((d, i));
             }
         }
-        points.push(m);
+        points.push(measures(&ss));
         ends.push(ss.end);
     }
+    // Two spot speeds whose nearest point is the same point check it once.
+    let mut chosen: Vec<usize> = Vec::new();
+    for (_, i) in nearest.into_iter().flatten() {
+        if !chosen.contains(&i) {
+            chosen.push(i);
+        }
+    }
     let mut run = Continued::of(&branch, points, cyclic);
+    run.spots = chosen
+        .iter()
+        .map(|&i| (run.points[i], branch.points[i].orbit.largest_multiplier(), ends[i].clone()))
+        .collect();
     run.ends = ends;
-    run.spots = nearest.into_iter().flatten().map(|(_, m, s)| (m, s)).collect();
     Ok((run, branch))
+}
+
+/// Which points of `branch` a spot check may start from: the stable points at
+/// least `margin` \[rad/s\] in speed from every fold, period doubling, change
+/// of stability, turn of the run in speed and gap. Near a fold F^(rms) moves
+/// steeply with speed (on `example-2004-deformable` at κ = 6, up: from 260.7
+/// to 276.6 N/mm within 1.4 rpm below the fold at 10 152 rpm), so a march
+/// from a point there meets the branch's steepness, not its error.
+fn spot_candidates(branch: &Branch, margin: f64) -> Vec<bool> {
+    let p = &branch.points;
+    let mut edges: Vec<f64> = branch.bifurcations.iter().map(|b| b.speed).collect();
+    for w in p.windows(2) {
+        let turned = w[0].speed_slope.signum() != w[1].speed_slope.signum();
+        if w[0].stable != w[1].stable || w[1].after_gap || turned {
+            edges.extend([w[0].orbit.speed, w[1].orbit.speed]);
+        }
+    }
+    p.iter().map(|q| q.stable && edges.iter().all(|e| (q.orbit.speed - e).abs() >= margin)).collect()
 }
 
 impl Continued {
@@ -343,11 +374,11 @@ impl Continuing<'_> {
     /// Marches from each run's stable points nearest the spot speeds and
     /// sets the result beside the branch.
     fn spot_checks(&self, reads: &[Read]) -> Result<Vec<Spot>, StudyError> {
-        let marches: Vec<(usize, &Read, &(CurvePoint, State))> =
+        let marches: Vec<(usize, &Read, &(CurvePoint, f64, State))> =
             reads.iter().enumerate().flat_map(|(k, r)| r.run.spots.iter().map(move |s| (k, r, s))).collect();
         marches
             .par_iter()
-            .map(|&(k, r, (point, state))| {
+            .map(|&(k, r, (point, multiplier, state))| {
                 let mut m = self.models[k / 2].clone();
                 let ss = steady_state(&mut m, self.set, self.run, point.speed, Some(state)).map_err(|e| {
                     StudyError::from(e).at(format!("spot check at {:.1} rpm", rad_per_s_to_rpm(point.speed)))
@@ -358,6 +389,7 @@ impl Continuing<'_> {
                     rpm: rad_per_s_to_rpm(point.speed),
                     branch: point.rms,
                     marched: measures(&ss).rms,
+                    multiplier: *multiplier,
                 })
             })
             .collect()
@@ -432,7 +464,7 @@ pub(super) fn sweep_run(
         .map(|r| format!("; a run ended early: {}", r.run.ended))
         .collect();
     let method = format!(
-        "continuation of the periodic states {first:.0}–{last:.0} rpm at a nominal step of {step:.0} rpm, up and down, κ = 0 and κ = {kappa} (each state's down run after its up run, ending where it joins the up run's unbroken stretch, below which its curve is the up run's; the two states in parallel), on the harmonic balance condensed onto the contact coordinates ({}; H by the rule, at most {}); stability from the whole model's Floquet multipliers; each direction's curve read on the first stable stretch of its run spanning each speed of the grid ({}){early}; {} of the 4 × {} curve points, where no stable periodic state of the run spans the speed, read on marching sweeps over those stretches, each from the stable state read at the grid speed before it ({integrator}); spot-checked by marching from {} stable branch points ({integrator})",
+        "continuation of the periodic states {first:.0}–{last:.0} rpm at a nominal step of {step:.0} rpm, up and down, κ = 0 and κ = {kappa} (each state's down run after its up run, ending where it joins the up run's unbroken stretch, below which its curve is the up run's; the two states in parallel), on the harmonic balance condensed onto the contact coordinates ({}; H by the rule, at most {}); stability from the whole model's Floquet multipliers; each direction's curve read on the first stable stretch of its run spanning each speed of the grid ({}){early}; {} of the 4 × {} curve points, where no stable periodic state of the run spans the speed, read on marching sweeps over those stretches, each from the stable state read at the grid speed before it ({integrator}); spot-checked by marching from {} stable branch points, each the nearest a spot speed of those at least half the nominal step from the run's folds, changes of stability and gaps ({integrator})",
         if cyclic {
             "the planets' cyclic symmetry held on every run, checked at every point"
         } else {
@@ -616,5 +648,47 @@ mod tests {
         let down = unstable_stretches(&unstable, Direction::Down);
         assert_eq!(down, vec![(vec![2, 1], 5), (vec![6, 5, 4], 10)]);
         assert!(unstable_stretches(&[None, None], Direction::Up).is_empty());
+    }
+
+    /// A run with a fold at 10.2: the lower branch stable to the fold, back unstable.
+    #[test]
+    fn a_spot_check_starts_only_from_stable_points_away_from_folds_and_changes_of_stability() {
+        use crate::analysis::continuation::{Bifurcation, BranchPoint};
+        use crate::dynamics::periodic::PeriodicOrbit;
+        let speeds = [8.0, 9.0, 9.5, 9.9, 10.15, 10.1, 9.0, 8.0];
+        let stable = [true, true, true, true, true, false, false, false];
+        let points = speeds
+            .iter()
+            .zip(stable)
+            .enumerate()
+            .map(|(i, (&s, st))| BranchPoint {
+                orbit: PeriodicOrbit::bare(s, 1.0),
+                stable: st,
+                segment: usize::from(i > 4),
+                speed_slope: if i > 4 { -1.0 } else { 1.0 },
+                after_gap: false,
+            })
+            .collect();
+        let fold = Bifurcation {
+            kind: BifurcationKind::Fold,
+            speed: 10.2,
+            between: (4, 5),
+            multipliers: (f64::NAN, f64::NAN),
+        };
+        let branch = Branch {
+            points,
+            bifurcations: vec![fold],
+            gaps: Vec::new(),
+            ended: String::new(),
+            work: Default::default(),
+            flows: 0,
+            scales: Vec::new(),
+        };
+        // Half a step of 1.0: 9.9 and 10.15 lie within 0.5 of the fold (and of the change of
+        // stability between 10.15 and 10.1); the unstable points never qualify.
+        let ok = spot_candidates(&branch, 0.5);
+        assert_eq!(ok, [true, true, true, false, false, false, false, false]);
+        // Without a margin every stable point qualifies.
+        assert_eq!(spot_candidates(&branch, 0.0), stable);
     }
 }

@@ -671,6 +671,9 @@ struct Spot {
     branch: [f64; 2],
     /// The same after marching from the point's state \[N\].
     marched: [f64; 2],
+    /// The point's largest Floquet multiplier |μ|: a march approaches the
+    /// orbit by this factor per period of the orbit.
+    multiplier: f64,
 }
 
 impl Spot {

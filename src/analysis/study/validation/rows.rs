@@ -702,7 +702,16 @@ pub(super) fn spot_row(rows: &mut Rows, r: &SweepReading) {
     let dir = |d: Direction| if d == Direction::Up { "up" } else { "down" };
     let each = spots
         .iter()
-        .map(|s| format!("κ = {} {} {:.0} rpm {:.2e}", s.kappa, dir(s.direction), s.rpm, s.difference()))
+        .map(|s| {
+            format!(
+                "κ = {} {} {:.0} rpm {:.2e} (|μ| {:.3})",
+                s.kappa,
+                dir(s.direction),
+                s.rpm,
+                s.difference(),
+                s.multiplier
+            )
+        })
         .collect::<Vec<_>>()
         .join(", ");
     rows.push(
