@@ -55,7 +55,17 @@
 //! crossing counts once in [`Stats::events_located`]. When a step fails the error test and an
 //! event function changed sign over it, the switch is the likely cause, so the next attempt is aimed
 //! at the crossing located roughly (to 10⁻³ of the step) on the rejected step's dense output; if
-//! that attempt fails as well, the controller's reduction applies. Two crossings of the same function within
+//! that attempt fails as well, the controller's reduction applies. With
+//! [`Rk45Settings::hop_switches`] the aim is the crossing's near side, and where that crossing
+//! lies within the event tolerance of the step's start (located to it), the state hops across it
+//! instead: an Euler step of at most twice the tolerance on the last derivative, the
+//! derivative then evaluated past the switch, taken only if the event function's side changes
+//! on it. A force that jumps at the switch (a damping force proportional to a contact stiffness,
+//! Rayleigh's η K) gives a step that straddles it an error of order h · jump, which a tight
+//! tolerance accepts only as the step shrinks towards the rounding of the time; the hop steps
+//! over it. (The retaken step that lands on a crossing's far side still takes its last stages
+//! past the switch, an error of order h · jump that the embedded estimate sees about eight
+//! times smaller; tests/solver.rs measures it.) Two crossings of the same function within
 //! one step (a contact shorter than a step) leave no sign change at the step end and are not
 //! seen; bound `max_step` by the shortest contact duration if that matters.
 
@@ -151,12 +161,18 @@ pub struct Rk45Settings {
     pub event_tolerance: f64,
     /// Whether located events are stored for [`Rk45::located_events`]; they are always counted.
     pub record_events: bool,
+    /// Whether a step rejected at a crossing is aimed at the crossing's near side and a
+    /// crossing at a rejected step's start is hopped across (module documentation): needed
+    /// where a force jumps at a switch and the tolerance is tight (the accuracy study's
+    /// reference at 1e-13). Off by default: with it the shooting's monodromy under Rayleigh
+    /// damping misses a period doubling the harmonic balance finds (tests/periodic.rs).
+    pub hop_switches: bool,
 }
 
 impl Default for Rk45Settings {
     /// rtol = 1e-8, atol_q = 1e-12, atol_v = 1e-10, safety 0.9, step ratios [0.2, 10], the PI
     /// controller with β = 0.04, automatic initial step, no maximum step, no minimum step,
-    /// 10⁶ attempts per call, event tolerance 1e-12, events not recorded.
+    /// 10⁶ attempts per call, event tolerance 1e-12, events not recorded, switches not hopped.
     fn default() -> Self {
         Self {
             rtol: 1e-8,
@@ -172,6 +188,7 @@ impl Default for Rk45Settings {
             max_steps: 1_000_000,
             event_tolerance: 1e-12,
             record_events: false,
+            hop_switches: false,
         }
     }
 }
@@ -758,7 +775,7 @@ impl Rk45 {
 
     /// Locates the crossing of event function `index` inside the step whose dense output is
     /// prepared, between the values `fa` at its start and `fb` at its end, to the tolerance `tol`
-    /// in θ; returns the time on the far side of the final bracket.
+    /// in θ; returns the times on the near and the far side of the final bracket.
     fn locate<S: SecondOrderSystem + ?Sized>(
         &mut self,
         sys: &mut S,
@@ -767,7 +784,7 @@ impl Rk45 {
         mut fb: f64,
         t_new: f64,
         tol: f64,
-    ) -> Result<f64, SolverError> {
+    ) -> Result<(f64, f64), SolverError> {
         let (t0, h) = (self.dense_t0, self.dense_h);
         let (mut a, mut b) = (0.0_f64, 1.0_f64);
         let mut last_side = 0i8;
@@ -813,18 +830,19 @@ impl Rk45 {
         }
         self.g_tmp = g;
         result?;
-        Ok(if b >= 1.0 { t_new } else { t0 + b * h })
+        Ok((t0 + a * h, if b >= 1.0 { t_new } else { t0 + b * h }))
     }
 
     /// Earliest sign change of an event function over a step that failed the error test, located
-    /// roughly (to 1e-3 of the step) on that step's dense output; `None` if no function changed
-    /// sign or the step's end state is unusable.
+    /// roughly (to 1e-3 of the step) on that step's dense output: its index and the side of its
+    /// bracket a retake aims at (the near side where switches are hopped, the far side
+    /// otherwise); `None` if no function changed sign or the step's end state is unusable.
     fn rough_crossing<S: SecondOrderSystem + ?Sized>(
         &mut self,
         sys: &mut S,
         h: f64,
         t_new: f64,
-    ) -> Result<Option<f64>, SolverError> {
+    ) -> Result<Option<(usize, f64)>, SolverError> {
         if first_non_finite(&self.y_new).is_some() {
             return Ok(None);
         }
@@ -836,12 +854,15 @@ impl Rk45 {
             return Ok(None);
         }
         self.prepare_dense(h);
-        let mut earliest: Option<f64> = None;
+        let mut earliest: Option<(usize, f64)> = None;
         for i in 0..self.n_events {
             let (fa, fb) = (self.g_ref[i], self.g_new[i]);
             if negative(fa) != negative(fb) {
-                let te = self.locate(sys, i, fa, fb, t_new, 1e-3)?;
-                earliest = Some(earliest.map_or(te, |e: f64| e.min(te)));
+                let (near, far) = self.locate(sys, i, fa, fb, t_new, 1e-3)?;
+                let aim = if self.settings.hop_switches { near } else { far };
+                if earliest.is_none_or(|e| aim < e.1) {
+                    earliest = Some((i, aim));
+                }
             }
         }
         Ok(earliest)
@@ -925,7 +946,13 @@ impl Rk45 {
                 }
                 Ok(err) if err > 1.0 => {
                     pending = None;
-                    aimed = self.reject_inaccurate(sys, span, err, tiny, !aimed && !landing)?;
+                    let hopped;
+                    (aimed, hopped) = self.reject_inaccurate(sys, span, err, tiny, !aimed && !landing)?;
+                    // A hop ends a single step: its crossing is recorded at the hop's end, where
+                    // a caller reading the located events after each step finds the switch.
+                    if hopped && single {
+                        break;
+                    }
                     continue;
                 }
                 Ok(err) => err,
@@ -980,10 +1007,12 @@ impl Rk45 {
 
     /// Rejects the attempt `span` whose error norm `err` exceeds 1: the controller's shorter
     /// step next, or, where `may_aim` (the attempt neither aimed at a crossing nor landing on
-    /// one) and the model has events, a step aimed at a crossing roughly located on the
-    /// rejected step: a switch inside the step (a kink in the force) is the likely cause of
-    /// the rejection; if the aimed attempt fails too, the controller takes over. Whether the
-    /// next attempt is aimed.
+    /// one) and the model has events, a step aimed at the near side of a crossing roughly
+    /// located on the rejected step: a switch inside the step (a kink or a jump in the force)
+    /// is the likely cause of the rejection; if the aimed attempt fails too, the controller
+    /// takes over. A crossing within the event tolerance of the step's start (located to it)
+    /// is hopped across where the hop crosses it ([`Rk45::hop`]), and the attempt is repeated
+    /// past it. Whether the next attempt is aimed, and whether the state hopped.
     #[inline]
     fn reject_inaccurate<S: SecondOrderSystem + ?Sized>(
         &mut self,
@@ -992,16 +1021,26 @@ impl Rk45 {
         err: f64,
         tiny: f64,
         may_aim: bool,
-    ) -> Result<bool, SolverError> {
+    ) -> Result<(bool, bool), SolverError> {
         let s = self.settings;
         self.stats.rejected_steps += 1;
         self.rejected_last = true;
         self.h_next = span.h * (s.safety * err.powf(-0.2)).max(s.min_ratio);
         let mut aimed = false;
         if self.n_events > 0 && may_aim {
-            if let Some(tc) = self.rough_crossing(sys, span.h, span.t_new)? {
-                if tc - span.t > tiny {
-                    self.h_next = tc - span.t;
+            if let Some((i, mut near)) = self.rough_crossing(sys, span.h, span.t_new)? {
+                let tol_t = s.event_tolerance * span.t.abs().max(span.t_new.abs()).max(span.h);
+                if s.hop_switches && near - span.t <= tol_t {
+                    let (fa, fb) = (self.g_ref[i], self.g_new[i]);
+                    let far;
+                    (near, far) = self.locate(sys, i, fa, fb, span.t_new, tol_t / span.h)?;
+                    if near - span.t <= tol_t && far > span.t && self.hop(sys, far, i)? {
+                        self.h_next = span.h;
+                        return Ok((false, true));
+                    }
+                }
+                if near - span.t > tiny {
+                    self.h_next = near - span.t;
                     aimed = true;
                 }
             }
@@ -1009,7 +1048,7 @@ impl Rk45 {
         if self.h_next < s.min_step.max(tiny) {
             return Err(SolverError::StepTooSmall { t: span.t, h: self.h_next });
         }
-        Ok(aimed)
+        Ok((aimed, false))
     }
 
     /// The step after an accepted step of length `h` with error norm `err`: the
@@ -1092,6 +1131,47 @@ impl Rk45 {
         }
     }
 
+    /// Moves the state from the current time across a switch at it to `t_far` \[s\], within the
+    /// event tolerance past it, on the last derivative (an Euler step of at most twice the
+    /// tolerance), where event function `index` changes side on that line: then evaluates the
+    /// derivative there (the next step's first stage, on the force past the switch), records
+    /// the event functions whose side changed and gives `true`. Otherwise, or on a failure,
+    /// the state stays as it was.
+    fn hop<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t_far: f64,
+        index: usize,
+    ) -> Result<bool, SolverError> {
+        let dt = t_far - self.t;
+        for ((x, y), k) in self.y_stage.iter_mut().zip(self.y.iter()).zip(self.k1.iter()) {
+            *x = y + dt * k;
+        }
+        let mut g = std::mem::take(&mut self.g_tmp);
+        let ev = eval_events(sys, self.n, Some(self.n_events), t_far, &self.y_stage, &mut g);
+        let crossed = ev.is_ok() && negative(g[index]) != negative(self.g_ref[index]);
+        if !crossed {
+            self.g_tmp = g;
+            return ev.map(|()| false);
+        }
+        let Self { y_stage, k7, fbuf, mass, stats, n, .. } = self;
+        if let Err(e) = deriv(sys, mass, *n, t_far, y_stage, k7, fbuf, stats) {
+            self.g_tmp = g;
+            return Err(e.into_error());
+        }
+        for (i, &gi) in g.iter().enumerate().take(self.n_events) {
+            if negative(gi) != negative(self.g_ref[i]) {
+                self.record(t_far, i, gi);
+            }
+            self.g_ref[i] = gi;
+        }
+        self.g_tmp = g;
+        std::mem::swap(&mut self.y, &mut self.y_stage);
+        std::mem::swap(&mut self.k1, &mut self.k7);
+        self.t = t_far;
+        Ok(true)
+    }
+
     /// The event functions whose sign changes over the accepted attempt `span`, each
     /// located: crossings at the step's start are recorded (nothing to retake for them),
     /// crossings at its end too (the step already ends there); otherwise the earliest
@@ -1111,7 +1191,7 @@ impl Rk45 {
         for i in 0..self.n_events {
             let (fa, fb) = (self.g_ref[i], self.g_new[i]);
             if negative(fa) != negative(fb) {
-                let te = self.locate(sys, i, fa, fb, t_new, tol_theta)?;
+                let (_, te) = self.locate(sys, i, fa, fb, t_new, tol_theta)?;
                 crossings.push((i, te));
             }
         }
