@@ -321,6 +321,14 @@ struct Span {
     h: f64,
 }
 
+impl Span {
+    /// The time tolerance of event location on this attempt, `event_tolerance · max(|t|,
+    /// |t_new|, h)` \[s\].
+    fn event_time_tolerance(self, event_tolerance: f64) -> f64 {
+        event_tolerance * self.t.abs().max(self.t_new.abs()).max(self.h)
+    }
+}
+
 /// The Dormand–Prince 5(4) integrator (see the module documentation for the equations).
 ///
 /// Typical use: [`Rk45::new`], [`Rk45::init`], then repeated [`Rk45::advance_to`] calls, reading
@@ -1007,12 +1015,13 @@ impl Rk45 {
 
     /// Rejects the attempt `span` whose error norm `err` exceeds 1: the controller's shorter
     /// step next, or, where `may_aim` (the attempt neither aimed at a crossing nor landing on
-    /// one) and the model has events, a step aimed at the near side of a crossing roughly
-    /// located on the rejected step: a switch inside the step (a kink or a jump in the force)
-    /// is the likely cause of the rejection; if the aimed attempt fails too, the controller
-    /// takes over. A crossing within the event tolerance of the step's start (located to it)
-    /// is hopped across where the hop crosses it ([`Rk45::hop`]), and the attempt is repeated
-    /// past it. Whether the next attempt is aimed, and whether the state hopped.
+    /// one) and the model has events, a step aimed at a crossing roughly located on the
+    /// rejected step ([`Rk45::rough_crossing`]): a switch inside the step (a kink or a jump in
+    /// the force) is the likely cause of the rejection; if the aimed attempt fails too, the
+    /// controller takes over. With [`Rk45Settings::hop_switches`] a crossing within the event
+    /// tolerance of the step's start (located to it) is hopped across where the hop crosses
+    /// it ([`Rk45::hop`]), and the attempt is repeated past it. Whether the next attempt is
+    /// aimed, and whether the state hopped.
     #[inline]
     fn reject_inaccurate<S: SecondOrderSystem + ?Sized>(
         &mut self,
@@ -1028,19 +1037,19 @@ impl Rk45 {
         self.h_next = span.h * (s.safety * err.powf(-0.2)).max(s.min_ratio);
         let mut aimed = false;
         if self.n_events > 0 && may_aim {
-            if let Some((i, mut near)) = self.rough_crossing(sys, span.h, span.t_new)? {
-                let tol_t = s.event_tolerance * span.t.abs().max(span.t_new.abs()).max(span.h);
-                if s.hop_switches && near - span.t <= tol_t {
+            if let Some((i, mut aim)) = self.rough_crossing(sys, span.h, span.t_new)? {
+                let tol_t = span.event_time_tolerance(s.event_tolerance);
+                if s.hop_switches && aim - span.t <= tol_t {
                     let (fa, fb) = (self.g_ref[i], self.g_new[i]);
-                    let far;
-                    (near, far) = self.locate(sys, i, fa, fb, span.t_new, tol_t / span.h)?;
+                    let (near, far) = self.locate(sys, i, fa, fb, span.t_new, tol_t / span.h)?;
                     if near - span.t <= tol_t && far > span.t && self.hop(sys, far, i)? {
                         self.h_next = span.h;
                         return Ok((false, true));
                     }
+                    aim = near;
                 }
-                if near - span.t > tiny {
-                    self.h_next = near - span.t;
+                if aim - span.t > tiny {
+                    self.h_next = aim - span.t;
                     aimed = true;
                 }
             }
@@ -1186,7 +1195,8 @@ impl Rk45 {
     ) -> Result<Option<Pending>, SolverError> {
         let Span { t, t_new, h } = span;
         let s = self.settings;
-        let tol_theta = s.event_tolerance * t.abs().max(t_new.abs()).max(h) / h;
+        let tol_t = span.event_time_tolerance(s.event_tolerance);
+        let tol_theta = tol_t / h;
         let mut crossings: Vec<(usize, f64)> = Vec::new();
         for i in 0..self.n_events {
             let (fa, fb) = (self.g_ref[i], self.g_new[i]);
@@ -1195,7 +1205,6 @@ impl Rk45 {
                 crossings.push((i, te));
             }
         }
-        let tol_t = s.event_tolerance * t.abs().max(t_new.abs()).max(h);
         while !crossings.is_empty() {
             let t_star = crossings.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
             if t_star <= t + tol_t {
