@@ -460,7 +460,7 @@ fn harmonics_of(
     for f in &force {
         harmonics.push(mesh_harmonics(f, cycles as usize, HARMONICS)?);
     }
-    Ok((harmonics, force.iter().map(|f| separation_fraction(f)).collect()))
+    Ok((harmonics, force.iter().map(separation_fraction).collect()))
 }
 
 /// The mesh period at input speed `speed` [rad/s] \[s\].

@@ -1011,7 +1011,7 @@ impl Simulation {
         if !data.iter().all(|f| f.is_finite()) {
             return None;
         }
-        Some(data.iter().filter(|f| **f == 0.0).count() as f64 / data.len() as f64)
+        Some(separation_fraction(data))
     }
 
     /// Harmonics 1..6 and separation fraction of planet 1's mesh force over

@@ -99,12 +99,19 @@ pub fn order_spectrum(
     Ok((1..=top).map(|k| (k as f64 / cycles as f64, 2.0 * x[k].norm() / n)).collect())
 }
 
-/// Fraction of samples at which a force is zero (the mesh or pair carries nothing).
-pub fn separation_fraction(force: &[f64]) -> f64 {
-    if force.is_empty() {
+/// Fraction of samples at which a force is zero (the mesh or pair carries nothing); the
+/// samples in a slice, a vector or a ring buffer.
+pub fn separation_fraction<'a, I>(force: I) -> f64
+where
+    I: IntoIterator<Item = &'a f64>,
+    I::IntoIter: ExactSizeIterator,
+{
+    let samples = force.into_iter();
+    let n = samples.len();
+    if n == 0 {
         return 0.0;
     }
-    force.iter().filter(|f| **f == 0.0).count() as f64 / force.len() as f64
+    samples.filter(|f| **f == 0.0).count() as f64 / n as f64
 }
 
 #[cfg(test)]
